@@ -1,0 +1,45 @@
+"""One exception hierarchy for everything a user can get wrong.
+
+Every message names where the fault is (file, line, joint, row or field) and what was expected, so the
+CLI can print it as one line and exit non-zero.
+"""
+
+from __future__ import annotations
+
+
+class IkcError(Exception):
+    """Base class of every error ikcompiler raises on purpose."""
+
+
+class RobotInputError(IkcError, ValueError):
+    """A robot description (URDF, DH table, spec file) is malformed or asks for something unsupported."""
+
+    def __init__(self, message: str, *, source: str | None = None, where: str | None = None):
+        self.source = source
+        self.where = where
+        prefix = ": ".join(x for x in (source, where) if x)
+        super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class UnknownRobotError(RobotInputError):
+    """The name is neither a file nor a robot of the zoo."""
+
+
+class UnsupportedJointError(RobotInputError):
+    """A planar, floating or otherwise unsupported joint lies inside the chain."""
+
+
+class ChainSelectionError(RobotInputError):
+    """Base or tip link missing, not connected, or ambiguous (a tree needs a tip)."""
+
+
+class TargetError(IkcError, ValueError):
+    """A target pose is not finite or not a rigid transform, or has the wrong shape."""
+
+
+class FreeJointError(IkcError, ValueError):
+    """Free joints named wrongly, or the wrong number of free values passed at solve time."""
+
+
+class CompileError(IkcError):
+    """No plan could be built; the message says what was tried and why it failed."""

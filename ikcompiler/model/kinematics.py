@@ -1,0 +1,51 @@
+"""Forward kinematics and Jacobians of a POE chain.
+
+Jacobian columns are twists ``(v, w)``, one per independent joint; a coupled joint adds ``a`` times its
+column to its master's.  Space Jacobian: ``V_s = J_s(q) dq`` with ``V_s^ = g' g^-1``; body Jacobian:
+``J_b = Ad_{g^-1} J_s``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems.screw import adjoint, inverse_transform, twist_exp, twist_exp_batch
+
+
+def forward(chain, q) -> np.ndarray:
+    """``g_st(q) = exp(xi_1 th_1) ... exp(xi_n th_n) g_st(0)``."""
+    th = chain.expand(np.asarray(q, dtype=float))
+    g = np.eye(4)
+    for joint, t in zip(chain.joints, th):
+        g = g @ twist_exp(joint.twist, t)
+    return g @ chain.home
+
+
+def forward_batch(chain, Q) -> np.ndarray:
+    """Vectorised :func:`forward` over Q of shape (N, dof); returns (N, 4, 4)."""
+    th = chain.expand(np.atleast_2d(np.asarray(Q, dtype=float)))
+    g = np.broadcast_to(np.eye(4), (th.shape[0], 4, 4)).copy()
+    for i, joint in enumerate(chain.joints):
+        g = g @ twist_exp_batch(joint.twist, th[:, i])
+    return g @ chain.home
+
+
+def _space_columns(chain, th) -> np.ndarray:
+    cols = np.zeros((6, chain.n))
+    g = np.eye(4)
+    for i, (joint, t) in enumerate(zip(chain.joints, th)):
+        cols[:, i] = adjoint(g) @ joint.twist
+        g = g @ twist_exp(joint.twist, t)
+    return cols
+
+
+def space_jacobian(chain, q) -> np.ndarray:
+    """(6, dof) space Jacobian at independent joint values ``q``."""
+    th = chain.expand(np.asarray(q, dtype=float))
+    A, _ = chain.coupling_matrix()
+    return _space_columns(chain, th) @ A
+
+
+def body_jacobian(chain, q) -> np.ndarray:
+    """(6, dof) body Jacobian: tool-frame twists per unit joint velocity."""
+    return adjoint(inverse_transform(forward(chain, q))) @ space_jacobian(chain, q)
