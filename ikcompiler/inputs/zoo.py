@@ -1,0 +1,54 @@
+"""The robot zoo: the robot files in the repository's ``robots/`` folder, loadable by bare name.
+
+A file's zoo name is its name without extension(s): ``puma560.dh.toml`` is ``puma560``.  The folder is
+``robots/`` next to the package, or the folder named by the environment variable ``IKC_ROBOTS``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ikcompiler.errors import UnknownRobotError
+
+SUFFIXES = (".urdf", ".toml")
+
+
+def zoo_dir() -> Path:
+    """The zoo folder: ``$IKC_ROBOTS`` if set, else the repository's ``robots/``."""
+    env = os.environ.get("IKC_ROBOTS")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[2] / "robots"
+
+
+def _files() -> dict[str, Path]:
+    folder = zoo_dir()
+    if not folder.is_dir():
+        return {}
+    out: dict[str, Path] = {}
+    for p in sorted(folder.iterdir()):
+        if p.is_file() and p.name.lower().endswith(SUFFIXES) and not p.name.startswith("."):
+            out.setdefault(p.name.split(".")[0], p)
+    return out
+
+
+def zoo_names() -> list[str]:
+    """Sorted names of the zoo robots.
+
+    >>> "rhino" in zoo_names()
+    True
+    """
+    return sorted(_files())
+
+
+def resolve(name: str) -> Path:
+    """The file of zoo robot ``name``; :class:`UnknownRobotError` listing the zoo when there is none."""
+    files = _files()
+    if name in files:
+        return files[name]
+    names = ", ".join(sorted(files)) or f"(none: the zoo folder {zoo_dir()} is empty or missing)"
+    raise UnknownRobotError(
+        f"no robot file or zoo robot named {name!r}. Give a path to a .urdf or .toml file, "
+        f"or one of the zoo names: {names}"
+    )
