@@ -25,6 +25,55 @@ def _cmd_describe(args) -> int:
     return 0
 
 
+def _compile_args(p: argparse.ArgumentParser) -> None:
+    _add_robot_args(p)
+    p.add_argument("--free", nargs="*", default=[], metavar="JOINT", help="free joints (redundant robots)")
+    p.add_argument("--target", default="pose", choices=["pose", "position"], help="what is solved for")
+
+
+def _cmd_compile(args) -> int:
+    from ikcompiler.compiler import compile_robot
+
+    out = args.output or f"{_stem(args.robot)}_ik.py"
+    module = compile_robot(
+        args.robot, base=args.base, tip=args.tip, target=args.target, free=args.free, out=out
+    )
+    print(
+        f"wrote {out}: {module.JOINT_TYPES} solver, method {module.METHOD}, "
+        f"up to {module.MAX_SOLUTIONS} solutions"
+    )
+    return 0
+
+
+def _cmd_explain(args) -> int:
+    from ikcompiler import load_robot
+    from ikcompiler.compiler import compile_plan
+
+    chain = load_robot(args.robot, base=args.base, tip=args.tip)
+    print(compile_plan(chain, target=args.target, free=args.free).explain())
+    return 0
+
+
+def _cmd_verify(args) -> int:
+    from ikcompiler import load_robot
+    from ikcompiler.compiler import compile_robot
+    from ikcompiler.verify import verify
+
+    chain = load_robot(args.robot, base=args.base, tip=args.tip)
+    module = compile_robot(chain, target=args.target, free=args.free)
+    print(f"verifying {chain.name} on {args.samples} random poses ...", file=sys.stderr)
+    report = verify(chain, module, samples=args.samples, seed=args.seed)
+    print(report.text())
+    return 0 if report.ok else 1
+
+
+def _stem(robot: str) -> str:
+    from pathlib import Path
+
+    name = Path(robot).name
+    return name.split(".")[0] or "robot"
+
+
 def _cmd_zoo(args) -> int:
     from ikcompiler.inputs.zoo import zoo_names
 
@@ -41,6 +90,18 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("describe", help="load a robot and print its POE model")
     _add_robot_args(p)
     p.set_defaults(func=_cmd_describe)
+    p = sub.add_parser("compile", help="write the IK solver module of a robot")
+    _compile_args(p)
+    p.add_argument("-o", "--output", help="output .py file (default: ROBOT_ik.py)")
+    p.set_defaults(func=_cmd_compile)
+    p = sub.add_parser("explain", help="print the geometry found and the subproblem chain")
+    _compile_args(p)
+    p.set_defaults(func=_cmd_explain)
+    p = sub.add_parser("verify", help="compile, then check solutions on random poses")
+    _compile_args(p)
+    p.add_argument("--samples", type=int, default=200, help="number of random poses (default 200)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)
     return parser

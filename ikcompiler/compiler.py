@@ -1,0 +1,171 @@
+"""The compiler's front door: chain -> plan -> module source -> module.
+
+``compile_plan`` analyses the geometry and searches for a chain of subproblems; when none exists it
+says why and falls back to a numerical multi-start solver (always available, flagged in ``METHOD``).
+``compile_source`` renders the module text; ``compile_robot`` builds it in memory.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+from pathlib import Path
+
+import numpy as np
+
+from ikcompiler.codegen import generate
+from ikcompiler.errors import CompileError, FreeJointError
+from ikcompiler.geometry import Tolerance, analyse
+from ikcompiler.model import Chain
+from ikcompiler.plan import Plan
+from ikcompiler.rules import Context
+from ikcompiler.search import finalize_steps, search
+from subproblems import max_solutions
+
+TARGETS = ("pose", "position")
+NUMERICAL_STARTS = 48
+NUMERICAL_ITERS = 30
+
+
+def _samples(chain: Chain, count: int = 4, seed: int = 3) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    th = rng.uniform(-math.pi, math.pi, size=(count, chain.n))
+    for i, j in enumerate(chain.joints):
+        if j.kind == "T":
+            th[:, i] = rng.uniform(-chain.scale, chain.scale, size=count)
+    return th
+
+
+def _coupling_tuples(chain: Chain):
+    return [(chain.index(c.joint), chain.index(c.master), c.a, c.b) for c in chain.couplings]
+
+
+def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> Plan:
+    """Search the cheapest subproblem chain for ``chain``; see the module docstring."""
+    tol = tol or Tolerance()
+    if target not in TARGETS:
+        raise CompileError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    free = tuple(free)
+    for f in free:
+        if f not in chain.independent_names:
+            raise FreeJointError(
+                f"free joint {f!r} is not an independent joint of {chain.name} "
+                f"({', '.join(chain.independent_names)})"
+            )
+    dof_needed = 6 if target == "pose" else 3
+    unknown = chain.dof - len(free)
+    notes = []
+    if unknown > dof_needed:
+        raise FreeJointError(
+            f"{chain.name} has {chain.dof} joints for a {dof_needed}-DOF {target} target: name "
+            f"{unknown - dof_needed} free joint(s) with --free (e.g. --free {chain.independent_names[0]})"
+        )
+    if unknown < dof_needed:
+        notes.append(
+            f"{unknown} joints for a {dof_needed}-DOF {target} target: solved from a sufficient subset of "
+            "the equations; every solution is checked against the whole target"
+        )
+    ctx = Context(
+        twists=chain.twists,
+        kinds=chain.joint_types,
+        names=tuple(j.name for j in chain.joints),
+        scale=chain.scale,
+        home=np.asarray(chain.home),
+        target=target,
+        tol=tol,
+        samples=_samples(chain),
+    )
+    couplings = _coupling_tuples(chain)
+    full_lower = np.array([j.lower for j in chain.joints])
+    full_upper = np.array([j.upper for j in chain.joints])
+    start = frozenset(chain.index(f) for f in free)
+    steps, cost, report = search(ctx, couplings, full_lower, full_upper, start)
+    geometry = tuple(analyse(chain, tol))
+    if steps is None:
+        notes.append(
+            "no closed-form chain: the rules found no subproblem sequence; tried (first moves):\n"
+            + "\n".join("    " + s for s in report.summary(12).splitlines())
+        )
+        step = {
+            "kind": "NUM",
+            "code": "NUM",
+            "starts": NUMERICAL_STARTS,
+            "iters": NUMERICAL_ITERS,
+            "rule": f"numerical multi-start Gauss-Newton from {NUMERICAL_STARTS} fixed starts; "
+            "returns every distinct solution it converges to",
+        }
+        return Plan(
+            chain.name,
+            tuple(chain.independent_names),
+            chain.joint_types,
+            target,
+            "numerical",
+            (step,),
+            free,
+            False,
+            0,
+            geometry,
+            tuple(notes),
+            math.inf,
+        )
+    steps, n_groups = finalize_steps(steps)
+    return Plan(
+        chain.name,
+        tuple(chain.independent_names),
+        chain.joint_types,
+        target,
+        "closed-form",
+        tuple(steps),
+        free,
+        bool(ctx.snapped),
+        n_groups,
+        geometry,
+        tuple(notes),
+        cost,
+    )
+
+
+def solution_slots(plan: Plan) -> int:
+    if plan.method == "numerical":
+        return 16
+    k = 1
+    for s in plan.steps:
+        if s["kind"] != "SUM":
+            k *= max_solutions(s["code"])
+    return max(1, min(k, 64))
+
+
+def compile_source(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> str:
+    """The generated module's source text."""
+    from ikcompiler import __version__
+
+    tol = tol or Tolerance()
+    plan = compile_plan(chain, target=target, free=free, tol=tol)
+    return generate(
+        plan, chain, slots=solution_slots(plan), version=__version__, scale=chain.scale, tol=tol.exact
+    )
+
+
+def load_module(source: str, name: str = "ik_module") -> types.ModuleType:
+    """Execute generated source as a module object."""
+    module = types.ModuleType(name)
+    exec(compile(source, f"<ikcompiler:{name}>", "exec"), module.__dict__)
+    module.__source__ = source
+    return module
+
+
+def compile_robot(robot, *, base=None, tip=None, target: str = "pose", free=(), tol=None, out=None):
+    """Load (if needed), compile and return the solver module; write it to ``out`` when given."""
+    from ikcompiler import load_robot
+
+    chain = robot if isinstance(robot, Chain) else load_robot(robot, base=base, tip=tip)
+    source = compile_source(chain, target=target, free=free, tol=tol)
+    if out is not None:
+        Path(out).parent.mkdir(parents=True, exist_ok=True)
+        Path(out).write_text(source)
+    return load_module(source, name=_module_name(chain.name))
+
+
+def _module_name(name: str) -> str:
+    safe = "".join(ch if ch.isalnum() else "_" for ch in name.lower())
+    return f"{safe}_ik"

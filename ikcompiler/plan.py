@@ -1,0 +1,66 @@
+"""A plan: the chosen chain of rules and subproblems, plain data between the search and the code
+generator.  ``Plan.explain()`` renders it for ``ikc explain`` in the style of the paper's worked example.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Plan:
+    robot: str
+    joint_names: tuple[str, ...]
+    kinds: str
+    target: str
+    method: str  # "closed-form", "numerical", ...
+    steps: tuple[dict, ...]
+    free: tuple[str, ...] = ()
+    snapped: bool = False
+    n_groups: int = 0
+    geometry: tuple[str, ...] = ()
+    notes: tuple[str, ...] = field(default=())
+    cost: float = 0.0
+
+    def step_lines(self) -> list[str]:
+        names = self.joint_names
+        out = []
+        for k, s in enumerate(self.steps, start=1):
+            if s["kind"] == "SUM":
+                out.append(f"step {k}: {s['rule']}")
+                continue
+            if s["kind"] == "NUM":
+                out.append(f"step {k}: {s['rule']}")
+                continue
+            if s["kind"] == "O":
+                gives = [
+                    names[g[0][0]]
+                    if len(g) == 1
+                    else "(" + " + ".join(("" if sg > 0 else "-") + names[j] for j, sg in g) + ")"
+                    for g in s["groups"]
+                ]
+                what = ", ".join(gives)
+            else:
+                what = ", ".join(names[j] for j in s["solve"])
+            out.append(f"step {k}: {s['code']} in ({what})  <-  {s['rule']}")
+        return out
+
+    def explain(self) -> str:
+        lines = [
+            f"robot    {self.robot}",
+            f"joints   {self.kinds}  ({', '.join(self.joint_names)})",
+            f"target   {self.target}",
+            f"method   {self.method}" + ("  (near-relations snapped, Newton-corrected)" * self.snapped),
+        ]
+        if self.free:
+            lines.append(f"free     {', '.join(self.free)} (values passed at solve time)")
+        if self.geometry:
+            lines.append("")
+            lines.append("geometry")
+            lines += [f"  {g}" for g in self.geometry]
+        lines.append("")
+        lines.append("chain")
+        lines += [f"  {s}" for s in self.step_lines()]
+        for note in self.notes:
+            lines.append(f"note: {note}")
+        return "\n".join(lines)

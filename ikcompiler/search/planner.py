@@ -1,0 +1,208 @@
+"""Search for the cheapest chain of subproblems (DESIGN.md section 5).
+
+State: which joints are solved and which parallel-group sums are known.  A move (from
+:mod:`ikcompiler.rules`) solves one canonical subproblem.  Every proposed move is validated on random
+configurations of the robot before it is trusted: its subproblem must return the sampled joint values
+among its solutions, never a continuum.  That makes the search sound for any geometry: a relation the
+rules believed in but that does not hold shows up as a failed validation, with the reason kept for the
+report.
+
+The cost of a chain adds ``log2(branches)`` and a per-subproblem price, so it prefers fewer branches and
+cheaper subproblems.  Expansion is Dijkstra in cost order over the lazily built state graph
+(networkx), deterministic (fixed seeds, ordered moves) and bounded by a state budget.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import networkx as nx
+import numpy as np
+
+from ikcompiler.rules.moves import Context, propose
+from subproblems import max_solutions, solve_batch
+from subproblems.core import SubproblemError
+from subproblems.plan_runtime import _step_inputs
+from subproblems.screw import inverse_transform
+
+# Price of each subproblem beyond its branching: closed-form geometry is cheap, eliminations are not.
+PRICE = {"S1": 0.6, "S2": 0.5, "S3": 0.5, "O": 0.3, "H": 0.4, "SUM": 0.05}
+GENERAL_PRICE = {"S2-RRR": 3.0, "S2-RRT": 1.0, "S2-TRR": 1.0, "S2-RTR": 1.5, "S1-RRR": 0.5}
+
+
+def move_cost(code: str) -> float:
+    if code == "SUM":
+        return PRICE["SUM"]
+    prefix = code.split("-")[0]
+    return math.log2(max(1, max_solutions(code))) + PRICE.get(prefix, 1.0) + GENERAL_PRICE.get(code, 0.0)
+
+
+@dataclass
+class SearchReport:
+    """What the search tried: per state, the moves proposed and why each failed."""
+
+    tried: list[str] = field(default_factory=list)
+    expanded: int = 0
+
+    def summary(self, limit: int = 25) -> str:
+        head = self.tried[:limit]
+        more = len(self.tried) - len(head)
+        return "\n".join(head + ([f"... and {more} more"] if more > 0 else []))
+
+
+class Trials:
+    """Random configurations of the robot and their targets, used to validate moves."""
+
+    def __init__(self, ctx: Context, couplings, lower, upper, count: int = 6, seed: int = 7):
+        rng = np.random.default_rng(seed)
+        lo = np.where(np.isfinite(lower), lower, -ctx.scale)
+        hi = np.where(np.isfinite(upper), upper, ctx.scale)
+        th = rng.uniform(lo, hi, size=(count, ctx.n))
+        _fill_coupled(th, couplings)
+        self.theta = th
+        g = np.empty((count, 4, 4))
+        for k, t in enumerate(th):
+            G = np.eye(4)
+            from subproblems.screw import twist_exp
+
+            for i in range(ctx.n):
+                G = G @ twist_exp(ctx.twists[i], t[i])
+            g[k] = G
+        if ctx.target == "position":
+            Td = np.broadcast_to(np.eye(4), (count, 4, 4)).copy()
+            Td[:, :3, 3] = (g @ ctx.home)[:, :3, 3] - ctx.home[:3, 3]
+        else:
+            Td = g  # g_d g0^-1 = product of exponentials
+        self.Td = Td
+
+
+def _fill_coupled(th, couplings):
+    for dep, master, a, b in couplings:
+        th[:, dep] = a * th[:, master] + b
+
+
+def _closure(solved: frozenset, couplings) -> frozenset:
+    s = set(solved)
+    changed = True
+    while changed:
+        changed = False
+        for dep, master, _, _ in couplings:
+            if master in s and dep not in s:
+                s.add(dep)
+                changed = True
+            elif dep in s and master not in s:
+                s.add(master)
+                changed = True
+    return frozenset(s)
+
+
+def _angle_close(a, b, kinds, cols, tol):
+    d = a - b
+    for c, j in enumerate(cols):
+        if kinds[j] == "R":
+            d[..., c] = np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi
+    return np.abs(d).max(axis=-1) <= tol
+
+
+def validate(ctx: Context, move: dict, trials: Trials, couplings, tol: float) -> str | None:
+    """None when the move recovers the trial values; otherwise the reason it fails."""
+    if move["kind"] == "SUM":
+        return None
+    th = trials.theta
+    TH = np.where(np.isin(np.arange(ctx.n), move["known"]), th, np.nan)
+    try:
+        tw, inputs = _step_inputs(move, ctx.twists, ctx.kinds, trials.Td, TH, None)
+        res = solve_batch(move["code"], tw, **inputs)
+    except (SubproblemError, KeyError, ValueError, np.linalg.LinAlgError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+    if res.continuum.any():
+        return "the subproblem has a continuum of solutions here"
+    if move["kind"] == "O":
+        truth = np.stack([sum(s * th[:, j] for j, s in g) for g in move["groups"]], axis=1)
+        cols_kinds = "R" * truth.shape[1]
+        ok = _angle_close(res.q, truth[:, None, :], cols_kinds, range(truth.shape[1]), tol)
+    else:
+        truth = th[:, move["solve"]]
+        ok = _angle_close(res.q, truth[:, None, :], ctx.kinds, move["solve"], tol * max(1.0, ctx.scale))
+    found = np.any(ok & res.valid, axis=1)
+    if not found.all():
+        return f"misses the sampled joint values in {int((~found).sum())} of {len(found)} trials"
+    return None
+
+
+def search(ctx: Context, couplings, lower, upper, start: frozenset, max_states: int = 400):
+    """Cheapest validated chain from ``start`` to all joints solved: (steps, cost, report)."""
+    trials = Trials(ctx, couplings, lower, upper)
+    report = SearchReport()
+    goal_size = ctx.n
+    start_state = (_closure(start, couplings), frozenset())
+    graph = nx.DiGraph()
+    graph.add_node(start_state)
+    best = {start_state: 0.0}
+    counter = itertools.count()
+    heap = [(0.0, next(counter), start_state)]
+    done = set()
+    goal = None
+    valid_cache: dict[str, str | None] = {}
+    while heap and report.expanded < max_states:
+        cost, _, state = heapq.heappop(heap)
+        if state in done:
+            continue
+        done.add(state)
+        report.expanded += 1
+        solved, sums = state
+        if len(solved) == goal_size:
+            goal = state
+            break
+        for move in propose(ctx, solved, sums):
+            key = repr((sorted(solved), sorted(map(repr, sums)), sorted(move.items(), key=str)))
+            if key not in valid_cache:
+                tol = 1e-2 if ctx.snapped else 1e-6
+                valid_cache[key] = validate(ctx, move, trials, couplings, tol)
+            why = valid_cache[key]
+            names = ", ".join(ctx.names[j] for j in move.get("solve", []))
+            if why is not None:
+                report.tried.append(f"{move['code']} for ({names}) via {move['rule']}: {why}")
+                continue
+            new_solved = set(solved) | set(move.get("solve", []))
+            new_sums = set(sums)
+            for g in move.get("gives", ()):
+                if len(g) > 1:
+                    new_sums.add(g)
+            nxt = (_closure(frozenset(new_solved), couplings), frozenset(new_sums))
+            if nxt == state:
+                continue
+            c = cost + move_cost(move["code"])
+            if c < best.get(nxt, math.inf):
+                best[nxt] = c
+                graph.add_edge(state, nxt, weight=move_cost(move["code"]), move=move)
+                heapq.heappush(heap, (c, next(counter), nxt))
+    if goal is None:
+        return None, math.inf, report
+    path = nx.dijkstra_path(graph, start_state, goal)
+    steps = [graph.edges[a, b]["move"] for a, b in zip(path, path[1:])]
+    return steps, best[goal], report
+
+
+def finalize_steps(steps: list[dict]) -> tuple[list[dict], int]:
+    """Number the parallel groups and strip search-only fields; returns (steps, group count)."""
+    ids: dict = {}
+    out = []
+    for s in steps:
+        s = dict(s)
+        if s["kind"] == "O":
+            gids = []
+            for g in s["gives"]:
+                gids.append(ids.setdefault(g, len(ids)) if len(g) > 1 else -1)
+            s["group_ids"] = gids
+            s.pop("gives")
+        if s["kind"] == "SUM":
+            s["group"] = ids[s["group"]]
+        out.append(s)
+    return out, len(ids)
+
+
+__all__ = ["search", "validate", "finalize_steps", "move_cost", "SearchReport", "inverse_transform"]

@@ -1,0 +1,129 @@
+"""Round-trip and completeness checks of a compiled solver on random joint values.
+
+Sample joint values inside the limits (a quarter of them snapped to the special angles 0, +-pi/2, pi),
+compute their poses with the *chain's own* forward kinematics, solve, and count: poses, solutions,
+recovered (the sampled vector is among the solutions), wrong (a returned solution whose FK misses the
+target by more than the tolerance), missed.  The batch path is checked against the single-pose path on a
+subset.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
+
+
+@dataclass
+class VerifyReport:
+    robot: str
+    method: str
+    poses: int
+    solutions: int
+    recovered: int
+    wrong: int
+    missed: int
+    max_error: float
+    median_error: float
+    batch_mismatch: int
+    scalar_checked: int
+
+    @property
+    def ok(self) -> bool:
+        return self.wrong == 0 and self.batch_mismatch == 0
+
+    def text(self) -> str:
+        rate = self.recovered / self.poses if self.poses else 0.0
+        return (
+            f"{self.robot}: method {self.method}\n"
+            f"  poses {self.poses}  solutions {self.solutions}  recovered {self.recovered} ({rate:.4%})  "
+            f"wrong {self.wrong}  missed {self.missed}\n"
+            f"  error of returned solutions (relative to robot size): max {self.max_error:.2e}, "
+            f"median {self.median_error:.2e}\n"
+            f"  single-pose vs batch: {self.scalar_checked} poses compared, {self.batch_mismatch} differ"
+        )
+
+
+def sample_configurations(chain, count: int, seed: int = 0, free_values=None) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo = np.where(np.isfinite(chain.lower), chain.lower, -math.pi)
+    hi = np.where(np.isfinite(chain.upper), chain.upper, math.pi)
+    kinds = [chain.joints[i].kind for i in chain.independent]
+    for c, k in enumerate(kinds):
+        if k == "T" and not (np.isfinite(chain.lower[c]) and np.isfinite(chain.upper[c])):
+            lo[c], hi[c] = -chain.scale, chain.scale
+    Q = rng.uniform(lo, hi, size=(count, chain.dof))
+    special = rng.random(size=Q.shape) < 0.25
+    pick = SPECIAL[rng.integers(0, len(SPECIAL), size=Q.shape)]
+    for c, k in enumerate(kinds):
+        if k == "R":
+            ok = special[:, c] & (pick[:, c] >= lo[c]) & (pick[:, c] <= hi[c])
+            Q[ok, c] = pick[ok, c]
+    return Q
+
+
+def _same(a, b, kinds) -> np.ndarray:
+    d = a - b
+    for c, k in enumerate(kinds):
+        if k == "R":
+            d[..., c] = np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi
+    return np.abs(d).max(axis=-1)
+
+
+def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int = 20) -> VerifyReport:
+    Q = sample_configurations(chain, samples, seed)
+    kinds = [chain.joints[i].kind for i in chain.independent]
+    G = chain.fk_batch(Q)
+    targets = G[:, :3, 3] if module.TARGET == "position" else G
+    free_pos = [chain.independent_names.index(f) for f in module.FREE_JOINTS]
+    free = [Q[:, p] for p in free_pos]
+    S, valid = module.solve_batch(targets, *free)
+    scale = chain.scale
+    errs, wrong, recovered, solutions = [], 0, 0, 0
+    tol = module.TOLERANCE * scale
+    for i in range(samples):
+        sols = S[i][valid[i]]
+        solutions += len(sols)
+        if len(sols) == 0:
+            continue
+        Gs = chain.fk_batch(sols)
+        if module.TARGET == "position":
+            e = np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1)
+        else:
+            e = np.maximum(
+                np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),
+                scale * np.abs(Gs[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2)),
+            )
+        errs.extend((e / scale).tolist())
+        wrong += int((e > tol).sum())
+        if (_same(sols, Q[i], kinds) <= 1e-6 * max(1.0, scale)).any():
+            recovered += 1
+    mismatch = 0
+    n_check = min(scalar_checks, samples)
+    for i in range(n_check):
+        single = module.solve(targets[i], *[f[i] for f in free])
+        batch = S[i][valid[i]]
+        if len(single) != len(batch):
+            mismatch += 1
+            continue
+        for row in single:
+            if not (_same(batch, row, kinds) <= 1e-9 * max(1.0, scale)).any():
+                mismatch += 1
+                break
+    errs = np.array(errs) if errs else np.zeros(1)
+    return VerifyReport(
+        chain.name,
+        module.METHOD,
+        samples,
+        solutions,
+        recovered,
+        wrong,
+        samples - recovered,
+        float(errs.max()),
+        float(np.median(errs)),
+        mismatch,
+        n_check,
+    )

@@ -1,0 +1,313 @@
+"""Executes a subproblem chain (a *plan*) over many target poses at once.
+
+This is the small runtime that generated solver modules and the compiler's own checks share.  A plan is
+a list of steps (plain dicts, written out literally in each generated module).  Each step reads the
+joints solved so far, rewrites the POE equation with the rules of DESIGN.md section 3, calls one
+canonical subproblem through :func:`subproblems.solve_batch`, and branches on its solutions.
+
+Equation bookkeeping (rules 5 and 7): with the solved joints known, every factor of
+``exp(xi_1 th_1) ... exp(xi_n th_n) = Td`` that belongs to a solved joint is moved to the right with the
+adjoint, ``K exp(xi th) = exp((Ad_K xi) th) K``, which leaves
+
+    prod_{u unsolved} exp(xi'_u th_u) = T' = Td K_all^-1,   xi'_u = Ad_{K_u} xi_u
+
+where ``K_u`` is the product of the solved factors before joint u.  An inverted step uses the same
+equation inverted (rule 5): ``prod_reversed exp(-xi'_u th_u) = T'^-1``.
+
+Step kinds (``step["kind"]``):
+
+* ``"S1"``: class I on all unsolved joints.
+* ``"O"``: orientation separation (rule 2): revolute unknowns grouped in runs of parallel axes; the
+  group sums ``sum_i s_i th_i`` are solved with an ``O-*`` rotation subproblem.
+* ``"OH"``: orientation plus axial projection (rules 2 and 6): ``h^T R_mid x = h^T R' x`` where ``h`` is
+  the axis of a leading parallel group and ``x`` the axis of a trailing parallel group.
+* ``"S2"``: rule 1: the point ``p`` common to the trailing ``trail`` axes is fixed by them, leaving
+  ``prod_rest exp(xi' th) p = T' p``.
+* ``"S3"``: rules 1 and 3: also a point ``c`` common to the leading ``lead`` axes: distance
+  ``|| prod_mid exp(xi' th) p - c || = || T' p - c ||``.
+* ``"HL"``: rules 1 and 6: the leading ``lead`` axes are parallel to ``h``:
+  ``h^T prod_mid exp(xi' th) p = h^T T' p``.
+* ``"HT"``: rules 1 and 6 on the other side: the trailing group ``lead`` before ``trail`` is parallel
+  to ``h``: ``h^T exp(-xi'_a th_a) T' p = h^T p`` for the single leading unknown ``a``.
+* ``"SUM"``: a joint from a known group sum.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from subproblems.core import solve_batch
+from subproblems.screw import inverse_transform, twist_exp_batch
+
+__all__ = ["run_plan", "finish", "fk_batch", "wrap_angles"]
+
+
+def _adjoint_apply(G, xi) -> np.ndarray:
+    """``Ad_G xi`` for G (M, 4, 4) and one twist xi (6,); returns (M, 6)."""
+    R, p = G[:, :3, :3], G[:, :3, 3]
+    w = R @ xi[3:]
+    v = R @ xi[:3] + np.cross(p, w)
+    return np.concatenate([v, w], axis=1)
+
+
+def _line_point(G, p0) -> np.ndarray:
+    return np.einsum("mij,j->mi", G[:, :3, :3], np.asarray(p0, dtype=float)) + G[:, :3, 3]
+
+
+def _apply(T, p) -> np.ndarray:
+    return np.einsum("mij,mj->mi", T[:, :3, :3], p) + T[:, :3, 3]
+
+
+def _equation(step, twists, kinds, Td, TH):
+    """Transformed unsolved twists {u: (M, 6)}, the K_u transforms and T' for the step's solved set."""
+    M = TH.shape[0]
+    solved = set(step["known"])
+    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
+    xi_t, K = {}, {}
+    for i in range(len(kinds)):
+        if i in solved:
+            G = G @ twist_exp_batch(twists[i], TH[:, i])
+        else:
+            xi_t[i] = _adjoint_apply(G, twists[i])
+            K[i] = G.copy()
+    Tp = Td @ inverse_transform(G)
+    return xi_t, K, Tp, G
+
+
+def _step_inputs(step, twists, kinds, Td, TH, SIG):
+    """Subproblem inputs (twists, keyword inputs) of one step, for every instance."""
+    kind = step["kind"]
+    xi_t, K, Tp, G_all = _equation(step, twists, kinds, Td, TH)
+    sign = -1.0 if step.get("inverted") else 1.0
+    if step.get("inverted"):
+        Tp = inverse_transform(Tp)
+
+    def tw(j):
+        return sign * xi_t[j]
+
+    if kind == "S1":
+        return np.stack([tw(j) for j in step["solve"]], axis=1), {"T": Tp}
+    if kind == "O":
+        cols = []
+        for group in step["groups"]:
+            first = group[0][0]
+            w = xi_t[first][:, 3:] * sign
+            cols.append(np.concatenate([np.zeros_like(w), w], axis=1))
+        T = Tp.copy()
+        T[:, :3, 3] = 0.0
+        return np.stack(cols, axis=1), {"T": T}
+    if kind == "OH":
+        h = xi_t[step["lead"][0]][:, 3:]
+        x = xi_t[step["trail"][0]][:, 3:]
+        w = xi_t[step["solve"][0]][:, 3:]
+        if step.get("inverted"):
+            h, x = x, h
+        twist = np.concatenate([np.zeros_like(w), sign * w], axis=1)[:, None, :]
+        Rx = np.einsum("mij,mj->mi", Tp[:, :3, :3], x)
+        return twist, {"p": x, "h": h, "d": np.sum(h * Rx, axis=1)}
+    # Point-based kinds: p is fixed by the trailing axes (K_u carries the home point p0 with them);
+    # with no trailing axes p is the tool point carried by every solved joint (position targets).
+    p = _line_point(K[step["trail"][0]] if step["trail"] else G_all, step["p0"])
+    Tp_p = _apply(Tp, p)
+    solve_tw = np.stack([tw(j) for j in step["solve"]], axis=1)
+    if kind == "S2":
+        return solve_tw, {"p": p, "q": Tp_p}
+    if kind == "S3":
+        c = _line_point(K[step["lead"][0]], step["c0"])
+        d = np.linalg.norm(Tp_p - c, axis=1)
+        return solve_tw, {"p": p, "q": c, "d": d}
+    if kind == "HL":
+        h = xi_t[step["lead"][0]][:, 3:]
+        return solve_tw, {"p": p, "h": h, "d": np.sum(h * Tp_p, axis=1)}
+    if kind == "HT":
+        h = xi_t[step["lead"][0]][:, 3:]
+        # h^T exp(xi'_a th)^-1 T'p = h^T p: rotate T'p by the inverse joint motion onto the plane.
+        return -solve_tw, {"p": Tp_p, "h": h, "d": np.sum(h * p, axis=1)}
+    raise ValueError(f"unknown step kind {kind!r}")
+
+
+def _apply_couplings(TH, couplings) -> None:
+    for dep, master, a, b in couplings:
+        known_m, known_d = ~np.isnan(TH[:, master]), ~np.isnan(TH[:, dep])
+        fill = known_m & ~known_d
+        TH[fill, dep] = a * TH[fill, master] + b
+        back = known_d & ~known_m
+        TH[back, master] = (TH[back, dep] - b) / a
+
+
+def wrap_angles(Q, kinds) -> np.ndarray:
+    """Revolute values wrapped to (-pi, pi]; prismatic ones unchanged."""
+    Q = np.array(Q, dtype=float)
+    for i, k in enumerate(kinds):
+        if k == "R":
+            w = np.remainder(Q[..., i] + math.pi, 2 * math.pi) - math.pi
+            Q[..., i] = np.where(w == -math.pi, math.pi, w)
+    return Q
+
+
+def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
+    """Run every step over N targets ``Td`` (N, 4, 4) (already right-multiplied by ``g_st(0)^-1``).
+
+    ``init`` (N, n) holds the values of free joints (NaN for the others).
+
+    Returns ``(TH, owner, ls)``: candidate joint vectors (M, n) of all joints, the target each belongs
+    to (M,), and whether any step along the branch used a least-squares answer (M,).
+    """
+    twists = np.asarray(twists, dtype=float)
+    N, n = Td.shape[0], len(kinds)
+    TH = np.full((N, n), np.nan)
+    if init is not None:  # free joints: values given per target, NaN elsewhere
+        TH = np.where(np.isnan(init), TH, init)
+        _apply_couplings(TH, couplings)
+    SIG = np.full((N, max(n_groups, 1)), np.nan)
+    owner = np.arange(N)
+    ls = np.zeros(N, dtype=bool)
+    for step in steps:
+        if TH.shape[0] == 0:
+            break
+        if step["kind"] == "SUM":
+            j, g, members = step["solve"][0], step["group"], step["members"]
+            s_j = dict(members)[j]
+            acc = SIG[:, g].copy()
+            for m, s in members:
+                if m != j:
+                    acc -= s * TH[:, m]
+            TH[:, j] = acc / s_j
+            _apply_couplings(TH, couplings)
+            continue
+        tw, inputs = _step_inputs(step, twists, kinds, Td[owner], TH, SIG)
+        res = solve_batch(step["code"], tw, **inputs)
+        rows, slots = np.nonzero(res.valid)
+        TH, SIG, owner = TH[rows], SIG[rows], owner[rows]
+        ls = ls[rows] | res.ls[rows, slots]
+        vals = res.q[rows, slots]
+        if step["kind"] == "O":
+            for col, g in enumerate(step["group_ids"]):
+                group = step["groups"][col]
+                if len(group) == 1:
+                    TH[:, group[0][0]] = vals[:, col] * group[0][1]
+                else:
+                    SIG[:, g] = vals[:, col]
+        else:
+            for col, j in enumerate(step["solve"]):
+                TH[:, j] = vals[:, col]
+        _apply_couplings(TH, couplings)
+    return TH, owner, ls
+
+
+def fk_batch(twists, TH, home) -> np.ndarray:
+    """Forward kinematics of all joints' values TH (M, n): (M, 4, 4)."""
+    M = TH.shape[0]
+    g = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
+    for i in range(TH.shape[1]):
+        g = g @ twist_exp_batch(twists[i], TH[:, i])
+    return g @ np.asarray(home, dtype=float)
+
+
+def pose_error(G, T, scale: float) -> np.ndarray:
+    """Per-row pose error: max of position error and rotation error times ``scale``."""
+    dp = np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
+    dR = np.abs(G[:, :3, :3] - T[:, :3, :3]).max(axis=(1, 2))
+    return np.maximum(dp, scale * dR)
+
+
+def finish(TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale, tol, slots, error):
+    """Check every candidate against its target, wrap, remove duplicates, pack into slots.
+
+    ``error(G, T)`` measures the target error of poses G against targets (full pose, position, ...).
+    Returns ``Q (N, slots, dof)``, ``valid (N, slots)``, ``ls (N, slots)``, ``residual (N, slots)``.
+    Candidates with NaN (an unresolved joint) are dropped.  Exact solutions come first in each slot row.
+    """
+    dof = len(independent)
+    Q = np.zeros((N, slots, dof))
+    valid = np.zeros((N, slots), dtype=bool)
+    LS = np.zeros((N, slots), dtype=bool)
+    RES = np.full((N, slots), np.inf)
+    ok = ~np.isnan(TH).any(axis=1)
+    TH, owner, ls = TH[ok], owner[ok], ls[ok]
+    if TH.shape[0] == 0:
+        return Q, valid, LS, RES
+    TH = wrap_angles(TH, kinds)
+    err = error(fk_batch(twists, TH, home), targets[owner])
+    inexact = err > tol * scale
+    # order: by target, exact first, then by error
+    order = np.lexsort((err, inexact, owner))
+    TH, owner, err, inexact = TH[order], owner[order], err[order], inexact[order]
+    Qi = TH[:, independent]
+    # pack candidates per target: rank within its target (rows are sorted by owner)
+    first = np.searchsorted(owner, owner, side="left")
+    rank = np.arange(len(owner)) - first
+    C = int(rank.max()) + 1
+    cand = np.zeros((N, C, dof))
+    cval = np.zeros((N, C), dtype=bool)
+    cerr = np.full((N, C), np.inf)
+    cls = np.zeros((N, C), dtype=bool)
+    cand[owner, rank], cval[owner, rank], cerr[owner, rank], cls[owner, rank] = Qi, True, err, inexact
+    # duplicates: a candidate equal (angles modulo 2 pi) to an earlier valid one of the same target
+    rev = np.array([kinds[i] == "R" for i in independent])
+    diff = cand[:, :, None, :] - cand[:, None, :, :]
+    diff[..., rev] = np.remainder(diff[..., rev] + math.pi, 2 * math.pi) - math.pi
+    same = np.abs(diff).max(axis=3) <= 1e-9 * max(1.0, scale)
+    earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
+    dup = np.any(same & earlier & cval[:, None, :], axis=2)
+    keep = cval & ~dup
+    new_rank = np.cumsum(keep, axis=1) - 1
+    n_idx, c_idx = np.nonzero(keep & (new_rank < slots))
+    r_idx = new_rank[n_idx, c_idx]
+    Q[n_idx, r_idx] = cand[n_idx, c_idx]
+    valid[n_idx, r_idx] = True
+    LS[n_idx, r_idx] = cls[n_idx, c_idx]
+    RES[n_idx, r_idx] = cerr[n_idx, c_idx]
+    return Q, valid, LS, RES
+
+
+def _tool_jacobian(twists, TH, home, A):
+    """Space Jacobian of the tool (position of the tool origin, then rotation) w.r.t. independent joints.
+
+    Returns (G, J) with G the tool poses (M, 4, 4) and J (M, 6, dof).
+    """
+    M, n = TH.shape
+    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
+    cols = np.zeros((M, 6, n))
+    for i in range(n):
+        cols[:, :, i] = _adjoint_apply(G, twists[i])
+        G = G @ twist_exp_batch(twists[i], TH[:, i])
+    G = G @ np.asarray(home, dtype=float)
+    p = G[:, :3, 3]
+    v, w = cols[:, :3, :], cols[:, 3:, :]
+    J = np.concatenate([v + np.cross(w, p[:, :, None], axis=1), w], axis=1)
+    return G, J @ A
+
+
+def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4):
+    """Damped Gauss-Newton on the independent joints of every row toward its target (M, 4, 4).
+
+    Corrects solutions of snapped near-relations and seeds of the numerical fallback.  Rows that do
+    not converge stay where they end; the final check flags them.
+    """
+    Q = TH[:, list(independent)].copy()
+    for _ in range(iters):
+        full = Q @ A.T + b
+        G, J = _tool_jacobian(twists, full, home, A)
+        e_pos = targets[:, :3, 3] - G[:, :3, 3]
+        if target == "position":
+            e, J = e_pos, J[:, :3, :]
+        else:
+            R, Rd = G[:, :3, :3], targets[:, :3, :3]
+            e_rot = 0.5 * np.cross(R, Rd, axis=1).sum(axis=2)
+            e = np.concatenate([e_pos, e_rot], axis=1)
+        JtJ = np.einsum("mki,mkj->mij", J, J)
+        lam = 1e-12 + 1e-9 * np.einsum("mii->m", JtJ)
+        JtJ = JtJ + lam[:, None, None] * np.eye(JtJ.shape[1])
+        dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", J, e)[..., None])[..., 0]
+        Q = Q + dq
+    return Q @ A.T + b
+
+
+def numerical_seeds(N, starts, lower, upper, seed=11):
+    """Fixed, deterministic starting points for the numerical fallback: (N * S, dof) and owners."""
+    rng = np.random.default_rng(seed)
+    S = rng.uniform(lower, upper, size=(starts, len(lower)))
+    return np.tile(S, (N, 1)), np.repeat(np.arange(N), starts)
