@@ -200,7 +200,7 @@ def solve(code: str, twists, T=None, p=None, q=None, d=None, h=None) -> Result:
     >>> from subproblems.screw import revolute_twist
     >>> r = solve("S2-R", twists=[revolute_twist([0, 0, 1], [0, 0, 0])], p=[1, 0, 0], q=[0, 1, 0])
     >>> np.round(r.q, 12), r.ls, r.continuum
-    (array([[1.570796326795]]), array([False]), False)
+    (array([[1.57079633]]), array([False]), False)
     """
     entry = _entry(code)
     tw = check_twists(code, entry.kinds, twists)

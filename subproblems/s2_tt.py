@@ -1,0 +1,66 @@
+"""S2-TT and S2-TTT: translate a point onto a point with two or three prismatic joints.
+
+Equations: ``p + t_1 v_1 + t_2 v_2 = q`` (S2-TT) and ``p + t_1 v_1 + t_2 v_2 + t_3 v_3 = q`` (S2-TTT).
+Prismatic motions commute, so the order of the joints does not matter: this is the linear system
+``V t = q - p`` with the unit directions as the columns of ``V`` (3 x m).
+
+Geometry: S2-TT asks for ``q`` on the plane through ``p`` spanned by ``v_1, v_2`` and decomposes
+``q - p`` along them; S2-TTT decomposes ``q - p`` in the basis ``v_1, v_2, v_3``.
+
+Max solutions: 1 (a linear system).
+
+Degenerate cases and what is returned (``t = V^+ (q - p)``, the pseudo-inverse solution):
+
+* S2-TT, ``q`` off the plane: the least-squares decomposition of ``q - p``, flagged ``ls``;
+* dependent directions (S2-TT: parallel; S2-TTT: coplanar or with two parallel): the solutions form
+  a continuum; the minimum-norm one is returned, flagged ``continuum`` (and ``ls`` when ``q - p`` is
+  outside the span).
+
+>>> from subproblems import solve
+>>> tw = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0]]
+>>> r = solve("S2-TTT", tw, p=[0, 0, 0], q=[1, 2, 3])
+>>> r.q.tolist(), bool(r.ls[0]), r.continuum
+([[1.0, 2.0, 3.0]], False, False)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems._class2 import EXACT_TOL, problem_scale, problem_scale_batch
+from subproblems.core import BatchResult, Solution, register
+
+RANK_TOL = 1e-10
+
+
+def _solve(code: str, twists, p, q) -> list[Solution]:
+    V = np.asarray(twists, dtype=float)[:, :3].T
+    s = np.linalg.svd(V, compute_uv=False)
+    continuum = bool(s.min() <= RANK_TOL * s.max())
+    t = np.linalg.pinv(V, rcond=RANK_TOL) @ (q - p)
+    ls = float(np.linalg.norm(V @ t - (q - p))) > EXACT_TOL * problem_scale(twists, p, q)
+    return [Solution(tuple(float(x) for x in t), ls=ls, continuum=continuum)]
+
+
+def _batch(code: str, tw, p, q) -> BatchResult:
+    V = np.swapaxes(tw[..., :3], -1, -2)
+    s = np.linalg.svd(V, compute_uv=False)
+    continuum = s.min(axis=-1) <= RANK_TOL * s.max(axis=-1)
+    d = q - p
+    t = np.einsum("nij,nj->ni", np.linalg.pinv(V, rcond=RANK_TOL), d)
+    err = np.linalg.norm(np.einsum("nij,nj->ni", V, t) - d, axis=-1)
+    ls = err > EXACT_TOL * problem_scale_batch(tw, p, q)
+    n = len(t)
+    return BatchResult(code, t[:, None, :], np.ones((n, 1), bool), ls[:, None], continuum)
+
+
+@register("S2-TT", 1, batch=lambda tw, p, q: _batch("S2-TT", tw, p, q))
+def solve_s2_tt(twists, p, q) -> list[Solution]:
+    """Every solution of ``p + t_1 v_1 + t_2 v_2 = q`` (see the module docstring)."""
+    return _solve("S2-TT", twists, p, q)
+
+
+@register("S2-TTT", 1, batch=lambda tw, p, q: _batch("S2-TTT", tw, p, q))
+def solve_s2_ttt(twists, p, q) -> list[Solution]:
+    """Every solution of ``p + t_1 v_1 + t_2 v_2 + t_3 v_3 = q`` (see the module docstring)."""
+    return _solve("S2-TTT", twists, p, q)
