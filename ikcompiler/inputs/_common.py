@@ -97,6 +97,18 @@ def angle_scale(data: dict, source: str) -> float:
     return ANGLE_UNITS[unit]
 
 
+def cos_sin(t: float) -> tuple[float, float]:
+    """``(cos t, sin t)``, exact at multiples of 90 degrees (so that 90 deg gives 0, not 6e-17).
+
+    >>> cos_sin(math.pi / 2), cos_sin(-math.pi)
+    ((0.0, 1.0), (-1.0, 0.0))
+    """
+    k = round(t / (math.pi / 2))
+    if abs(t - k * (math.pi / 2)) <= 1e-15 * max(1.0, abs(t)):
+        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[k % 4]
+    return math.cos(t), math.sin(t)
+
+
 def rpy_matrix(rpy) -> np.ndarray:
     """Rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (the URDF convention: fixed axes x, then y, then z).
 
@@ -104,7 +116,7 @@ def rpy_matrix(rpy) -> np.ndarray:
     array([0., 1., 0.])
     """
     r, p, y = (float(a) for a in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    (cr, sr), (cp, sp), (cy, sy) = cos_sin(r), cos_sin(p), cos_sin(y)
     Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
     Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
     Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
