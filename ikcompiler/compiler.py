@@ -7,6 +7,7 @@ says why and falls back to a numerical multi-start solver (always available, fla
 
 from __future__ import annotations
 
+import itertools
 import math
 import types
 from pathlib import Path
@@ -81,11 +82,34 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     start = frozenset(chain.index(f) for f in free)
     steps, cost, report = search(ctx, couplings, full_lower, full_upper, start)
     geometry = tuple(analyse(chain, tol))
+    all_names = tuple(j.name for j in chain.joints)
     if steps is None:
         notes.append(
             "no closed-form chain: the rules found no subproblem sequence; tried (first moves):\n"
             + "\n".join("    " + s for s in report.summary(12).splitlines())
         )
+        found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
+        if found is not None:
+            sub_steps, joints, cost = found
+            sub_steps, n_groups = finalize_steps(sub_steps)
+            method = f"{len(joints)}d-search"
+            return Plan(
+                chain.name,
+                tuple(chain.independent_names),
+                chain.joint_types,
+                target,
+                method,
+                tuple(sub_steps),
+                free,
+                True,
+                n_groups,
+                geometry,
+                tuple(notes),
+                cost,
+                tuple(joints),
+                SEARCH_GRID[len(joints)],
+                all_names,
+            )
         step = {
             "kind": "NUM",
             "code": "NUM",
@@ -117,16 +141,34 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         "closed-form",
         tuple(steps),
         free,
-        bool(ctx.snapped),
+        any(s.get("snapped", False) for s in steps),
         n_groups,
         geometry,
         tuple(notes),
         cost,
+        all_names=all_names,
     )
 
 
+SEARCH_GRID = {1: 128, 2: 40}
+
+
+def _search_fallback(chain, ctx, couplings, lower, upper, start):
+    """Cheapest closed-form chain once one joint (then two) is treated as known: (steps, joints, cost)."""
+    candidates = [i for i in chain.independent if chain.joints[i].kind == "R" and i not in start]
+    for k in (1, 2):
+        best = None
+        for joints in itertools.combinations(candidates, k):
+            steps, cost, _ = search(ctx, couplings, lower, upper, start | frozenset(joints), max_states=200)
+            if steps is not None and (best is None or cost < best[2]):
+                best = (steps, list(joints), cost)
+        if best is not None:
+            return best
+    return None
+
+
 def solution_slots(plan: Plan) -> int:
-    if plan.method == "numerical":
+    if plan.method != "closed-form":
         return 16
     k = 1
     for s in plan.steps:

@@ -21,9 +21,16 @@ class Plan:
     geometry: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default=())
     cost: float = 0.0
+    search: tuple[int, ...] = ()  # joints gridded by the 1-D / 2-D search fallback
+    grid: int = 0
+    all_names: tuple[str, ...] = ()  # every joint, coupled ones included (steps index these)
+
+    @property
+    def joint_names_all(self) -> tuple[str, ...]:
+        return self.all_names or self.joint_names
 
     def step_lines(self) -> list[str]:
-        names = self.joint_names
+        names = self.joint_names_all
         out = []
         for k, s in enumerate(self.steps, start=1):
             if s["kind"] == "SUM":
@@ -60,6 +67,13 @@ class Plan:
             lines += [f"  {g}" for g in self.geometry]
         lines.append("")
         lines.append("chain")
+        if self.search:
+            which = ", ".join(self.joint_names_all[j] for j in self.search)
+            lines.append(
+                f"  search over {which} on a grid of {self.grid} values per joint; for each value the "
+                "closed form below gives candidates; local minima of the pose error along the grid are "
+                "polished by Newton steps on every joint"
+            )
         lines += [f"  {s}" for s in self.step_lines()]
         for note in self.notes:
             lines.append(f"note: {note}")

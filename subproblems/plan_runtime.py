@@ -152,8 +152,9 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
 
     ``init`` (N, n) holds the values of free joints (NaN for the others).
 
-    Returns ``(TH, owner, ls)``: candidate joint vectors (M, n) of all joints, the target each belongs
-    to (M,), and whether any step along the branch used a least-squares answer (M,).
+    Returns ``(TH, owner, ls, branch)``: candidate joint vectors (M, n) of all joints, the target each
+    belongs to (M,), whether any step along the branch used a least-squares answer (M,), and the branch
+    id (the solution slots taken at each step, mixed radix) that the search fallbacks follow.
     """
     twists = np.asarray(twists, dtype=float)
     N, n = Td.shape[0], len(kinds)
@@ -164,6 +165,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
     SIG = np.full((N, max(n_groups, 1)), np.nan)
     owner = np.arange(N)
     ls = np.zeros(N, dtype=bool)
+    branch = np.zeros(N, dtype=np.int64)
     for step in steps:
         if TH.shape[0] == 0:
             break
@@ -181,6 +183,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
         res = solve_batch(step["code"], tw, **inputs)
         rows, slots = np.nonzero(res.valid)
         TH, SIG, owner = TH[rows], SIG[rows], owner[rows]
+        branch = branch[rows] * res.valid.shape[1] + slots
         ls = ls[rows] | res.ls[rows, slots]
         vals = res.q[rows, slots]
         if step["kind"] == "O":
@@ -194,7 +197,50 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
             for col, j in enumerate(step["solve"]):
                 TH[:, j] = vals[:, col]
         _apply_couplings(TH, couplings)
-    return TH, owner, ls
+    return TH, owner, ls, branch
+
+
+def run_search(step, twists, kinds, Td, couplings=(), n_groups=0, init=None):
+    """Search fallback: grid over the ``step["search"]`` joints, closed form for the rest.
+
+    For every grid value the sub-plan ``step["steps"]`` (which treats the searched joints as known)
+    gives candidate branches; each branch's pose error is followed along the grid and its local minima
+    become seeds that the caller polishes with Newton steps on every joint.  Returns ``(TH, owner)``
+    seeds.  Roots closer together than one grid cell can merge: ``step["grid"]`` sets the resolution.
+    """
+    N, n = Td.shape[0], len(kinds)
+    joints, G = step["search"], step["grid"]
+    axes = [np.linspace(-math.pi, math.pi, G, endpoint=False) for _ in joints]
+    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(joints))
+    P = len(mesh)
+    base = np.full((N, n), np.nan) if init is None else init
+    seed_init = np.repeat(base, P, axis=0)
+    seed_init[:, joints] = np.tile(mesh, (N, 1))
+    TH, flat_owner, _, branch = run_plan(
+        step["steps"], twists, kinds, np.repeat(Td, P, axis=0), couplings, n_groups, seed_init
+    )
+    if TH.shape[0] == 0:
+        return TH, flat_owner
+    owner, cell = flat_owner // P, flat_owner % P
+    G = fk_batch(twists, TH, step["home"])
+    if step.get("target") == "position":
+        # Td is a translation taking the home tool point to the goal point
+        goal = Td[owner, :3, 3] + np.asarray(step["home"])[:3, 3]
+        err = np.linalg.norm(G[:, :3, 3] - goal, axis=1)
+    else:
+        err = pose_error(G, Td[owner] @ step["home"], step["scale"])
+    _, b_idx = np.unique(branch, return_inverse=True)
+    B = int(b_idx.max()) + 1
+    E = np.full((N, B) + (G,) * len(joints), np.inf)
+    shape_cells = (G,) * len(joints)
+    idx = np.unravel_index(cell, shape_cells)
+    E[(owner, b_idx) + idx] = err
+    is_min = np.isfinite(E)
+    for ax in range(2, 2 + len(joints)):
+        for shift in (1, -1):
+            is_min &= E <= np.roll(E, shift, axis=ax)
+    picked = is_min[(owner, b_idx) + idx]
+    return TH[picked], owner[picked]
 
 
 def fk_batch(twists, TH, home) -> np.ndarray:

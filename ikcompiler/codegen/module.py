@@ -112,6 +112,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     out.append(f"_FREE = {tuple(free_idx)!r}  # positions of the free joints in JOINT_NAMES\n")
     out.append(f"_N_GROUPS = {plan.n_groups}\n")
     out.append(f"_POLISH = {4 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
+    out.append(f"_SEARCH = {_literal(list(plan.search))}  # joints gridded by the search fallback\n")
+    out.append(f"_GRID = {plan.grid}\n")
     out.append("_STEPS = [\n")
     for k, (step, line) in enumerate(zip(plan.steps, lines), start=1):
         out.append(_step_source(k, step, line))
@@ -181,8 +183,15 @@ def _solve_chunk(goals, Td, init):
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                         independent=_INDEPENDENT, target=TARGET, iters=step["iters"])
         ls = np.zeros(len(TH), dtype=bool)
+    elif _SEARCH:
+        step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
+                "target": TARGET}
+        TH, owner = _rt.run_search(step, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
+                        independent=_INDEPENDENT, target=TARGET, iters=8)
+        ls = np.zeros(len(TH), dtype=bool)
     else:
-        TH, owner, ls = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        TH, owner, ls, _ = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
         if _POLISH and len(TH):
             TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                             independent=_INDEPENDENT, target=TARGET, iters=_POLISH)

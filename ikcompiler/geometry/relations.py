@@ -82,8 +82,38 @@ def pair_relation(chain, i: int, j: int, tol: Tolerance = Tolerance()) -> PairRe
     return PairRelation(i, j, "skew", perp <= tol.snap, None, True)
 
 
+def persists(chain, i: int, j: int, rel: PairRelation, tol: Tolerance, samples: int = 3) -> bool:
+    """Does the home relation of axes i < j hold for every value of the joints between them?"""
+    from subproblems.screw import adjoint, twist_exp
+
+    if j == i + 1:
+        return True
+    rng = np.random.default_rng(5)
+    for _ in range(samples):
+        G = np.eye(4)
+        for k in range(i + 1, j):
+            th = (
+                rng.uniform(-np.pi, np.pi)
+                if chain.joints[k].kind == "R"
+                else rng.uniform(-1, 1) * chain.scale
+            )
+            G = G @ twist_exp(chain.joints[k].twist, th)
+        moved = adjoint(G) @ chain.joints[j].twist
+        (w1, r1), (w2, r2) = twist_line(chain.joints[i].twist), twist_line(moved)
+        if rel.relation in ("parallel", "coincident"):
+            if parallel_miss(w1, w2) > tol.snap:
+                return False
+        elif rel.relation == "intersecting":
+            x, miss = lines_meet([(w1, r1), (w2, r2)], chain.scale)
+            if x is None or miss > tol.snap:
+                return False
+        elif rel.perpendicular and abs(float(w1 @ w2)) > tol.snap:
+            return False
+    return True
+
+
 def analyse(chain, tol: Tolerance = Tolerance()) -> list[str]:
-    """Human-readable lines describing the axis geometry at home (for ``ikc explain``)."""
+    """Human-readable lines describing the axis relations that hold in every configuration."""
     out = []
     names = [j.name for j in chain.joints]
     for i in range(chain.n):
@@ -91,7 +121,7 @@ def analyse(chain, tol: Tolerance = Tolerance()) -> list[str]:
             rel = pair_relation(chain, i, j, tol)
             if rel is None or rel.relation == "skew" and not rel.perpendicular:
                 continue
-            if rel.relation == "skew" and j != i + 1:
+            if not persists(chain, i, j, rel, tol):
                 continue
             txt = f"{names[i]} & {names[j]}: {rel.relation}"
             if rel.perpendicular:

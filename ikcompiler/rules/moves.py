@@ -33,7 +33,6 @@ class Context:
     target: str = "pose"
     tol: Tolerance = field(default_factory=Tolerance)
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    snapped: set = field(default_factory=set)
 
     @property
     def n(self) -> int:
@@ -189,10 +188,12 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
     if not revs:
         return moves
     runs = _group_runs(ctx, frames, revs)
+    snapped = False
     if len(runs) <= 3:
         groups, gives = [], []
         for run in runs:
-            signs, _ = _parallel(ctx, frames, run)
+            signs, exact = _parallel(ctx, frames, run)
+            snapped |= not exact
             groups.append([[j, s] for j, s in zip(run, signs)])
             gives.append(tuple((j, s) for j, s in zip(run, signs)))
         new = [g for g in gives if len(g) == 1 or g not in sums]
@@ -209,6 +210,7 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
                     "groups": groups,
                     "gives": gives,
                     "solve": [g[0][0] for g in gives if len(g) == 1],
+                    "snapped": snapped,
                     "rule": f"rule 2: orientation separation; the rotation gives {txt}",
                 }
             )
@@ -225,6 +227,7 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
                     "lead": lead,
                     "trail": trail,
                     "solve": mid,
+                    "snapped": snapped,
                     "rule": "rules 2 and 6: the axis of "
                     f"{ctx.names[trail[-1]]} keeps its direction under its own run, its component "
                     f"along the axis of {ctx.names[lead[0]]} is unchanged by that run: "
@@ -236,8 +239,7 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
 
 def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> list[dict]:
     base = {"known": known, "inverted": inverted, "trail": trail, "p0": [float(x) for x in p0]}
-    if not exact:
-        ctx.snapped.add(tuple(trail))
+    base["snapped"] = not exact
     moves = []
     if 1 <= len(rest) <= 3:
         code = _code("S2", ctx, rest)
@@ -254,6 +256,7 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
             moves.append(
                 dict(
                     base,
+                    snapped=base["snapped"] or not c_exact,
                     kind="S3",
                     code=_code("S3", ctx, mid),
                     solve=list(mid),
@@ -262,11 +265,12 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
                     rule=f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}",
                 )
             )
-        signs, _ = _parallel(ctx, frames, lead)
+        signs, p_exact = _parallel(ctx, frames, lead)
         if signs is not None:
             moves.append(
                 dict(
                     base,
+                    snapped=base["snapped"] or not p_exact,
                     kind="HL",
                     code=_code("H", ctx, mid),
                     solve=list(mid),
@@ -275,11 +279,12 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
                 )
             )
     if len(rest) >= 2 and all(ctx.kinds[j] == "R" for j in rest[1:]):
-        signs, _ = _parallel(ctx, frames, rest[1:])
+        signs, p_exact = _parallel(ctx, frames, rest[1:])
         if signs is not None:
             moves.append(
                 dict(
                     base,
+                    snapped=base["snapped"] or not p_exact,
                     kind="HT",
                     code=_code("H", ctx, rest[:1]),
                     solve=list(rest[:1]),

@@ -160,7 +160,7 @@ def search(ctx: Context, couplings, lower, upper, start: frozenset, max_states: 
         for move in propose(ctx, solved, sums):
             key = repr((sorted(solved), sorted(map(repr, sums)), sorted(move.items(), key=str)))
             if key not in valid_cache:
-                tol = 1e-2 if ctx.snapped else 1e-6
+                tol = 1e-2 if move.get("snapped") else 1e-6
                 valid_cache[key] = validate(ctx, move, trials, couplings, tol)
             why = valid_cache[key]
             names = ", ".join(ctx.names[j] for j in move.get("solve", []))
