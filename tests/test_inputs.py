@@ -429,3 +429,13 @@ def test_load_robot_dispatch_and_names(tmp_path):
     with pytest.raises(ChainSelectionError, match="one chain"):
         load_robot("puma560", base="world")
     assert load_robot("rhino", base="base", tip="tool").n == 6
+
+
+def test_readme_spec_example_loads():
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("## Robot files", 1)[1].split("```toml", 1)[1].split("```", 1)[0]
+    chain = load_spec_text(block, "README.md")
+    assert chain.joint_types == "RRT" and chain.dof == 2 and chain.units == "mm"
+    assert np.allclose(chain.joints[1].point, [300, 0, 0])
