@@ -174,18 +174,20 @@ def circle_of(xi, a):
     return r + par, perp, np.cross(w, perp)
 
 
-def trig_roots(f0: float, c1: float, s1: float, c2: float = 0.0, s2: float = 0.0) -> list[float] | None:
+def trig_roots(
+    f0: float, c1: float, s1: float, c2: float = 0.0, s2: float = 0.0, ref: float = 0.0
+) -> list[float] | None:
     """Roots of ``f0 + c1 cos th + s1 sin th + c2 cos 2th + s2 sin 2th``.
 
     Returns the arguments of all roots of the equivalent polynomial in ``z = exp(i th)`` (degree 4, or 2
     when the second harmonic vanishes): real roots exactly, complex ones projected onto the unit
     circle, which is where the polynomial's modulus is smallest nearby (least-squares candidates).
-    Returns None when the polynomial vanishes identically (every angle is a root) and ``[]`` when it is
-    a non-zero constant.
+    Returns None when the polynomial vanishes identically (every coefficient at most ``COEF_TOL * ref``:
+    every angle is a root) and ``[]`` when it is a non-zero constant.
     """
     a = np.array([(c2 - 1j * s2) / 2, (c1 - 1j * s1) / 2, f0, (c1 + 1j * s1) / 2, (c2 + 1j * s2) / 2])
     m = float(np.abs(a).max())
-    if m == 0.0:
+    if m <= COEF_TOL * ref or m == 0.0:
         return None
     if abs(a[0]) <= COEF_TOL * m:
         if abs(a[1]) <= COEF_TOL * m:
@@ -309,6 +311,7 @@ def circle_of_batch(xi, a):
     return r + par, perp, np.cross(w, perp)
 
 
+@np.errstate(all="ignore")
 def trig_roots_batch(F):
     """Vectorised :func:`trig_roots` for ``F`` (N, 5) = (f0, c1, s1, c2, s2): angles (N, 4).
 
@@ -341,6 +344,7 @@ def trig_roots_batch(F):
     return np.angle(z)
 
 
+@np.errstate(all="ignore")
 def quadratic_roots_batch(a, b, c):
     """Two candidate real roots of ``a t^2 + b t + c`` per instance (vertex twice when complex;
     the linear root twice when ``a`` vanishes; zeros when both vanish)."""
@@ -359,6 +363,7 @@ def quadratic_roots_batch(a, b, c):
     return np.stack([r1, r2], axis=-1)
 
 
+@np.errstate(all="ignore")
 def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) -> BatchResult:
     """Vectorised :func:`finalize`: candidates (N, C, m) -> a BatchResult with ``max_solutions`` slots."""
     from subproblems.core import max_solutions
@@ -366,8 +371,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     kinds = kinds_of(code)
     K = max_solutions(code)
     N, C, m = cand.shape
-    if cand_free is None:
-        cand_free = np.zeros((N, C), dtype=bool)
+    cand_free = np.zeros((N, C), dtype=bool) if cand_free is None else np.broadcast_to(cand_free, (N, C))
     if inst_cont is None:
         inst_cont = np.zeros(N, dtype=bool)
     rev = np.array([k == "R" for k in kinds])

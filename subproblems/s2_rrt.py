@@ -1,0 +1,228 @@
+"""S2-RRT and S2-TRR: two rotations and a translation carry a point onto a point.
+
+Equations: ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 t) p = q`` (S2-RRT) and
+``exp(xi_1 t) exp(xi_2 th_2) exp(xi_3 th_3) p = q`` (S2-TRR), the latter solved as S2-RRT through
+inversion: ``exp(-xi_3 th_3) exp(-xi_2 th_2) exp(-xi_1 t) q = p``.
+
+Geometry (S2-RRT): ``z = p + t v`` slides on a line; it is then turned about axis 2 and axis 1.  The
+point ``y = exp(-xi_1 th_1) q`` runs on a circle about axis 1 and must lie on the surface swept by the
+line turning about axis 2 (a hyperboloid, cone, cylinder or plane): circle meets quadric, up to four
+points.
+
+* Axes 1 and 2 intersecting at ``c`` (the core paper's Fig. 2): rotations about both keep ``|x - c|``,
+  so ``|p + t v - c| = |q - c|`` gives ``t`` from a quadratic (law of cosines), then S2-RR for each ``t``.
+* General position (skew axes; the core paper solves it algebraically): with ``h`` the coordinate
+  along axis 2 and ``D`` the squared distance from a point ``r_2`` of axis 2, ``y`` is on the swept
+  surface iff some ``t`` has ``h(z(t)) = h(y)`` and ``D(z(t)) = D(y)``.  ``h(y)``, ``D(y)`` are linear
+  in ``(cos th_1, sin th_1)``; ``h(z(t)) = k_0 + k_1 t`` is linear in ``t``; eliminating ``t`` gives
+  ``k_1^2 D(y) - k_1^2 D(z_0) - 2 k_1 P_1 g - g^2 = 0`` with ``g = h(y) - k_0``: a trigonometric
+  polynomial of degree 2 in ``th_1``, i.e. a quartic in ``exp(i th_1)`` whose roots come from the
+  eigenvalues of its companion matrix.  Then ``t = g / k_1`` (or, when ``v`` is perpendicular to axis
+  2, the two roots of ``D(z(t)) = D(y)``), and ``th_2`` from S2-R.  Every root is polished by
+  Gauss-Newton on the full equation and verified.
+
+Max solutions: 4 (at most four roots of the quartic, one ``t`` each; perpendicular case: two angles
+times two ``t``).
+
+Degenerate cases and what is returned:
+
+* unreachable ``q``: the best local least-squares solution, flagged ``ls``;
+* the eliminant vanishes identically (``q`` on axis 1, axes 1 and 2 coincident, or parallel axes with
+  the line perpendicular to them: a planar chain), so ``th_1`` is free: ``th_1 = 0`` if that leaves a
+  solution, otherwise the ``th_1`` that moves ``y`` farthest from ``r_2`` (always feasible in the
+  planar case); flagged ``continuum``;
+* the slid point on axis 2 with ``y`` on it too: ``th_2 = 0``, flagged ``continuum``.
+
+The vectorised path is the algebraic one for every instance (the scalar path takes the geometric
+shortcut when axes 1 and 2 intersect), so the two paths check each other.
+
+>>> import numpy as np
+>>> from subproblems import solve
+>>> from subproblems.screw import prismatic_twist, revolute_twist
+>>> tw = [revolute_twist([0, 0, 1], [0, 0, 0]), revolute_twist([0, 1, 0], [1, 0, 0]),
+...       prismatic_twist([1, 0, 0])]
+>>> r = solve("S2-RRT", tw, p=[0, 0, 0], q=[0, 2, 0.5])
+>>> len(r.q), bool(r.ls.any()), r.continuum
+(4, False, False)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from subproblems._class2 import (
+    COEF_TOL,
+    FREE_TOL,
+    circle_of,
+    circle_of_batch,
+    finalize,
+    finalize_batch,
+    inverted,
+    inverted_batch,
+    problem_scale,
+    problem_scale_batch,
+    quadratic_form_to_fourier,
+    quadratic_roots_batch,
+    real_quadratic_roots,
+    revert,
+    revert_batch,
+    rotation_angle,
+    rotation_angle_batch,
+    trig_roots,
+    trig_roots_batch,
+)
+from subproblems.core import BatchResult, Solution, register
+from subproblems.s2_rr import PARALLEL_TOL, rr_candidates
+
+
+def _eliminant(x1, x2, x3, p, q):
+    """Coefficients of the eliminant in th_1 and the pieces needed to back-substitute (see doc)."""
+    c0, cc, cs = circle_of(x1, q)  # y = c0 + cc cos th1 - cs sin th1
+    w2 = x2[3:]
+    r2 = np.cross(w2, x2[:3])
+    v = x3[:3]
+    hy = (float(w2 @ (c0 - r2)), float(w2 @ cc), -float(w2 @ cs))
+    k0, k1 = float(w2 @ (p - r2)), float(w2 @ v)
+    P0, P1 = float((p - r2) @ (p - r2)), float((p - r2) @ v)
+    d0 = float((c0 - r2) @ (c0 - r2) + cc @ cc)
+    dc, ds = 2 * float((c0 - r2) @ cc), -2 * float((c0 - r2) @ cs)
+    g0, gc, gs = hy[0] - k0, hy[1], hy[2]
+    A, B, C = -gc * gc, -2 * gc * gs, -gs * gs
+    D = k1 * k1 * dc - 2 * k1 * P1 * gc - 2 * g0 * gc
+    E = k1 * k1 * ds - 2 * k1 * P1 * gs - 2 * g0 * gs
+    F = k1 * k1 * (d0 - P0) - 2 * k1 * P1 * g0 - g0 * g0
+    return (A, B, C, D, E, F), (c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds)
+
+
+def _candidates_for(th1_list, x2, x3, p, q, aux, scale):
+    c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds = aux
+    v = x3[:3]
+    out = []
+    for th1 in th1_list:
+        c, s = math.cos(th1), math.sin(th1)
+        y = c0 + cc * c - cs * s
+        ts = real_quadratic_roots(1.0, 2 * P1, P0 - (d0 + dc * c + ds * s))
+        if abs(k1) > COEF_TOL:
+            ts.append((g0 + gc * c + gs * s) / k1)
+        for t in ts:
+            th2, free = rotation_angle(x2, p + t * v, y, scale)
+            out.append(((th1, th2, t), free))
+    return out
+
+
+def rrt_candidates(twists, p, q, scale):
+    """Candidates and continuum flag of S2-RRT (geometric when axes 1, 2 intersect, else algebraic)."""
+    x1, x2, x3 = twists
+    w1, w2, v = x1[3:], x2[3:], x3[:3]
+    r1, r2 = np.cross(w1, x1[:3]), np.cross(w2, x2[:3])
+    n = np.cross(w1, w2)
+    nn = float(np.linalg.norm(n))
+    if nn > PARALLEL_TOL and abs(float((r2 - r1) @ n)) / nn <= FREE_TOL * scale:
+        ab = np.linalg.lstsq(np.column_stack([w1, -w2]), r2 - r1, rcond=None)[0]
+        c = r1 + ab[0] * w1
+        b = float((p - c) @ v)
+        out = []
+        for t in real_quadratic_roots(1.0, 2 * b, float((p - c) @ (p - c) - (q - c) @ (q - c))):
+            pt = p + t * v
+            for (th1, th2), free in rr_candidates(twists[:2], pt, q, scale)[0]:
+                out.append(((th1, th2, t), free))
+        return [out], False
+    coef, aux = _eliminant(x1, x2, x3, p, q)
+    roots = trig_roots(*quadratic_form_to_fourier(*coef), ref=scale * scale)
+    if roots is None:  # th_1 free: representatives, preferred in this order
+        c0, cc, cs, *_rest = aux
+        dc, ds = aux[10], aux[11]
+        return [
+            _candidates_for([0.0], x2, x3, p, q, aux, scale),
+            _candidates_for([math.atan2(ds, dc)], x2, x3, p, q, aux, scale),
+        ], True
+    return [_candidates_for(roots, x2, x3, p, q, aux, scale)], False
+
+
+def solve_rrt(code, twists, p, q) -> list[Solution]:
+    scale = problem_scale(twists, p, q)
+    groups, cont = rrt_candidates(twists, p, q, scale)
+    sols = []
+    for cands in groups:
+        sols = finalize(code, twists, p, q, cands, continuum=cont)
+        if not all(s.ls for s in sols):
+            break
+    return sols
+
+
+@register("S2-RRT", 4, batch=lambda tw, p, q: rrt_batch(tw, p, q))
+def solve_s2_rrt(twists, p, q) -> list[Solution]:
+    """Every solution of ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 t) p = q`` (module docstring)."""
+    return solve_rrt("S2-RRT", twists, p, q)
+
+
+@register("S2-TRR", 4, batch=lambda tw, p, q: revert_batch(rrt_batch(inverted_batch(tw), q, p), "S2-TRR"))
+def solve_s2_trr(twists, p, q) -> list[Solution]:
+    """Every solution of ``exp(xi_1 t) exp(xi_2 th_2) exp(xi_3 th_3) p = q``, by inversion to S2-RRT."""
+    return revert(solve_rrt("S2-RRT", inverted(twists), q, p))
+
+
+def rrt_batch(tw, p, q) -> BatchResult:
+    """Vectorised S2-RRT: the algebraic path for every instance."""
+    x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
+    scale = problem_scale_batch(tw, p, q)
+    c0, cc, cs = circle_of_batch(x1, q)
+    w2, v = x2[:, 3:], x3[:, :3]
+    r2 = np.cross(w2, x2[:, :3])
+
+    def dot(a, b):
+        return np.sum(a * b, -1)
+
+    k0, k1 = dot(w2, p - r2), dot(w2, v)
+    P0, P1 = dot(p - r2, p - r2), dot(p - r2, v)
+    d0 = dot(c0 - r2, c0 - r2) + dot(cc, cc)
+    dc, ds = 2 * dot(c0 - r2, cc), -2 * dot(c0 - r2, cs)
+    g0, gc, gs = dot(w2, c0 - r2) - k0, dot(w2, cc), -dot(w2, cs)
+    A, B, C = -gc * gc, -2 * gc * gs, -gs * gs
+    D = k1 * k1 * dc - 2 * k1 * P1 * gc - 2 * g0 * gc
+    E = k1 * k1 * ds - 2 * k1 * P1 * gs - 2 * g0 * gs
+    F = k1 * k1 * (d0 - P0) - 2 * k1 * P1 * g0 - g0 * g0
+    four = np.stack(quadratic_form_to_fourier(A, B, C, D, E, F), -1)
+    free1 = np.abs(four).max(-1) <= COEF_TOL * scale * scale
+    th1 = np.concatenate(
+        [trig_roots_batch(four), np.zeros((len(F), 1)), np.arctan2(ds, dc)[:, None]], axis=1
+    )  # (N, 6)
+    c, s = np.cos(th1), np.sin(th1)
+    y = c0[:, None] + cc[:, None] * c[..., None] - cs[:, None] * s[..., None]
+    ts = quadratic_roots_batch(
+        np.ones_like(c),
+        2 * P1[:, None] * np.ones_like(c),
+        P0[:, None] - (d0[:, None] + dc[:, None] * c + ds[:, None] * s),
+    )
+    ok = np.abs(k1) > COEF_TOL
+    tl = np.where(
+        ok[:, None], (g0[:, None] + gc[:, None] * c + gs[:, None] * s) / np.where(ok, k1, 1.0)[:, None], 0.0
+    )
+    t = np.concatenate([ts, tl[..., None]], axis=-1)  # (N, 6, 3)
+    N = len(F)
+    TH1 = np.repeat(th1[..., None], 3, axis=-1).reshape(N, -1)
+    Y = np.repeat(y[:, :, None, :], 3, axis=2).reshape(N, -1, 3)
+    T = t.reshape(N, -1)
+    z = p[:, None] + T[..., None] * v[:, None]
+    th2, free2 = rotation_angle_batch(x2[:, None], z, Y, scale[:, None])
+    cand = np.stack([TH1, th2, T], -1)
+    # representatives of a free th_1 (slots 4, 5 of th1) count only when the eliminant vanishes
+    rep = np.zeros(th1.shape[1], dtype=bool)
+    rep[4:] = True
+    is_rep = np.repeat(rep, 3)[None, :]
+    fin = np.isfinite(cand).all(-1) & (~is_rep | free1[:, None])
+    # with a free th_1, prefer the th_1 = 0 representative when it works (as the scalar path)
+    cand = np.where(fin[..., None], cand, np.nan)
+    r = finalize_batch("S2-RRT", tw, p, q, cand, free2, free1)
+    return _prefer_zero_rep(r, free1)
+
+
+def _prefer_zero_rep(r: BatchResult, free1) -> BatchResult:
+    """With a free th_1, keep the th_1 = 0 representatives when one of them is exact."""
+    zero = np.abs(r.q[..., 0]) <= 1e-12
+    has_zero = (zero & r.valid & ~r.ls).any(axis=1)
+    drop = free1[:, None] & has_zero[:, None] & ~zero
+    valid = r.valid & ~drop
+    return BatchResult(r.code, r.q, valid, r.ls, r.continuum, r.vectorised)
