@@ -1,0 +1,83 @@
+"""S2-TTR and S2-RTT: two translations and a rotation carry a point onto a point.
+
+Equations: ``exp(xi_1 t_1) exp(xi_2 t_2) exp(xi_3 th) p = q`` (S2-TTR) and
+``exp(xi_1 th) exp(xi_2 t_2) exp(xi_3 t_3) p = q`` (S2-RTT), the latter solved as S2-TTR through
+inversion (``exp(-xi_3 t_3) exp(-xi_2 t_2) exp(-xi_1 th) q = p``).
+
+Geometry (S2-TTR): translations commute, so ``q - exp(xi_3 th) p`` must lie in the plane spanned by
+``v_1, v_2``.  With ``n = v_1 x v_2``, "rotate a point to a plane": ``n . exp(xi_3 th) p = n . q`` is
+linear in ``(cos th, sin th)`` (at most two angles), then ``t_1, t_2`` decompose the rest (S2-TT).
+
+Max solutions: 2.
+
+Degenerate cases and what is returned:
+
+* the circle of ``p`` misses the plane: the angle bringing it closest, then least-squares
+  translations, flagged ``ls``;
+* ``n`` parallel to the axis, or ``p`` on the axis: the plane condition holds for every angle (or
+  none): ``th = 0``, flagged ``continuum`` (``ls`` if it holds for none);
+* parallel translations (``v_1 = +-v_2``): only ``t_1 +- t_2`` matters: ``t_2 = 0`` and S2-TR for
+  ``(t_1, th)``, flagged ``continuum``.
+
+No vectorised path yet: ``solve_batch`` loops over the scalar one (``vectorised=False``).
+
+>>> import numpy as np
+>>> from subproblems import solve
+>>> from subproblems.screw import prismatic_twist, revolute_twist
+>>> tw = [prismatic_twist([1, 0, 0]), prismatic_twist([0, 1, 0]), revolute_twist([1, 0, 0], [0, 0, 0])]
+>>> r = solve("S2-TTR", tw, p=[0, 0, 1], q=[2, 3, 0])
+>>> np.round(r.q, 6) + 0.0
+array([[ 2.      ,  2.      , -1.570796],
+       [ 2.      ,  4.      ,  1.570796]])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems._class2 import (
+    circle_of,
+    finalize,
+    inverted,
+    problem_scale,
+    revert,
+    rotation_angle,
+    trig_roots,
+)
+from subproblems.core import Solution, register
+from subproblems.s2_rr import PARALLEL_TOL
+from subproblems.s2_rt import tr_candidates
+
+
+def ttr_candidates(twists, p, q, scale):
+    x1, x2, x3 = twists
+    v1, v2 = x1[:3], x2[:3]
+    n = np.cross(v1, v2)
+    nn = float(np.linalg.norm(n))
+    if nn <= PARALLEL_TOL:
+        return [((t1, 0.0, th), free) for (t1, th), free in tr_candidates([x1, x3], p, q, scale)], True
+    n = n / nn
+    c0, cc, cs = circle_of(x3, p)
+    roots = trig_roots(float(n @ (c0 - q)), float(n @ cc), float(n @ cs), ref=scale)
+    cont = roots is None
+    V = np.column_stack([v1, v2])
+    out = []
+    for th in [0.0] if cont else roots:
+        _, free = rotation_angle(x3, p, q, scale)
+        z = c0 + cc * np.cos(th) + cs * np.sin(th)
+        t = np.linalg.lstsq(V, q - z, rcond=None)[0]
+        out.append(((float(t[0]), float(t[1]), th), free))
+    return out, cont
+
+
+@register("S2-TTR", 2)
+def solve_s2_ttr(twists, p, q) -> list[Solution]:
+    """Every solution of ``exp(xi_1 t_1) exp(xi_2 t_2) exp(xi_3 th) p = q`` (module docstring)."""
+    cands, cont = ttr_candidates(twists, p, q, problem_scale(twists, p, q))
+    return finalize("S2-TTR", twists, p, q, cands, continuum=cont)
+
+
+@register("S2-RTT", 2)
+def solve_s2_rtt(twists, p, q) -> list[Solution]:
+    """Every solution of ``exp(xi_1 th) exp(xi_2 t_2) exp(xi_3 t_3) p = q``, by inversion to S2-TTR."""
+    return revert(solve_s2_ttr(inverted(twists), q, p))
