@@ -3,8 +3,9 @@
 Sample joint values inside the limits (a quarter of them snapped to the special angles 0, +-pi/2, pi),
 compute their poses with the *chain's own* forward kinematics, solve, and count: poses, solutions,
 recovered (the sampled vector is among the solutions), wrong (a returned solution whose FK misses the
-target by more than the tolerance), missed.  The batch path is checked against the single-pose path on a
-subset.
+target by more than the tolerance), self-motion (not recovered, but the pose is singular with a
+continuum of solutions and a flagged representative was returned), missed (the rest).  The batch
+path is checked against the single-pose path on a subset.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ class VerifyReport:
     recovered: int
     wrong: int
     missed: int
+    self_motion: int
     max_error: float
     median_error: float
     batch_mismatch: int
@@ -40,7 +42,7 @@ class VerifyReport:
         return (
             f"{self.robot}: method {self.method}\n"
             f"  poses {self.poses}  solutions {self.solutions}  recovered {self.recovered} ({rate:.4%})  "
-            f"wrong {self.wrong}  missed {self.missed}\n"
+            f"wrong {self.wrong}  missed {self.missed}  at a self-motion {self.self_motion}\n"
             f"  error of returned solutions (relative to robot size): max {self.max_error:.2e}, "
             f"median {self.median_error:.2e}\n"
             f"  single-pose vs batch: {self.scalar_checked} poses compared, {self.batch_mismatch} differ"
@@ -80,9 +82,10 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
     targets = G[:, :3, 3] if module.TARGET == "position" else G
     free_pos = [chain.independent_names.index(f) for f in module.FREE_JOINTS]
     free = [Q[:, p] for p in free_pos]
-    S, valid = module.solve_batch(targets, *free)
+    S, valid, ls, _, cont = module.solve_batch_info(targets, *free)
+    valid = valid & ~ls
     scale = chain.scale
-    errs, wrong, recovered, solutions = [], 0, 0, 0
+    errs, wrong, recovered, solutions, self_motion = [], 0, 0, 0, 0
     tol = module.TOLERANCE * scale
     for i in range(samples):
         sols = S[i][valid[i]]
@@ -101,6 +104,8 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
         wrong += int((e > tol).sum())
         if (_same(sols, Q[i], kinds) <= 1e-6 * max(1.0, scale)).any():
             recovered += 1
+        elif (cont[i] & valid[i]).any():
+            self_motion += 1
     mismatch = 0
     n_check = min(scalar_checks, samples)
     for i in range(n_check):
@@ -121,7 +126,8 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
         solutions,
         recovered,
         wrong,
-        samples - recovered,
+        samples - recovered - self_motion,
+        self_motion,
         float(errs.max()),
         float(np.median(errs)),
         mismatch,

@@ -44,11 +44,18 @@ from subproblems.screw import inverse_transform, twist_exp_batch
 __all__ = ["run_plan", "finish", "fk_batch", "wrap_angles"]
 
 
+def _cross(a, b) -> np.ndarray:
+    """Row-wise cross product of (..., 3) arrays (numpy's cross is slow on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def _adjoint_apply(G, xi) -> np.ndarray:
     """``Ad_G xi`` for G (M, 4, 4) and one twist xi (6,); returns (M, 6)."""
     R, p = G[:, :3, :3], G[:, :3, 3]
     w = R @ xi[3:]
-    v = R @ xi[:3] + np.cross(p, w)
+    v = R @ xi[:3] + _cross(p, w)
     return np.concatenate([v, w], axis=1)
 
 
@@ -152,9 +159,10 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
 
     ``init`` (N, n) holds the values of free joints (NaN for the others).
 
-    Returns ``(TH, owner, ls, branch)``: candidate joint vectors (M, n) of all joints, the target each
-    belongs to (M,), whether any step along the branch used a least-squares answer (M,), and the branch
-    id (the solution slots taken at each step, mixed radix) that the search fallbacks follow.
+    Returns ``(TH, owner, ls, branch, cont)``: candidate joint vectors (M, n) of all joints, the target
+    each belongs to (M,), whether any step along the branch used a least-squares answer (M,), the branch
+    id (the solution slots taken at each step, mixed radix) that the search fallbacks follow, and whether
+    a step met a continuum of solutions (a self-motion: the branch holds one representative) (M,).
     """
     twists = np.asarray(twists, dtype=float)
     N, n = Td.shape[0], len(kinds)
@@ -166,6 +174,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
     owner = np.arange(N)
     ls = np.zeros(N, dtype=bool)
     branch = np.zeros(N, dtype=np.int64)
+    cont = np.zeros(N, dtype=bool)
     for step in steps:
         if TH.shape[0] == 0:
             break
@@ -185,6 +194,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
         TH, SIG, owner = TH[rows], SIG[rows], owner[rows]
         branch = branch[rows] * res.valid.shape[1] + slots
         ls = ls[rows] | res.ls[rows, slots]
+        cont = cont[rows] | res.continuum[rows]
         vals = res.q[rows, slots]
         if step["kind"] == "O":
             for col, g in enumerate(step["group_ids"]):
@@ -197,7 +207,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
             for col, j in enumerate(step["solve"]):
                 TH[:, j] = vals[:, col]
         _apply_couplings(TH, couplings)
-    return TH, owner, ls, branch
+    return TH, owner, ls, branch, cont
 
 
 def run_search(step, twists, kinds, Td, couplings=(), n_groups=0, init=None):
@@ -216,19 +226,19 @@ def run_search(step, twists, kinds, Td, couplings=(), n_groups=0, init=None):
     base = np.full((N, n), np.nan) if init is None else init
     seed_init = np.repeat(base, P, axis=0)
     seed_init[:, joints] = np.tile(mesh, (N, 1))
-    TH, flat_owner, _, branch = run_plan(
+    TH, flat_owner, _, branch, _ = run_plan(
         step["steps"], twists, kinds, np.repeat(Td, P, axis=0), couplings, n_groups, seed_init
     )
     if TH.shape[0] == 0:
         return TH, flat_owner
     owner, cell = flat_owner // P, flat_owner % P
-    G = fk_batch(twists, TH, step["home"])
+    poses = fk_batch(twists, TH, step["home"])
     if step.get("target") == "position":
         # Td is a translation taking the home tool point to the goal point
         goal = Td[owner, :3, 3] + np.asarray(step["home"])[:3, 3]
-        err = np.linalg.norm(G[:, :3, 3] - goal, axis=1)
+        err = np.linalg.norm(poses[:, :3, 3] - goal, axis=1)
     else:
-        err = pose_error(G, Td[owner] @ step["home"], step["scale"])
+        err = pose_error(poses, Td[owner] @ step["home"], step["scale"])
     _, b_idx = np.unique(branch, return_inverse=True)
     B = int(b_idx.max()) + 1
     E = np.full((N, B) + (G,) * len(joints), np.inf)
@@ -259,11 +269,14 @@ def pose_error(G, T, scale: float) -> np.ndarray:
     return np.maximum(dp, scale * dR)
 
 
-def finish(TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale, tol, slots, error):
+def finish(
+    TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale, tol, slots, error, cont=None
+):
     """Check every candidate against its target, wrap, remove duplicates, pack into slots.
 
     ``error(G, T)`` measures the target error of poses G against targets (full pose, position, ...).
-    Returns ``Q (N, slots, dof)``, ``valid (N, slots)``, ``ls (N, slots)``, ``residual (N, slots)``.
+    Returns ``Q (N, slots, dof)``, ``valid (N, slots)``, ``ls (N, slots)``, ``residual (N, slots)``,
+    ``continuum (N, slots)``.
     Candidates with NaN (an unresolved joint) are dropped.  Exact solutions come first in each slot row.
     """
     dof = len(independent)
@@ -271,16 +284,18 @@ def finish(TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale
     valid = np.zeros((N, slots), dtype=bool)
     LS = np.zeros((N, slots), dtype=bool)
     RES = np.full((N, slots), np.inf)
+    CONT = np.zeros((N, slots), dtype=bool)
+    cont = np.zeros(len(owner), dtype=bool) if cont is None else cont
     ok = ~np.isnan(TH).any(axis=1)
-    TH, owner, ls = TH[ok], owner[ok], ls[ok]
+    TH, owner, ls, cont = TH[ok], owner[ok], ls[ok], cont[ok]
     if TH.shape[0] == 0:
-        return Q, valid, LS, RES
+        return Q, valid, LS, RES, CONT
     TH = wrap_angles(TH, kinds)
     err = error(fk_batch(twists, TH, home), targets[owner])
     inexact = err > tol * scale
     # order: by target, exact first, then by error
     order = np.lexsort((err, inexact, owner))
-    TH, owner, err, inexact = TH[order], owner[order], err[order], inexact[order]
+    TH, owner, err, inexact, cont = TH[order], owner[order], err[order], inexact[order], cont[order]
     Qi = TH[:, independent]
     # pack candidates per target: rank within its target (rows are sorted by owner)
     first = np.searchsorted(owner, owner, side="left")
@@ -290,7 +305,9 @@ def finish(TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale
     cval = np.zeros((N, C), dtype=bool)
     cerr = np.full((N, C), np.inf)
     cls = np.zeros((N, C), dtype=bool)
+    ccont = np.zeros((N, C), dtype=bool)
     cand[owner, rank], cval[owner, rank], cerr[owner, rank], cls[owner, rank] = Qi, True, err, inexact
+    ccont[owner, rank] = cont
     # duplicates: a candidate equal (angles modulo 2 pi) to an earlier valid one of the same target
     rev = np.array([kinds[i] == "R" for i in independent])
     diff = cand[:, :, None, :] - cand[:, None, :, :]
@@ -306,7 +323,8 @@ def finish(TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale
     valid[n_idx, r_idx] = True
     LS[n_idx, r_idx] = cls[n_idx, c_idx]
     RES[n_idx, r_idx] = cerr[n_idx, c_idx]
-    return Q, valid, LS, RES
+    CONT[n_idx, r_idx] = ccont[n_idx, c_idx]
+    return Q, valid, LS, RES, CONT
 
 
 def _tool_jacobian(twists, TH, home, A):

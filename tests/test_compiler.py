@@ -115,7 +115,7 @@ def test_unreachable_pose_returns_no_exact_solution(rhino):
     T = np.eye(4)
     T[:3, 3] = [1e5, 0, 0]
     assert module.solve(T).shape == (0, 6)
-    q, res, ls = module.solve_info(T)
+    q, res, ls, _ = module.solve_info(T)
     assert np.all(ls) and np.all(res > 0)
 
 

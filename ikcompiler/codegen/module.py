@@ -77,7 +77,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
         couplings.append((chain.index(c.joint), chain.index(c.master), c.a, c.b))
     free_idx = [chain.independent_names.index(f) for f in plan.free]
     lines = plan.step_lines()
-    plan_doc = "\n".join("    " + s for s in plan.explain().splitlines())
+    plan_doc = "\n".join(("    " + s).rstrip() for s in plan.explain().splitlines())
     out = [
         HEADER.format(
             robot=plan.robot,
@@ -182,29 +182,36 @@ def _solve_chunk(goals, Td, init):
         TH = np.where(fixed, init[owner], TH)
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                         independent=_INDEPENDENT, target=TARGET, iters=step["iters"])
-        ls = np.zeros(len(TH), dtype=bool)
+        ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
                 "target": TARGET}
         TH, owner = _rt.run_search(step, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                         independent=_INDEPENDENT, target=TARGET, iters=8)
-        ls = np.zeros(len(TH), dtype=bool)
+        ls = cont = np.zeros(len(TH), dtype=bool)
     else:
-        TH, owner, ls, _ = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        if cont.any():
+            # A self-motion: the representative a step chose may not complete the pose; Newton steps
+            # on every joint pull it onto a nearby exact solution of the continuum.
+            TH[cont] = _rt.polish(TH[cont], goals[owner[cont]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
+                                  independent=_INDEPENDENT, target=TARGET, iters=60)
         if _POLISH and len(TH):
             TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                             independent=_INDEPENDENT, target=TARGET, iters=_POLISH)
     return _rt.finish(TH, owner, ls, N, twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
-                      slots=MAX_SOLUTIONS, error=_error)
+                      slots=MAX_SOLUTIONS, error=_error, cont=cont)
 
 
 def solve_batch_info(Ts, *free, chunk=4096):
-    """Every solution of N targets: Q (N, K, n), valid (N, K), ls (N, K), residual (N, K).
+    """Every solution of N targets: Q (N, K, n), valid (N, K), ls (N, K), residual (N, K), continuum (N, K).
 
     Rows with ls True are least-squares answers (their residual says how far they miss); valid marks
-    the filled slots.  Vectorised over the targets; processed in chunks to bound memory.
+    the filled slots; continuum marks solutions that are one representative of a self-motion (the
+    target is at a singular configuration with infinitely many solutions).  Vectorised over the
+    targets; processed in chunks to bound memory.
     """
     goals, Td = _targets(Ts)
     init = _init(len(goals), free)
@@ -212,25 +219,26 @@ def solve_batch_info(Ts, *free, chunk=4096):
              for i in range(0, len(goals), chunk)]
     if not parts:
         n = len(JOINT_NAMES)
-        return (np.zeros((0, MAX_SOLUTIONS, n)), np.zeros((0, MAX_SOLUTIONS), bool),
-                np.zeros((0, MAX_SOLUTIONS), bool), np.zeros((0, MAX_SOLUTIONS)))
+        empty = np.zeros((0, MAX_SOLUTIONS), bool)
+        return np.zeros((0, MAX_SOLUTIONS, n)), empty, empty, np.zeros((0, MAX_SOLUTIONS)), empty
     return tuple(np.concatenate(x) for x in zip(*parts))
 
 
 def solve_batch(Ts, *free):
     """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
-    Q, valid, ls, _ = solve_batch_info(Ts, *free)
+    Q, valid, ls, _, _ = solve_batch_info(Ts, *free)
     return Q, valid & ~ls
 
 
 def solve_info(T, *free):
-    """All candidate solutions of one target with residuals and least-squares flags: (q, residual, ls)."""
-    Q, valid, ls, res = solve_batch_info(np.asarray(T, dtype=float)[None], *free)
-    return Q[0][valid[0]], res[0][valid[0]], ls[0][valid[0]]
+    """All candidates of one target with residuals and flags: (q, residual, ls, continuum)."""
+    Q, valid, ls, res, cont = solve_batch_info(np.asarray(T, dtype=float)[None], *free)
+    v = valid[0]
+    return Q[0][v], res[0][v], ls[0][v], cont[0][v]
 
 
 def solve(T, *free):
     """Every exact solution of one target, one row each in JOINT_NAMES order; (0, n) if unreachable."""
-    q, _, ls = solve_info(T, *free)
+    q, _, ls, _ = solve_info(T, *free)
     return q[~ls]
 '''
