@@ -1,0 +1,700 @@
+"""Pure-rotation subproblems through the origin (orientation separation, DESIGN.md rule 2).
+
+Equations, with unit axes ``w_i`` and ``R`` a rotation matrix:
+
+* ``exp([w1] t1) = R``                                        :func:`orientation_r`   (code ``O-R``)
+* ``exp([w1] t1) exp([w2] t2) = R``                           :func:`orientation_rr`  (code ``O-RR``)
+* ``exp([w1] t1) exp([w2] t2) exp([w3] t3) = R``              :func:`orientation_rrr` (code ``O-RRR``)
+* ``exp([w1] t1) u = v``  (rotate a vector onto a vector)      :func:`direction_r`
+* ``exp([w1] t1) exp([w2] t2) u = v``                         :func:`direction_rr`
+
+Geometric meaning: the orientation part of a chain of revolute joints, every axis moved to pass through
+the origin.  A rotation has 3 degrees of freedom, so ``O-R`` and ``O-RR`` are overdetermined (3
+equations, 1 or 2 unknowns) and ``O-RRR`` is square.
+
+Maximum number of solutions: ``O-R`` 1, ``O-RR`` 1, ``O-RRR`` 2 (Euler angles: ``t2`` and its mirror),
+``direction_r`` 1, ``direction_rr`` 2 (Paden-Kahan problem 2 through the origin).
+
+Registered codes (for :func:`subproblems.solve`): ``"O-R"``, ``"O-RR"``, ``"O-RRR"``.  Their input is ``T``
+(4x4; only its rotation is used) and revolute twists (only their ``w`` is used, ``v`` is ignored).  The
+residual of a solution is the angle of ``E(t)^T R`` in radians.
+
+How each is solved and what is returned in degenerate cases:
+
+* ``O-R``: ``t = atan2(w . vee(R - R^T), tr R - w^T R w)``, the least-squares angle (Frobenius norm).
+  ``ls`` when ``R`` is not a rotation about ``w``; when ``R`` is a half-turn about an axis perpendicular to
+  ``w`` every angle is equally good: ``t = 0`` flagged ``ls`` and ``continuum``.
+* ``O-RR``: ``t1`` rotates ``w2`` onto ``R w2`` about ``w1``, then ``t2`` is ``O-R`` on ``exp(-[w1]t1) R``.
+  Parallel axes (``w2 = s w1``): only ``t1 + s t2`` is determined; ``t1 = 0`` is returned, ``continuum``.
+* ``O-RRR``: ``w1^T exp([w2]t2) w3 = w1^T R w3`` gives ``t2`` (two roots), ``t1`` rotates ``exp([w2]t2) w3``
+  onto ``R w3`` about ``w1``, ``t3`` is ``O-R`` on the rest.  Degenerate cases, all ``continuum``:
+  ``w1 || w2``: ``t1 = 0`` (``w1 || w2 || w3``: ``t1 = t2 = 0``); ``w2 || w3``: ``t2 = 0``; gimbal lock
+  (``exp([w2]t2) w3 = +-w1``, i.e. ``R w3 = +-w1``, e.g. ``t2 = 0`` of ZYZ Euler angles): ``t1 = 0``.
+  Unreachable ``R`` (possible unless the axes allow every rotation): the root of the clamped equation,
+  flagged ``ls``.
+* ``direction_r``: Paden-Kahan problem 1 about an axis through the origin; ``u`` on the axis: ``t = 0``,
+  ``continuum``; ``ls`` when the components along ``w`` or the lengths differ.
+* ``direction_rr``: the intermediate vector ``z = exp([w2]t2) u = exp(-[w1]t1) v`` has ``w2.z = w2.u``,
+  ``w1.z = w1.v``, ``|z| = |u|``: two candidates.  ``w1 || w2``: ``t1 = 0``, ``continuum``; ``u || w2``:
+  ``t2 = 0``; ``v || w1``: ``t1 = 0`` (both ``continuum``); no real ``z``: the nearest one, ``ls``.
+
+Every function returns a list of :class:`~subproblems.core.Solution` (plain floats, angles wrapped to
+(-pi, pi]); exact solutions are polished by Gauss-Newton and verified; without an exact one, the best
+least-squares answer alone is returned.  The ``*_batch`` functions solve N instances at once (fixed
+slots and a validity mask, no Python loop over instances) and return a
+:class:`~subproblems.core.BatchResult`.
+
+>>> import numpy as np
+>>> from subproblems.screw import rotation_exp
+>>> R = rotation_exp([0, 0, 1], 0.3) @ rotation_exp([0, 1, 0], 0.4) @ rotation_exp([0, 0, 1], 0.5)
+>>> sols = orientation_rrr([0, 0, 1], [0, 1, 0], [0, 0, 1], R)
+>>> [tuple(round(a, 6) for a in s.q) for s in sols]
+[(-2.841593, -0.4, -2.641593), (0.3, 0.4, 0.5)]
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from subproblems.core import BatchResult, Solution, SubproblemInputError, register
+from subproblems.screw import rotation_exp
+
+__all__ = [
+    "orientation_r",
+    "orientation_rr",
+    "orientation_rrr",
+    "direction_r",
+    "direction_rr",
+    "orientation_r_batch",
+    "orientation_rr_batch",
+    "orientation_rrr_batch",
+    "rotation_error",
+    "rotation_families",
+]
+
+#: An orientation solution is exact when its residual angle is at most this (radians).
+EXACT_TOL = 1e-9
+#: Two axes are parallel when ``|w1 x w2|`` is at most this.
+PAR_TOL = 1e-9
+#: Gimbal lock is tried when ``|w1 x R w3|`` is at most this; it is declared when its representative
+#: (``t1 = 0``) is exact.  Closer to gimbal lock than this the isolated solutions are not resolvable.
+GIMBAL_TOL = 1e-6
+#: A vector closer than this (relative) to an axis does not determine the angle about it.
+FREE_TOL = 1e-10
+#: Exact solutions closer than this (radians, modulo 2 pi) are one.
+DEDUP_TOL = 1e-6
+#: Candidates with a residual below this are polished before the exactness check.
+POLISH_TOL = 1e-5
+
+_TWO_PI = 2.0 * math.pi
+_SQRT8 = math.sqrt(8.0)
+
+
+# ----------------------------------------------------------------------------------------------------
+# small scalar helpers
+# ----------------------------------------------------------------------------------------------------
+
+
+def _wrap(a: float) -> float:
+    a = math.remainder(float(a), _TWO_PI)
+    return math.pi if a <= -math.pi else a
+
+
+def _unit(w) -> np.ndarray:
+    w = np.asarray(w, dtype=float).reshape(3)
+    n = float(np.linalg.norm(w))
+    if not math.isfinite(n) or n < 1e-12:
+        raise SubproblemInputError(f"rotation axis {w} is zero or not finite")
+    return w / n
+
+
+def _rot(R) -> np.ndarray:
+    R = np.asarray(R, dtype=float)
+    if R.shape == (4, 4):
+        R = R[:3, :3]
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise SubproblemInputError(f"expected a finite 3x3 rotation (or 4x4 transform), got shape {R.shape}")
+    return R
+
+
+def rotation_error(E, R) -> float:
+    """Angle (radians) of the rotation ``E^T R``; 0 when ``E = R``.
+
+    >>> round(rotation_error(np.eye(3), rotation_exp([1, 0, 0], 0.25)), 12)
+    0.25
+    """
+    d = float(np.linalg.norm(np.asarray(E, dtype=float) - np.asarray(R, dtype=float)))
+    return 2.0 * math.asin(min(1.0, d / _SQRT8))
+
+
+def _angle_about(w, a, b, scale: float = 1.0) -> tuple[float, bool]:
+    """Angle about ``w`` (through 0) turning ``a`` closest to ``b``; ``free`` if ``a`` is on the axis."""
+    u = a - w * float(w @ a)
+    v = b - w * float(w @ b)
+    if float(np.linalg.norm(u)) <= FREE_TOL * scale:
+        return 0.0, True
+    return math.atan2(float(w @ np.cross(u, v)), float(u @ v)), False
+
+
+def _angle_r(w, R) -> tuple[float, bool]:
+    """Least-squares angle of ``exp([w] t) = R``; ``free`` when every angle is equally good."""
+    vee = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    a = float(w @ vee)
+    b = float(np.trace(R) - w @ R @ w)
+    if math.hypot(a, b) <= 1e-12:
+        return 0.0, True
+    return math.atan2(a, b), False
+
+
+def _product(ws, th) -> np.ndarray:
+    E = np.eye(3)
+    for w, t in zip(ws, th):
+        E = E @ rotation_exp(w, t)
+    return E
+
+
+def _polish(ws, R, th, fixed=(), iters: int = 4) -> np.ndarray:
+    """Gauss-Newton on ``prod exp([w_i] t_i) = R`` over the joints not in ``fixed`` (accept if better)."""
+    th = np.array(th, dtype=float)
+    free = [i for i in range(len(ws)) if i not in fixed]
+    if not free:
+        return th
+    err = rotation_error(_product(ws, th), R)
+    for _ in range(iters):
+        if err <= 1e-15:
+            break
+        # body-frame error: E^T R = exp([e]); d(E)/dt_i = E [J_i] with J_i = (E_{i+1..k})^T w_i
+        E = _product(ws, th)
+        M = E.T @ R
+        e = 0.5 * np.array([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])
+        J = np.zeros((3, len(free)))
+        for c, i in enumerate(free):
+            J[:, c] = _product(ws[i + 1 :], th[i + 1 :]).T @ ws[i]
+        step = np.linalg.lstsq(J, e, rcond=1e-10)[0]
+        th2 = th.copy()
+        th2[free] += step
+        err2 = rotation_error(_product(ws, th2), R)
+        if not err2 < err:
+            break
+        th, err = th2, err2
+    return th
+
+
+def _finish(ws, R, cands, allow_continuum=True) -> list[Solution]:
+    """Polish, verify, deduplicate candidates ``(th, continuum, fixed)``; best ``ls`` one if none exact."""
+    scored = []
+    for th, cont, fixed in cands:
+        th = np.asarray(th, dtype=float)
+        err = rotation_error(_product(ws, th), R)
+        if err <= POLISH_TOL:
+            th = _polish(ws, R, th, fixed)
+            err = rotation_error(_product(ws, th), R)
+        scored.append((err, tuple(_wrap(a) for a in th), bool(cont and allow_continuum)))
+    exact = sorted((s for s in scored if s[0] <= EXACT_TOL), key=lambda s: s[0])
+    if not exact:
+        err, th, cont = min(scored, key=lambda s: s[0])
+        return [Solution(th, ls=True, continuum=cont)]
+    kept: list[tuple[float, tuple, bool]] = []
+    for s in exact:
+        if all(
+            max(abs(math.remainder(a - b, _TWO_PI)) for a, b in zip(s[1], k[1])) > DEDUP_TOL for k in kept
+        ):
+            kept.append(s)
+    kept.sort(key=lambda s: s[1])
+    return [Solution(th, continuum=cont) for _, th, cont in kept]
+
+
+# ----------------------------------------------------------------------------------------------------
+# candidates with their continuum families (shared with the class I solvers)
+# ----------------------------------------------------------------------------------------------------
+
+
+def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
+    """Candidate solutions of ``prod exp([w_i] t_i) = R`` (k = 0..3 unit axes) with their families.
+
+    Each entry is ``(th, n, dim)``: ``dim = 0`` an isolated candidate (``n`` is None); ``dim = 1`` every
+    ``th + tau n`` has the same orientation (``n`` has entries 0 and +-1; ``th`` is the documented
+    representative); ``dim = 2`` (three parallel axes) only ``sum s_i t_i`` is determined, ``n`` is None.
+    Candidates are not verified: unreachable instances give least-squares candidates.
+    """
+    ws = [np.asarray(w, dtype=float) for w in ws]
+    k = len(ws)
+    if k == 0:
+        return [(np.zeros(0), None, 0)]
+    if k == 1:
+        return [(np.array([_angle_r(ws[0], R)[0]]), None, 0)]
+    if k == 2:
+        w1, w2 = ws
+        if np.linalg.norm(np.cross(w1, w2)) <= PAR_TOL:
+            s = 1.0 if w1 @ w2 > 0 else -1.0
+            phi = _angle_r(w1, R)[0]
+            return [(np.array([0.0, s * phi]), np.array([1.0, -s]), 1)]
+        t1, _ = _angle_about(w1, w2, R @ w2)
+        t2, _ = _angle_r(w2, rotation_exp(w1, -t1) @ R)
+        return [(np.array([t1, t2]), None, 0)]
+    w1, w2, w3 = ws
+    p12 = np.linalg.norm(np.cross(w1, w2)) <= PAR_TOL
+    p23 = np.linalg.norm(np.cross(w2, w3)) <= PAR_TOL
+    if p12 and p23:
+        s3 = 1.0 if w1 @ w3 > 0 else -1.0
+        return [(np.array([0.0, 0.0, s3 * _angle_r(w1, R)[0]]), None, 2)]
+    if p12:
+        ((th, _, _),) = rotation_families([w1, w3], R)
+        s = 1.0 if w1 @ w2 > 0 else -1.0
+        return [(np.array([0.0, s * th[0], th[1]]), np.array([1.0, -s, 0.0]), 1)]
+    if p23:
+        ((th, _, _),) = rotation_families([w1, w2], R)
+        s = 1.0 if w2 @ w3 > 0 else -1.0
+        return [(np.array([th[0], 0.0, s * th[1]]), np.array([0.0, 1.0, -s]), 1)]
+    Rw3 = R @ w3
+    if np.linalg.norm(np.cross(w1, Rw3)) <= GIMBAL_TOL:
+        # gimbal lock: exp([w2]t2) w3 = sigma w1, so exp([w2]t2) exp([w3]t3) = exp([w1] sigma t3) exp([w2]t2)
+        ((th, _, _),) = rotation_families([w2, w3], R)
+        cand = np.array([0.0, th[0], th[1]])
+        if rotation_error(_product(ws, cand), R) <= EXACT_TOL:
+            sigma = 1.0 if w1 @ Rw3 > 0 else -1.0
+            return [(cand, np.array([1.0, 0.0, -sigma]), 1)]
+    # general: w1^T exp([w2]t2) w3 = w1^T R w3, i.e. alpha + beta cos t2 + gamma sin t2 = delta
+    w3par = w2 * float(w2 @ w3)
+    alpha = float(w1 @ w3par)
+    beta = float(w1 @ (w3 - w3par))
+    gamma = float(w1 @ np.cross(w2, w3))
+    delta = float(w1 @ Rw3)
+    rho = math.hypot(beta, gamma)
+    psi = math.atan2(gamma, beta)
+    c = (delta - alpha) / rho
+    out = []
+    for sgn in (1.0, -1.0):
+        t2 = psi + sgn * math.acos(max(-1.0, min(1.0, c)))
+        a = rotation_exp(w2, t2) @ w3
+        t1, _ = _angle_about(w1, a, Rw3)
+        t3, _ = _angle_r(w3, (rotation_exp(w1, t1) @ rotation_exp(w2, t2)).T @ R)
+        out.append((np.array([t1, t2, t3]), None, 0))
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------
+# public scalar solvers
+# ----------------------------------------------------------------------------------------------------
+
+
+def _solve_orientation(ws, R) -> list[Solution]:
+    cands = []
+    for th, n, dim in rotation_families(ws, R):
+        if dim == 0:
+            cands.append((th, False, ()))
+        else:
+            fixed = (0, 1) if dim == 2 else tuple(i for i in range(len(ws)) if n[i] > 0)[:1]
+            cands.append((th, True, fixed))
+    return _finish(ws, R, cands)
+
+
+def orientation_r(w, R) -> list[Solution]:
+    """Every solution of ``exp([w] t) = R`` (one; least squares when ``R`` is not about ``w``).
+
+    >>> orientation_r([0, 0, 1], rotation_exp([0, 0, 1], 0.7))
+    [Solution(q=(0.7,), ls=False, continuum=False)]
+    """
+    w, R = _unit(w), _rot(R)
+    t, free = _angle_r(w, R)
+    err = rotation_error(rotation_exp(w, t), R)
+    return [Solution((_wrap(t),), ls=err > EXACT_TOL, continuum=free)]
+
+
+def orientation_rr(w1, w2, R) -> list[Solution]:
+    """Every solution of ``exp([w1] t1) exp([w2] t2) = R`` (at most one, or a continuum).
+
+    >>> R = rotation_exp([0, 0, 1], 0.2) @ rotation_exp([1, 0, 0], -0.4)
+    >>> [round(a, 12) for a in orientation_rr([0, 0, 1], [1, 0, 0], R)[0].q]
+    [0.2, -0.4]
+    """
+    return _solve_orientation([_unit(w1), _unit(w2)], _rot(R))
+
+
+def orientation_rrr(w1, w2, w3, R) -> list[Solution]:
+    """Every solution of ``exp([w1] t1) exp([w2] t2) exp([w3] t3) = R`` (at most two, or a continuum).
+
+    See the module docstring for the degenerate cases and their representatives.
+    """
+    return _solve_orientation([_unit(w1), _unit(w2), _unit(w3)], _rot(R))
+
+
+def direction_r(w, u, v) -> list[Solution]:
+    """Solution of ``exp([w] t) u = v`` (Paden-Kahan 1 through the origin; least squares if unreachable).
+
+    >>> direction_r([0, 0, 1], [1, 0, 0], [0, 1, 0])
+    [Solution(q=(1.5707963267948966,), ls=False, continuum=False)]
+    """
+    w = _unit(w)
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    scale = max(1.0, float(np.linalg.norm(u)), float(np.linalg.norm(v)))
+    t, free = _angle_about(w, u, v, scale)
+    err = float(np.linalg.norm(rotation_exp(w, t) @ u - v))
+    return [Solution((_wrap(t),), ls=err > EXACT_TOL * scale, continuum=free)]
+
+
+def _polish_direction(w1, w2, u, v, t1, t2, scale, iters: int = 4) -> tuple[float, float]:
+    """Gauss-Newton on ``exp([w1]t1) exp([w2]t2) u - v`` from a candidate (steps kept if better)."""
+
+    def f(a, b):
+        E1, E2 = rotation_exp(w1, a), rotation_exp(w2, b)
+        x2 = E2 @ u
+        x = E1 @ x2
+        return x - v, np.column_stack([np.cross(w1, x), E1 @ np.cross(w2, x2)])
+
+    r, J = f(t1, t2)
+    err = float(np.linalg.norm(r))
+    if err > 1e-4 * scale:
+        return t1, t2
+    for _ in range(iters):
+        if err <= 1e-16 * scale:
+            break
+        d = np.linalg.lstsq(J, -r, rcond=1e-10)[0]
+        r2, J2 = f(t1 + d[0], t2 + d[1])
+        e2 = float(np.linalg.norm(r2))
+        if not e2 < err:
+            break
+        t1, t2, r, J, err = t1 + float(d[0]), t2 + float(d[1]), r2, J2, e2
+    return t1, t2
+
+
+def direction_rr(w1, w2, u, v) -> list[Solution]:
+    """Every solution of ``exp([w1] t1) exp([w2] t2) u = v`` (at most two, or a continuum).
+
+    >>> sols = direction_rr([0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1])
+    >>> [tuple(round(a, 12) + 0.0 for a in s.q) for s in sols]
+    [(0.0, 1.570796326795)]
+    """
+    w1, w2 = _unit(w1), _unit(w2)
+    u, v = np.asarray(u, dtype=float), np.asarray(v, dtype=float)
+    scale = max(1.0, float(np.linalg.norm(u)), float(np.linalg.norm(v)))
+    cands = []
+    v_on_1 = np.linalg.norm(v - w1 * float(w1 @ v)) <= FREE_TOL * scale
+    u_on_2 = np.linalg.norm(u - w2 * float(w2 @ u)) <= FREE_TOL * scale
+    if np.linalg.norm(np.cross(w1, w2)) <= PAR_TOL or v_on_1:
+        t2, _ = _angle_about(w2, u, v, scale)
+        cands.append((0.0, t2, True))
+    elif u_on_2:
+        t1, _ = _angle_about(w1, u, v, scale)
+        cands.append((t1, 0.0, True))
+    else:
+        k = float(w1 @ w2)
+        a1, a2 = float(w1 @ v), float(w2 @ u)
+        al = (a1 - k * a2) / (1.0 - k * k)
+        be = (a2 - k * a1) / (1.0 - k * k)
+        c = np.cross(w1, w2)
+        g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / float(c @ c)
+        g = math.sqrt(max(0.0, g2))
+        for sg in (g, -g) if g > 0 else (0.0,):
+            z = al * w1 + be * w2 + sg * c
+            t2, _ = _angle_about(w2, u, z, scale)
+            t1, _ = _angle_about(w1, z, v, scale)
+            t1, t2 = _polish_direction(w1, w2, u, v, t1, t2, scale)
+            cands.append((t1, t2, False))
+    scored = []
+    for t1, t2, cont in cands:
+        err = float(np.linalg.norm(rotation_exp(w1, t1) @ rotation_exp(w2, t2) @ u - v))
+        scored.append((err, (_wrap(t1), _wrap(t2)), cont))
+    exact = [s for s in scored if s[0] <= EXACT_TOL * scale]
+    if not exact:
+        err, th, cont = min(scored, key=lambda s: s[0])
+        return [Solution(th, ls=True, continuum=cont)]
+    kept: list = []
+    for s in sorted(exact, key=lambda s: s[0]):
+        if all(
+            max(abs(math.remainder(a - b, _TWO_PI)) for a, b in zip(s[1], k_[1])) > DEDUP_TOL for k_ in kept
+        ):
+            kept.append(s)
+    kept.sort(key=lambda s: s[1])
+    return [Solution(th, continuum=cont) for _, th, cont in kept]
+
+
+# ----------------------------------------------------------------------------------------------------
+# vectorised helpers: N instances, no Python loop over them
+# ----------------------------------------------------------------------------------------------------
+
+
+def _hat_b(w) -> np.ndarray:
+    W = np.zeros(w.shape[:-1] + (3, 3))
+    W[..., 0, 1], W[..., 0, 2] = -w[..., 2], w[..., 1]
+    W[..., 1, 0], W[..., 1, 2] = w[..., 2], -w[..., 0]
+    W[..., 2, 0], W[..., 2, 1] = -w[..., 1], w[..., 0]
+    return W
+
+
+def rexp_batch(w, t) -> np.ndarray:
+    """``exp([w] t)`` for stacked unit axes ``w`` (..., 3) and angles ``t`` (...): (..., 3, 3)."""
+    W = _hat_b(w)
+    s, c = np.sin(t)[..., None, None], np.cos(t)[..., None, None]
+    return np.eye(3) + s * W + (1.0 - c) * (W @ W)
+
+
+def _mv(M, x) -> np.ndarray:
+    return np.einsum("...ij,...j->...i", M, x)
+
+
+def _dot(a, b) -> np.ndarray:
+    return np.sum(a * b, axis=-1)
+
+
+def _tr(M) -> np.ndarray:
+    return np.swapaxes(M, -1, -2)
+
+
+def rotation_error_batch(E, R) -> np.ndarray:
+    """:func:`rotation_error` over stacked matrices."""
+    d = np.linalg.norm(E - R, axis=(-2, -1))
+    return 2.0 * np.arcsin(np.minimum(1.0, d / _SQRT8))
+
+
+def _wrap_b(a) -> np.ndarray:
+    a = np.remainder(a + math.pi, _TWO_PI) - math.pi
+    return np.where(a <= -math.pi, math.pi, a)
+
+
+def _angle_r_b(w, R):
+    vee = np.stack(
+        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1
+    )
+    a = _dot(w, vee)
+    b = np.trace(R, axis1=-2, axis2=-1) - _dot(w, _mv(R, w))
+    free = np.hypot(a, b) <= 1e-12
+    return np.where(free, 0.0, np.arctan2(a, b)), free
+
+
+def _angle_about_b(w, a, b, scale=1.0):
+    u = a - w * _dot(w, a)[..., None]
+    v = b - w * _dot(w, b)[..., None]
+    free = np.linalg.norm(u, axis=-1) <= FREE_TOL * scale
+    t = np.arctan2(_dot(w, np.cross(u, v)), _dot(u, v))
+    return np.where(free, 0.0, t), free
+
+
+def product_batch(W, TH) -> np.ndarray:
+    """``prod_i exp([w_i] t_i)`` for axes (..., k, 3) and angles (..., k): (..., 3, 3)."""
+    E = np.broadcast_to(np.eye(3), TH.shape[:-1] + (3, 3)).copy()
+    for i in range(TH.shape[-1]):
+        E = E @ rexp_batch(W[..., i, :], TH[..., i])
+    return E
+
+
+def _polish_b(W, R, TH, fixed, iters: int = 4) -> np.ndarray:
+    """Batched Gauss-Newton on the orientation (``fixed``: (..., k) joints kept); steps kept if better."""
+    k = TH.shape[-1]
+    if k == 0:
+        return TH
+    err = rotation_error_batch(product_batch(W, TH), R)
+    for _ in range(iters):
+        E = product_batch(W, TH)
+        M = _tr(E) @ R
+        e = 0.5 * np.stack(
+            [M[..., 2, 1] - M[..., 1, 2], M[..., 0, 2] - M[..., 2, 0], M[..., 1, 0] - M[..., 0, 1]], -1
+        )
+        cols = []
+        for i in range(k):
+            tail = product_batch(W[..., i + 1 :, :], TH[..., i + 1 :])
+            cols.append(_mv(_tr(tail), W[..., i, :]))
+        J = np.stack(cols, -1) * (~fixed)[..., None, :]
+        step = np.einsum("...ij,...j->...i", np.linalg.pinv(J, rcond=1e-10), e)
+        TH2 = TH + step
+        err2 = rotation_error_batch(product_batch(W, TH2), R)
+        better = (err2 < err) & (err > 1e-15)
+        TH = np.where(better[..., None], TH2, TH)
+        err = np.where(better, err2, err)
+    return TH
+
+
+def rotation_families_batch(W, R):
+    """Vectorised :func:`rotation_families` for N instances: axes (N, k, 3), rotations (N, 3, 3).
+
+    Returns ``TH`` (N, K, k) candidates (K = 1, or 2 for k = 3), ``cvalid`` (N, K), family direction
+    ``n`` (N, k) (zeros without a family; it belongs to slot 0) and ``dim`` (N,) in {0, 1, 2}.
+    """
+    N, k = W.shape[0], W.shape[1]
+    if k == 0:
+        return np.zeros((N, 1, 0)), np.ones((N, 1), bool), np.zeros((N, 0)), np.zeros(N, int)
+    if k == 1:
+        t, _ = _angle_r_b(W[:, 0], R)
+        return t[:, None, None], np.ones((N, 1), bool), np.zeros((N, 1)), np.zeros(N, int)
+    if k == 2:
+        TH, n, dim = _rr_b(W[:, 0], W[:, 1], R)
+        return TH[:, None], np.ones((N, 1), bool), n, dim
+    w1, w2, w3 = W[:, 0], W[:, 1], W[:, 2]
+    p12 = np.linalg.norm(np.cross(w1, w2), axis=-1) <= PAR_TOL
+    p23 = np.linalg.norm(np.cross(w2, w3), axis=-1) <= PAR_TOL
+    Rw3 = _mv(R, w3)
+    # general
+    w3par = w2 * _dot(w2, w3)[:, None]
+    alpha = _dot(w1, w3par)
+    beta = _dot(w1, w3 - w3par)
+    gamma = _dot(w1, np.cross(w2, w3))
+    delta = _dot(w1, Rw3)
+    rho = np.hypot(beta, gamma)
+    psi = np.arctan2(gamma, beta)
+    c = np.clip((delta - alpha) / np.where(rho > 0, rho, 1.0), -1.0, 1.0)
+    t2 = psi[:, None] + np.array([1.0, -1.0]) * np.arccos(c)[:, None]  # (N, 2)
+    W2 = np.repeat(w2[:, None], 2, 1)
+    W1 = np.repeat(w1[:, None], 2, 1)
+    E2 = rexp_batch(W2, t2)
+    a = _mv(E2, w3[:, None])
+    t1, _ = _angle_about_b(W1, a, Rw3[:, None])
+    E12 = rexp_batch(W1, t1) @ E2
+    t3, _ = _angle_r_b(np.repeat(w3[:, None], 2, 1), _tr(E12) @ R[:, None])
+    TH = np.stack([t1, t2, t3], -1)
+    cvalid = np.ones((N, 2), bool)
+    n = np.zeros((N, 3))
+    dim = np.zeros(N, int)
+    # w1 || w2 (not w3): t1 = 0
+    th13, _, _ = _rr_b(w1, w3, R)
+    s12 = np.where(_dot(w1, w2) > 0, 1.0, -1.0)
+    a12 = np.stack([np.zeros(N), s12 * th13[:, 0], th13[:, 1]], -1)
+    # w2 || w3 (not w1): t2 = 0
+    th12, _, _ = _rr_b(w1, w2, R)
+    s23 = np.where(_dot(w2, w3) > 0, 1.0, -1.0)
+    a23 = np.stack([th12[:, 0], np.zeros(N), s23 * th12[:, 1]], -1)
+    # all parallel: t1 = t2 = 0
+    s13 = np.where(_dot(w1, w3) > 0, 1.0, -1.0)
+    phi, _ = _angle_r_b(w1, R)
+    aall = np.stack([np.zeros(N), np.zeros(N), s13 * phi], -1)
+    # gimbal lock: t1 = 0, (t2, t3) from O-RR on axes 2, 3
+    th23, _, _ = _rr_b(w2, w3, R)
+    agim = np.stack([np.zeros(N), th23[:, 0], th23[:, 1]], -1)
+    gim = (
+        ~p12
+        & ~p23
+        & (np.linalg.norm(np.cross(w1, Rw3), axis=-1) <= GIMBAL_TOL)
+        & (rotation_error_batch(product_batch(W, agim), R) <= EXACT_TOL)
+    )
+    sig = np.where(_dot(w1, Rw3) > 0, 1.0, -1.0)
+    one = np.ones(N)
+    zero = np.zeros(N)
+    for mask, rep, nn, dd in (
+        (gim, agim, np.stack([one, zero, -sig], -1), 1),
+        (p23 & ~p12, a23, np.stack([zero, one, -s23], -1), 1),
+        (p12 & ~p23, a12, np.stack([one, -s12, zero], -1), 1),
+        (p12 & p23, aall, np.zeros((N, 3)), 2),
+    ):
+        TH[:, 0] = np.where(mask[:, None], rep, TH[:, 0])
+        cvalid[:, 1] &= ~mask
+        n = np.where(mask[:, None], nn, n)
+        dim = np.where(mask, dd, dim)
+    return TH, cvalid, n, dim
+
+
+def _rr_b(w1, w2, R):
+    par = np.linalg.norm(np.cross(w1, w2), axis=-1) <= PAR_TOL
+    t1, _ = _angle_about_b(w1, w2, _mv(R, w2))
+    t2, _ = _angle_r_b(w2, _tr(rexp_batch(w1, t1)) @ R)
+    s = np.where(_dot(w1, w2) > 0, 1.0, -1.0)
+    phi, _ = _angle_r_b(w1, R)
+    TH = np.where(par[:, None], np.stack([np.zeros_like(phi), s * phi], -1), np.stack([t1, t2], -1))
+    n = np.where(par[:, None], np.stack([np.ones_like(s), -s], -1), 0.0)
+    return TH, n, par.astype(int)
+
+
+def _finish_b(code, W, R, TH, cvalid, n, dim) -> BatchResult:
+    """Batched counterpart of :func:`_finish`: polish, verify, deduplicate, keep the best ``ls`` one."""
+    N, K, k = TH.shape
+    cont = dim > 0
+    fixed = np.zeros((N, K, k), bool)
+    if k:
+        first = np.argmax(n > 0, axis=-1)  # the representative joint of a 1-D family
+        fam = np.zeros((N, k), bool)
+        fam[np.arange(N), first] = dim == 1
+        if k >= 2:
+            fam[:, 0] |= dim == 2
+            fam[:, 1] |= dim == 2
+        fixed[:, 0] = fam
+    Wk = np.repeat(W[:, None], K, 1)
+    Rk = np.repeat(R[:, None], K, 1)
+    err = rotation_error_batch(product_batch(Wk, TH), Rk)
+    TH = np.where((err <= POLISH_TOL)[..., None], _polish_b(Wk, Rk, TH, fixed), TH)
+    TH = _wrap_b(TH)
+    err = np.where(cvalid, rotation_error_batch(product_batch(Wk, TH), Rk), np.inf)
+    exact = err <= EXACT_TOL
+    valid = exact.copy()
+    if K == 2:
+        dist = np.max(np.abs(_wrap_b(TH[:, 0] - TH[:, 1])), axis=-1)
+        valid[:, 1] &= ~(valid[:, 0] & (dist <= DEDUP_TOL))
+    none = ~exact.any(axis=1)
+    best = np.argmin(err, axis=1)
+    valid[np.arange(N), best] |= none
+    ls = valid & ~exact
+    return BatchResult(code, TH, valid, ls, cont)
+
+
+def _batch_inputs(ws, R):
+    W = np.asarray(ws, dtype=float)
+    R = np.asarray(R, dtype=float)
+    if R.shape[-2:] == (4, 4):
+        R = R[..., :3, :3]
+    W = W / np.linalg.norm(W, axis=-1, keepdims=True)
+    return W, R
+
+
+def orientation_r_batch(w, R) -> BatchResult:
+    """Vectorised :func:`orientation_r`: ``w`` (N, 3), ``R`` (N, 3, 3) or (N, 4, 4); ``q`` (N, 1, 1)."""
+    W, R = _batch_inputs(np.asarray(w, dtype=float)[:, None], R)
+    t, free = _angle_r_b(W[:, 0], R)
+    t = _wrap_b(t)
+    err = rotation_error_batch(rexp_batch(W[:, 0], t), R)
+    N = len(t)
+    return BatchResult("O-R", t.reshape(N, 1, 1), np.ones((N, 1), bool), (err > EXACT_TOL)[:, None], free)
+
+
+def orientation_rr_batch(w1, w2, R) -> BatchResult:
+    """Vectorised :func:`orientation_rr`: axes (N, 3) each, ``R`` (N, 3, 3); ``q`` (N, 1, 2)."""
+    W, R = _batch_inputs(np.stack([np.asarray(w1, float), np.asarray(w2, float)], 1), R)
+    return _finish_b("O-RR", W, R, *rotation_families_batch(W, R))
+
+
+def orientation_rrr_batch(w1, w2, w3, R) -> BatchResult:
+    """Vectorised :func:`orientation_rrr`: axes (N, 3) each, ``R`` (N, 3, 3); ``q`` (N, 2, 3)."""
+    W, R = _batch_inputs(np.stack([np.asarray(w, float) for w in (w1, w2, w3)], 1), R)
+    return _finish_b("O-RRR", W, R, *rotation_families_batch(W, R))
+
+
+# ----------------------------------------------------------------------------------------------------
+# registration: codes O-R, O-RR, O-RRR for subproblems.solve / solve_batch
+# ----------------------------------------------------------------------------------------------------
+
+
+def _target_rotation(code, T) -> np.ndarray:
+    T = np.asarray(T, dtype=float)
+    if T.shape[-2:] not in ((4, 4), (3, 3)):
+        raise SubproblemInputError(f"{code}: T must be a 4x4 transform (or a 3x3 rotation), got {T.shape}")
+    return T[..., :3, :3]
+
+
+def _residual(twists, qrow, T=None, **_) -> float:
+    ws = [np.asarray(xi, dtype=float)[3:] for xi in twists]
+    return rotation_error(_product(ws, qrow), _target_rotation("O", T))
+
+
+def _make(code: str, k: int):
+    def batch(twists, T) -> BatchResult:
+        W, R = _batch_inputs(np.asarray(twists, dtype=float)[..., 3:], _target_rotation(code, T))
+        if k == 1:
+            b = orientation_r_batch(W[:, 0], R)
+            return BatchResult(code, b.q, b.valid, b.ls, b.continuum)
+        return _finish_b(code, W, R, *rotation_families_batch(W, R))
+
+    def scalar(twists, T) -> list[Solution]:
+        ws = [np.asarray(xi, dtype=float)[3:] for xi in twists]
+        R = _target_rotation(code, T)
+        if k == 1:
+            return orientation_r(ws[0], R)
+        return _solve_orientation([_unit(w) for w in ws], R)
+
+    scalar.__name__ = scalar.__qualname__ = f"solve_{code.replace('-', '_').lower()}"
+    scalar.__doc__ = (
+        f"``{code}``: orientation of {k} revolute joint(s) through the origin (module docstring)."
+    )
+    return register(code, max_solutions=2 if k == 3 else 1, batch=batch, residual=_residual)(scalar)
+
+
+solve_o_r = _make("O-R", 1)
+solve_o_rr = _make("O-RR", 2)
+solve_o_rrr = _make("O-RRR", 3)
