@@ -1,0 +1,144 @@
+"""Class III subproblems ``|| prod exp(xi_i th_i) p - q || = d``: S3-R, S3-T and the two-equation types.
+
+Hypothesis draws the geometry (general and degenerate relations of ``twist_lists``; points general,
+at the origin or on a joint axis, pairs of points equal or not), joint values (special angles
+included); ``d`` is built by evaluating the left side.  ``tests/subproblems/_checks3.py`` says what
+each instance must pass (drawn values recovered, exact rows satisfy the equations, scalar and
+vectorised paths agree).  Budgets follow the active hypothesis profile (``HYPOTHESIS_PROFILE``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from subproblems import codes, max_solutions, solve, solve_batch
+from subproblems.screw import prismatic_twist, revolute_twist
+from tests.strategies import joint_values, twist_lists
+
+from ._checks3 import check_instance, fk_point
+
+EXAMPLES = settings().max_examples
+_coord = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)
+_vec = st.tuples(_coord, _coord, _coord).map(np.array)
+_REGISTERED = set(codes())
+
+
+def budget(factor: float = 1.0) -> settings:
+    return settings(max_examples=max(5, int(EXAMPLES * factor)))
+
+
+@st.composite
+def points(draw, twists):
+    """General, the origin, or on one of the revolute axes."""
+    kind = draw(st.integers(0, 6))
+    if kind == 0:
+        return np.zeros(3)
+    revs = [xi for xi in twists if xi[3:].any()]
+    if kind == 1 and revs:
+        xi = draw(st.sampled_from(revs))
+        return np.cross(xi[3:], xi[:3]) + draw(_coord) * xi[3:]
+    return draw(_vec)
+
+
+# ------------------------------------------------------------------------------------- S3-R, S3-T
+
+
+@pytest.mark.parametrize("code", ["S3-R", "S3-T"])
+@budget(1.5)
+@given(data=st.data())
+def test_one_joint_roundtrip(code, data):
+    kinds = code[3:]
+    tw, _ = data.draw(twist_lists(kinds))
+    th = data.draw(joint_values(kinds))
+    p, q = data.draw(points(tw)), data.draw(points(tw))
+    d = float(np.linalg.norm(fk_point(tw, th, p) - q))
+    r = check_instance(code, kinds, tw, {"p": p, "q": q, "d": d}, th)
+    assert 1 <= len(r.q) <= 2
+
+
+@pytest.mark.parametrize("code", ["S3-R", "S3-T"])
+@budget()
+@given(data=st.data())
+def test_one_joint_unreachable(code, data):
+    kinds = code[3:]
+    tw, _ = data.draw(twist_lists(kinds))
+    p, q = data.draw(points(tw)), data.draw(points(tw))
+    xi = tw[0]
+    if code == "S3-R":
+        w, c = xi[3:], np.cross(xi[3:], xi[:3])
+        a = c + w * (w @ (p - c))
+        rho, m = np.linalg.norm(p - a), a - q
+        m_par = abs(m @ w)
+        m_perp = np.linalg.norm(m - w * (m @ w))
+        lo, hi = math.hypot(m_par, m_perp - rho), math.hypot(m_par, m_perp + rho)
+    else:
+        u = p - q
+        lo = float(np.linalg.norm(u - xi[:3] * (u @ xi[:3])))
+        hi = math.inf
+    gap = data.draw(st.floats(1e-3, 2.0))
+    above = data.draw(st.booleans()) and hi < math.inf
+    d = hi + gap if above else lo - gap
+    r = check_instance(code, kinds, tw, {"p": p, "q": q, "d": d})
+    assert r.ls.all() and len(r.q) == 1
+    # the least-squares answer is the extreme distance
+    assert abs(r.residual[0] - gap) <= 1e-6 * max(1.0, gap)
+
+
+def test_s3_r_cases():
+    z = revolute_twist([0, 0, 1], [0, 0, 0])
+    assert len(solve("S3-R", [z], p=[1, 0, 0], q=[2, 0, 0], d=1.5).q) == 2
+    r = solve("S3-R", [z], p=[1, 0, 0], q=[2, 0, 0], d=1.0)  # tangent: nearest point
+    assert r.q.tolist() == [[0.0]] and not r.ls[0]
+    r = solve("S3-R", [z], p=[1, 0, 0], q=[2, 0, 0], d=3.0)  # tangent: farthest point
+    assert len(r.q) == 1 and abs(abs(r.q[0, 0]) - math.pi) < 1e-15 and not r.ls[0]
+    r = solve("S3-R", [z], p=[1, 0, 0], q=[2, 0, 0], d=5.0)
+    assert r.ls.all() and math.isclose(r.residual[0], 2.0)
+    r = solve("S3-R", [z], p=[1, 0, 0], q=[2, 0, 0], d=-1.0)
+    assert r.ls.all() and r.q.tolist() == [[0.0]]
+    # q on the axis: continuum, exact iff the constant distance is d
+    r = solve("S3-R", [z], p=[3, 0, 0], q=[0, 0, 4], d=5.0)
+    assert r.continuum and not r.ls[0] and r.q.tolist() == [[0.0]]
+    r = solve("S3-R", [z], p=[3, 0, 0], q=[0, 0, 4], d=6.0)
+    assert r.continuum and r.ls[0]
+    # p on the axis
+    assert solve("S3-R", [z], p=[0, 0, 1], q=[1, 2, 3], d=1.0).continuum
+
+
+def test_s3_t_cases():
+    x = prismatic_twist([1, 0, 0])
+    r = solve("S3-T", [x], p=[0, 0, 0], q=[0, 1, 0], d=1.0)
+    assert r.q.tolist() == [[0.0]] and not r.ls[0]
+    r = solve("S3-T", [x], p=[1e8, 0, 0], q=[0, 0, 0], d=1e8 + 1e-3)  # no cancellation
+    assert np.allclose(np.sort(r.q[:, 0]), [-2e8 - 1e-3, 1e-3], rtol=1e-12)
+    r = solve("S3-T", [x], p=[0, 0, 0], q=[5, 2, 0], d=1.0)
+    assert r.ls.all() and r.q.tolist() == [[5.0]] and math.isclose(r.residual[0], 1.0)
+
+
+@pytest.mark.parametrize("code", ["S3-R", "S3-T"])
+def test_one_joint_batch_many(code):
+    rng = np.random.default_rng(3)
+    n = 400
+    if code == "S3-R":
+        w = rng.normal(size=(n, 3))
+        tw = np.array([revolute_twist(wi, ri) for wi, ri in zip(w, rng.normal(size=(n, 3)))])
+        th = rng.uniform(-math.pi, math.pi, n)
+    else:
+        tw = np.array([prismatic_twist(v) for v in rng.normal(size=(n, 3))])
+        th = rng.uniform(-2, 2, n)
+    tw = tw[:, None, :]
+    p, q = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
+    d = np.array([np.linalg.norm(fk_point(tw[i], [th[i]], p[i]) - q[i]) for i in range(n)])
+    d[::5] += 3.0
+    b = solve_batch(code, tw, p=p, q=q, d=d)
+    assert b.vectorised and b.q.shape == (n, max_solutions(code), 1)
+    for i in range(0, n, 20):
+        r = solve(code, tw[i], p=p[i], q=q[i], d=d[i])
+        rows = b.q[i][b.valid[i]]
+        assert len(rows) == len(r.q)
+        assert np.allclose(np.sort(rows[:, 0]), np.sort(r.q[:, 0]), atol=1e-12)
+        assert b.ls[i][b.valid[i]].tolist() == r.ls.tolist()
