@@ -269,15 +269,45 @@ def pose_error(G, T, scale: float) -> np.ndarray:
     return np.maximum(dp, scale * dR)
 
 
+def within_limits(Q, kinds, lower, upper, eps=1e-9) -> np.ndarray:
+    """Rows of Q (M, dof) inside the limits; a revolute value counts in any of its 2 pi representations."""
+    ok = np.ones(Q.shape[0], dtype=bool)
+    for c, k in enumerate(kinds):
+        lo, hi, v = lower[c] - eps, upper[c] + eps, Q[:, c]
+        inside = (v >= lo) & (v <= hi)
+        if k == "R":
+            inside |= ((v + 2 * math.pi >= lo) & (v + 2 * math.pi <= hi)) | (
+                (v - 2 * math.pi >= lo) & (v - 2 * math.pi <= hi)
+            )
+        ok &= inside
+    return ok
+
+
 def finish(
-    TH, owner, ls, N, *, twists, kinds, home, independent, targets, scale, tol, slots, error, cont=None
+    TH,
+    owner,
+    ls,
+    N,
+    *,
+    twists,
+    kinds,
+    home,
+    independent,
+    targets,
+    scale,
+    tol,
+    slots,
+    error,
+    cont=None,
+    limits=None,
 ):
     """Check every candidate against its target, wrap, remove duplicates, pack into slots.
 
     ``error(G, T)`` measures the target error of poses G against targets (full pose, position, ...).
     Returns ``Q (N, slots, dof)``, ``valid (N, slots)``, ``ls (N, slots)``, ``residual (N, slots)``,
     ``continuum (N, slots)``.
-    Candidates with NaN (an unresolved joint) are dropped.  Exact solutions come first in each slot row.
+    Candidates with NaN (an unresolved joint) are dropped, and so are candidates outside ``limits``
+    (lower, upper of the independent joints) when given.  Exact solutions come first in each slot row.
     """
     dof = len(independent)
     Q = np.zeros((N, slots, dof))
@@ -287,6 +317,9 @@ def finish(
     CONT = np.zeros((N, slots), dtype=bool)
     cont = np.zeros(len(owner), dtype=bool) if cont is None else cont
     ok = ~np.isnan(TH).any(axis=1)
+    if limits is not None:  # (lower, upper) of the independent joints: other rows are not solutions
+        ind_kinds = "".join(kinds[i] for i in independent)
+        ok &= within_limits(wrap_angles(np.nan_to_num(TH), kinds)[:, list(independent)], ind_kinds, *limits)
     TH, owner, ls, cont = TH[ok], owner[ok], ls[ok], cont[ok]
     if TH.shape[0] == 0:
         return Q, valid, LS, RES, CONT

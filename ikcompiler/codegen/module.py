@@ -21,9 +21,7 @@ Derivation:
 API: ``solve(T, *free)`` -> (k, n) every solution; ``solve_batch(Ts, *free)`` -> (Q, valid);
 ``solve_info(T, *free)`` -> (q, residual, ls) including least-squares rows; ``fk(q)`` -> 4x4.
 """
-
-import math
-
+{imports}
 import numpy as np
 
 from subproblems import plan_runtime as _rt
@@ -87,6 +85,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
             target=plan.target,
             method=plan.method,
             plan_doc=plan_doc,
+            imports="{imports}",
         )
     ]
     out.append(f"\nJOINT_NAMES = {tuple(chain.independent_names)!r}\n")
@@ -94,7 +93,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     out.append(f"METHOD = {plan.method!r}\n")
     out.append(f"TARGET = {plan.target!r}\n")
     out.append(f"FREE_JOINTS = {tuple(plan.free)!r}\n")
-    out.append(f"LOWER = {_array(chain.lower)}\n")
+    out.append(f"LOWER = np.array({_array(chain.lower)})\n")
     out.append(f"UPPER = {_array(chain.upper)}\n")
     out.append(f"SCALE = {_num(scale)}  # robot size; tolerances are relative to it\n")
     out.append(f"TOLERANCE = {_num(tol)}  # a solution is exact when its error <= TOLERANCE * SCALE\n")
@@ -119,7 +118,9 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
         out.append(_step_source(k, step, line))
     out.append("]\n")
     out.append(BODY)
-    return "".join(out)
+    text = "".join(out)
+    # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
+    return text.replace("{imports}", "\nimport math\n" if "math.inf" in text else "", 1)
 
 
 BODY = '''
@@ -171,7 +172,7 @@ def _init(N, free):
     return init
 
 
-def _solve_chunk(goals, Td, init):
+def _solve_chunk(goals, Td, init, limits):
     N = len(goals)
     if METHOD == "numerical":
         step = _STEPS[0]
@@ -200,22 +201,31 @@ def _solve_chunk(goals, Td, init):
         if _POLISH and len(TH):
             TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                             independent=_INDEPENDENT, target=TARGET, iters=_POLISH)
+    if len(TH):
+        # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
+        err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
+        near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
+        if near.any():
+            TH[near] = _rt.polish(TH[near], goals[owner[near]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
+                                  independent=_INDEPENDENT, target=TARGET, iters=3)
     return _rt.finish(TH, owner, ls, N, twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
-                      slots=MAX_SOLUTIONS, error=_error, cont=cont)
+                      slots=MAX_SOLUTIONS, error=_error, cont=cont,
+                      limits=(LOWER, UPPER) if limits else None)
 
 
-def solve_batch_info(Ts, *free, chunk=4096):
+def solve_batch_info(Ts, *free, limits=True, chunk=4096):
     """Every solution of N targets: Q (N, K, n), valid (N, K), ls (N, K), residual (N, K), continuum (N, K).
 
     Rows with ls True are least-squares answers (their residual says how far they miss); valid marks
     the filled slots; continuum marks solutions that are one representative of a self-motion (the
     target is at a singular configuration with infinitely many solutions).  Vectorised over the
-    targets; processed in chunks to bound memory.
+    targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
+    the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
     """
     goals, Td = _targets(Ts)
     init = _init(len(goals), free)
-    parts = [_solve_chunk(goals[i:i + chunk], Td[i:i + chunk], init[i:i + chunk])
+    parts = [_solve_chunk(goals[i:i + chunk], Td[i:i + chunk], init[i:i + chunk], limits)
              for i in range(0, len(goals), chunk)]
     if not parts:
         n = len(JOINT_NAMES)
@@ -224,21 +234,22 @@ def solve_batch_info(Ts, *free, chunk=4096):
     return tuple(np.concatenate(x) for x in zip(*parts))
 
 
-def solve_batch(Ts, *free):
+def solve_batch(Ts, *free, limits=True):
     """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
-    Q, valid, ls, _, _ = solve_batch_info(Ts, *free)
+    Q, valid, ls, _, _ = solve_batch_info(Ts, *free, limits=limits)
     return Q, valid & ~ls
 
 
-def solve_info(T, *free):
+def solve_info(T, *free, limits=True):
     """All candidates of one target with residuals and flags: (q, residual, ls, continuum)."""
-    Q, valid, ls, res, cont = solve_batch_info(np.asarray(T, dtype=float)[None], *free)
+    Q, valid, ls, res, cont = solve_batch_info(np.asarray(T, dtype=float)[None], *free, limits=limits)
     v = valid[0]
     return Q[0][v], res[0][v], ls[0][v], cont[0][v]
 
 
-def solve(T, *free):
-    """Every exact solution of one target, one row each in JOINT_NAMES order; (0, n) if unreachable."""
-    q, _, ls, _ = solve_info(T, *free)
+def solve(T, *free, limits=True):
+    """Every exact solution of one target inside the joint limits, one row each in JOINT_NAMES order;
+    (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits."""
+    q, _, ls, _ = solve_info(T, *free, limits=limits)
     return q[~ls]
 '''
