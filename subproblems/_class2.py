@@ -111,6 +111,19 @@ def polish(twists, p, q, th, scale: float, iters: int = 6) -> np.ndarray:
     return th
 
 
+def has_free_joint(twists, p, th, scale: float) -> bool:
+    """True when some revolute joint acts on a point of its own axis (its angle is then free)."""
+    x = np.asarray(p, dtype=float)
+    for xi, a in zip(twists[::-1], th[::-1]):
+        if xi[3:].any():
+            u = x - np.cross(xi[3:], xi[:3])
+            if np.linalg.norm(u - xi[3:] * (xi[3:] @ u)) <= FREE_TOL * scale:
+                return True
+        g = twist_exp(xi, a)
+        x = g[:3, :3] @ x + g[:3, 3]
+    return False
+
+
 def residual(twists, p, q, th) -> float:
     return float(np.linalg.norm(chain_point_jac(twists, th, p)[0] - q))
 
@@ -131,7 +144,8 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         if th.shape != (len(kinds),) or not np.all(np.isfinite(th)):
             continue
         th = wrap_row(kinds, polish(twists, p, q, th, scale))
-        scored.append((residual(twists, p, q, th), th, bool(free)))
+        free = bool(free) or has_free_joint(twists, p, th, scale)
+        scored.append((residual(twists, p, q, th), th, free))
     if not scored:  # nothing usable: the zero vector as a flagged least-squares answer
         th = np.zeros(len(kinds))
         return [Solution(tuple(th), ls=True, continuum=continuum)]
@@ -382,6 +396,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     cand = np.where(rev, wrap_batch(cand), cand)
     x, _ = chain_points_batch(tw, cand, p)
     res = np.where(ok, np.linalg.norm(x - q[:, None, :], axis=-1), np.inf)
+    cand_free = cand_free | _free_joint_batch(tw, p, cand, scale)
     exact = res <= EXACT_TOL * scale[:, None]
     # prefer low residuals when deduplicating
     order = np.argsort(np.where(exact, res, np.inf), axis=1, kind="stable")
@@ -413,6 +428,22 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     # order valid rows lexicographically like the scalar path (cosmetic; keeps outputs comparable)
     Q = np.where(valid[..., None], Q, 0.0)
     return BatchResult(code, Q, valid, ls, cont)
+
+
+def _free_joint_batch(tw, p, th, scale):
+    """Vectorised :func:`has_free_joint` over candidates (N, C, m)."""
+    N, C, m = th.shape
+    x = np.broadcast_to(p[:, None, :], (N, C, 3))
+    free = np.zeros((N, C), dtype=bool)
+    for j in range(m - 1, -1, -1):
+        xi = np.broadcast_to(tw[:, None, j, :], (N, C, 6))
+        w = xi[..., 3:]
+        u = x - np.cross(w, xi[..., :3])
+        d = np.linalg.norm(u - w * np.sum(w * u, -1, keepdims=True), axis=-1)
+        free |= np.any(w != 0, axis=-1) & (d <= FREE_TOL * scale[:, None])
+        g = twist_exp_batch(xi, th[..., j])
+        x = _mv(g[..., :3, :3], x) + g[..., :3, 3]
+    return free
 
 
 def inverted_batch(tw) -> np.ndarray:
