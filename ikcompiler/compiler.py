@@ -132,7 +132,11 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             tuple(notes),
             math.inf,
         )
+    from ikcompiler.search.planner import move_key
+
+    alt, _, _ = search(ctx, couplings, full_lower, full_upper, start, banned_first={move_key(steps[0])})
     steps, n_groups = finalize_steps(steps)
+    alt_steps, alt_groups = finalize_steps(alt) if alt else ([], 0)
     return Plan(
         chain.name,
         tuple(chain.independent_names),
@@ -142,11 +146,12 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         tuple(steps),
         free,
         any(s.get("snapped", False) for s in steps),
-        n_groups,
+        max(n_groups, alt_groups),
         geometry,
         tuple(notes),
         cost,
         all_names=all_names,
+        alternative=tuple(alt_steps),
     )
 
 

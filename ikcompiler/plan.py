@@ -24,15 +24,16 @@ class Plan:
     search: tuple[int, ...] = ()  # joints gridded by the 1-D / 2-D search fallback
     grid: int = 0
     all_names: tuple[str, ...] = ()  # every joint, coupled ones included (steps index these)
+    alternative: tuple[dict, ...] = ()  # run for targets where ``steps`` meets a continuum
 
     @property
     def joint_names_all(self) -> tuple[str, ...]:
         return self.all_names or self.joint_names
 
-    def step_lines(self) -> list[str]:
+    def step_lines(self, steps=None) -> list[str]:
         names = self.joint_names_all
         out = []
-        for k, s in enumerate(self.steps, start=1):
+        for k, s in enumerate(self.steps if steps is None else steps, start=1):
             if s["kind"] == "SUM":
                 out.append(f"step {k}: {s['rule']}")
                 continue
@@ -75,6 +76,9 @@ class Plan:
                 "polished by Newton steps on every joint"
             )
         lines += [f"  {s}" for s in self.step_lines()]
+        if self.alternative:
+            lines.append("alternative chain (for targets where a step above meets a continuum)")
+            lines += [f"  {s}" for s in self.step_lines(self.alternative)]
         for note in self.notes:
             lines.append(f"note: {note}")
         return "\n".join(lines)

@@ -117,6 +117,14 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     for k, (step, line) in enumerate(zip(plan.steps, lines), start=1):
         out.append(_step_source(k, step, line))
     out.append("]\n")
+    out.append(
+        "# Alternative chain, run for the targets where a step above meets a continuum (a joint left\n"
+    )
+    out.append("# free by that step's geometry but fixed by the rest of the target).\n")
+    out.append("_ALT_STEPS = [\n")
+    for step, line in zip(plan.alternative, plan.step_lines(plan.alternative)):
+        out.append(_step_source(0, step, line))
+    out.append("]\n")
     out.append(BODY)
     text = "".join(out)
     # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
@@ -193,6 +201,12 @@ def _solve_chunk(goals, Td, init, limits):
         ls = cont = np.zeros(len(TH), dtype=bool)
     else:
         TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        if _ALT_STEPS and cont.any():
+            redo = np.unique(owner[cont])
+            TH2, own2, ls2, _, cont2 = _rt.run_plan(_ALT_STEPS, _TWISTS, _KINDS, Td[redo], _COUPLINGS,
+                                                    _N_GROUPS, init[redo])
+            TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, redo[own2]])
+            ls, cont = np.concatenate([ls, ls2]), np.concatenate([cont, cont2])
         if cont.any():
             # A self-motion: the representative a step chose may not complete the pose; Newton steps
             # on every joint pull it onto a nearby exact solution of the continuum.

@@ -23,7 +23,7 @@ import networkx as nx
 import numpy as np
 
 from ikcompiler.rules.moves import Context, propose
-from subproblems import max_solutions, solve_batch
+from subproblems import codes, max_solutions, solve_batch
 from subproblems.core import SubproblemError
 from subproblems.plan_runtime import _step_inputs
 from subproblems.screw import inverse_transform
@@ -37,6 +37,8 @@ def move_cost(code: str) -> float:
     if code == "SUM":
         return PRICE["SUM"]
     prefix = code.split("-")[0]
+    if code not in codes():
+        return math.inf  # no solver registered for this subproblem type
     return math.log2(max(1, max_solutions(code))) + PRICE.get(prefix, 1.0) + GENERAL_PRICE.get(code, 0.0)
 
 
@@ -133,58 +135,65 @@ def validate(ctx: Context, move: dict, trials: Trials, couplings, tol: float) ->
     return None
 
 
-def search(ctx: Context, couplings, lower, upper, start: frozenset, max_states: int = 400):
-    """Cheapest validated chain from ``start`` to all joints solved: (steps, cost, report)."""
+def move_key(move: dict) -> str:
+    """A stable identity of a move (its fields, minus the prose)."""
+    return repr(sorted((k, v) for k, v in move.items() if k != "rule"))
+
+
+def search(
+    ctx: Context, couplings, lower, upper, start: frozenset, max_states: int = 400, banned_first=frozenset()
+):
+    """Cheapest validated chain from ``start`` to all joints solved: (steps, cost, report).
+
+    ``banned_first`` holds :func:`move_key` of moves not to take from the start state (used to find an
+    alternative chain for targets where the best one meets a continuum).
+    """
     trials = Trials(ctx, couplings, lower, upper)
     report = SearchReport()
-    goal_size = ctx.n
     start_state = (_closure(start, couplings), frozenset())
     graph = nx.DiGraph()
     graph.add_node(start_state)
-    best = {start_state: 0.0}
     counter = itertools.count()
-    heap = [(0.0, next(counter), start_state)]
-    done = set()
+    # Lazy Dijkstra: a move is validated only when the state it leads to is the cheapest one left, so
+    # expensive subproblems that never beat a cheaper chain are never run.
+    heap = [(0.0, next(counter), start_state, None, None)]
+    done: dict = {}
     goal = None
-    valid_cache: dict[str, str | None] = {}
     while heap and report.expanded < max_states:
-        cost, _, state = heapq.heappop(heap)
+        cost, _, state, parent, move = heapq.heappop(heap)
         if state in done:
             continue
-        done.add(state)
-        report.expanded += 1
-        solved, sums = state
-        if len(solved) == goal_size:
-            goal = state
-            break
-        for move in propose(ctx, solved, sums):
-            key = repr((sorted(solved), sorted(map(repr, sums)), sorted(move.items(), key=str)))
-            if key not in valid_cache:
-                tol = 1e-2 if move.get("snapped") else 1e-6
-                valid_cache[key] = validate(ctx, move, trials, couplings, tol)
-            why = valid_cache[key]
-            names = ", ".join(ctx.names[j] for j in move.get("solve", []))
+        if move is not None:
+            why = validate(ctx, move, trials, couplings, 1e-2 if move.get("snapped") else 1e-6)
             if why is not None:
+                names = ", ".join(ctx.names[j] for j in move.get("solve", []))
                 report.tried.append(f"{move['code']} for ({names}) via {move['rule']}: {why}")
                 continue
-            new_solved = set(solved) | set(move.get("solve", []))
-            new_sums = set(sums)
-            for g in move.get("gives", ()):
-                if len(g) > 1:
-                    new_sums.add(g)
-            nxt = (_closure(frozenset(new_solved), couplings), frozenset(new_sums))
-            if nxt == state:
+            graph.add_edge(parent, state, weight=move_cost(move["code"]), move=move)
+        done[state] = cost
+        report.expanded += 1
+        solved, sums = state
+        if len(solved) == ctx.n:
+            goal = state
+            break
+        for mv in propose(ctx, solved, sums):
+            if state == start_state and move_key(mv) in banned_first:
                 continue
-            c = cost + move_cost(move["code"])
-            if c < best.get(nxt, math.inf):
-                best[nxt] = c
-                graph.add_edge(state, nxt, weight=move_cost(move["code"]), move=move)
-                heapq.heappush(heap, (c, next(counter), nxt))
+            new_sums = set(sums) | {g for g in mv.get("gives", ()) if len(g) > 1}
+            nxt = (
+                _closure(frozenset(solved) | frozenset(mv.get("solve", [])), couplings),
+                frozenset(new_sums),
+            )
+            step_cost = move_cost(mv["code"])
+            if math.isinf(step_cost):
+                report.tried.append(f"{mv['code']} via {mv['rule']}: no solver for this subproblem type")
+            elif nxt != state and nxt not in done:
+                heapq.heappush(heap, (cost + step_cost, next(counter), nxt, state, mv))
     if goal is None:
         return None, math.inf, report
     path = nx.dijkstra_path(graph, start_state, goal)
     steps = [graph.edges[a, b]["move"] for a, b in zip(path, path[1:])]
-    return steps, best[goal], report
+    return steps, done[goal], report
 
 
 def finalize_steps(steps: list[dict]) -> tuple[list[dict], int]:
