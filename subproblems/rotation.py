@@ -78,6 +78,8 @@ __all__ = [
 EXACT_TOL = 1e-9
 #: Two axes are parallel when ``|w1 x w2|`` is at most this.
 PAR_TOL = 1e-9
+#: Below this ``|w1 x w2|`` the general formulas cannot be evaluated: the parallel branch is forced.
+_DEGEN = 1e-15
 #: Gimbal lock is tried when ``|w1 x R w3|`` is at most this; it is declared when its representative
 #: (``t1 = 0``) is exact.  Closer to gimbal lock than this the isolated solutions are not resolvable.
 GIMBAL_TOL = 1e-6
@@ -225,35 +227,51 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
         return [(np.zeros(0), None, 0)]
     if k == 1:
         return [(np.array([_angle_r(ws[0], R)[0]]), None, 0)]
+
+    # A degenerate branch (parallel axes) is taken when its representative is exact, or when the axes
+    # are so close to parallel that the general formulas cannot be evaluated; otherwise the general
+    # formulas run (and a near-parallel unreachable instance gets a general least-squares answer).
+    def exact(cand) -> bool:
+        return rotation_error(_product(ws, cand), R) <= EXACT_TOL
+
     if k == 2:
         w1, w2 = ws
-        if np.linalg.norm(np.cross(w1, w2)) <= PAR_TOL:
+        c12 = float(np.linalg.norm(np.cross(w1, w2)))
+        if c12 <= PAR_TOL:
             s = 1.0 if w1 @ w2 > 0 else -1.0
-            phi = _angle_r(w1, R)[0]
-            return [(np.array([0.0, s * phi]), np.array([1.0, -s]), 1)]
-        t1, _ = _angle_about(w1, w2, R @ w2)
+            cand = np.array([0.0, s * _angle_r(w1, R)[0]])
+            if c12 <= _DEGEN or exact(cand):
+                return [(cand, np.array([1.0, -s]), 1)]
+        t1, _ = _angle_about(w1, w2, R @ w2, 0.0)
         t2, _ = _angle_r(w2, rotation_exp(w1, -t1) @ R)
         return [(np.array([t1, t2]), None, 0)]
     w1, w2, w3 = ws
-    p12 = np.linalg.norm(np.cross(w1, w2)) <= PAR_TOL
-    p23 = np.linalg.norm(np.cross(w2, w3)) <= PAR_TOL
-    if p12 and p23:
+    c12 = float(np.linalg.norm(np.cross(w1, w2)))
+    c23 = float(np.linalg.norm(np.cross(w2, w3)))
+    general_ok = min(c12, c23) > _DEGEN
+    if c12 <= PAR_TOL and c23 <= PAR_TOL:
         s3 = 1.0 if w1 @ w3 > 0 else -1.0
-        return [(np.array([0.0, 0.0, s3 * _angle_r(w1, R)[0]]), None, 2)]
-    if p12:
+        cand = np.array([0.0, 0.0, s3 * _angle_r(w1, R)[0]])
+        if not general_ok or exact(cand):
+            return [(cand, None, 2)]
+    if c12 <= PAR_TOL:
         ((th, _, _),) = rotation_families([w1, w3], R)
         s = 1.0 if w1 @ w2 > 0 else -1.0
-        return [(np.array([0.0, s * th[0], th[1]]), np.array([1.0, -s, 0.0]), 1)]
-    if p23:
+        cand = np.array([0.0, s * th[0], th[1]])
+        if not general_ok or exact(cand):
+            return [(cand, np.array([1.0, -s, 0.0]), 1)]
+    if c23 <= PAR_TOL:
         ((th, _, _),) = rotation_families([w1, w2], R)
         s = 1.0 if w2 @ w3 > 0 else -1.0
-        return [(np.array([th[0], 0.0, s * th[1]]), np.array([0.0, 1.0, -s]), 1)]
+        cand = np.array([th[0], 0.0, s * th[1]])
+        if not general_ok or exact(cand):
+            return [(cand, np.array([0.0, 1.0, -s]), 1)]
     Rw3 = R @ w3
     if np.linalg.norm(np.cross(w1, Rw3)) <= GIMBAL_TOL:
         # gimbal lock: exp([w2]t2) w3 = sigma w1, so exp([w2]t2) exp([w3]t3) = exp([w1] sigma t3) exp([w2]t2)
         ((th, _, _),) = rotation_families([w2, w3], R)
         cand = np.array([0.0, th[0], th[1]])
-        if rotation_error(_product(ws, cand), R) <= EXACT_TOL:
+        if exact(cand):
             sigma = 1.0 if w1 @ Rw3 > 0 else -1.0
             return [(cand, np.array([1.0, 0.0, -sigma]), 1)]
     # general: w1^T exp([w2]t2) w3 = w1^T R w3, i.e. alpha + beta cos t2 + gamma sin t2 = delta
@@ -561,20 +579,26 @@ def rotation_families_batch(W, R):
     # gimbal lock: t1 = 0, (t2, t3) from O-RR on axes 2, 3
     th23, _, _ = _rr_b(w2, w3, R)
     agim = np.stack([np.zeros(N), th23[:, 0], th23[:, 1]], -1)
-    gim = (
-        ~p12
-        & ~p23
-        & (np.linalg.norm(np.cross(w1, Rw3), axis=-1) <= GIMBAL_TOL)
-        & (rotation_error_batch(product_batch(W, agim), R) <= EXACT_TOL)
-    )
+
+    def exact(cand):
+        return rotation_error_batch(product_batch(W, cand), R) <= EXACT_TOL
+
+    c12 = np.linalg.norm(np.cross(w1, w2), axis=-1)
+    c23 = np.linalg.norm(np.cross(w2, w3), axis=-1)
+    gen_bad = np.minimum(c12, c23) <= _DEGEN
+    use_all = p12 & p23 & (gen_bad | exact(aall))
+    use_12 = ~use_all & p12 & (gen_bad | exact(a12))
+    use_23 = ~use_all & ~use_12 & p23 & (gen_bad | exact(a23))
+    taken = use_all | use_12 | use_23
+    gim = ~taken & (np.linalg.norm(np.cross(w1, Rw3), axis=-1) <= GIMBAL_TOL) & exact(agim)
     sig = np.where(_dot(w1, Rw3) > 0, 1.0, -1.0)
     one = np.ones(N)
     zero = np.zeros(N)
     for mask, rep, nn, dd in (
         (gim, agim, np.stack([one, zero, -sig], -1), 1),
-        (p23 & ~p12, a23, np.stack([zero, one, -s23], -1), 1),
-        (p12 & ~p23, a12, np.stack([one, -s12, zero], -1), 1),
-        (p12 & p23, aall, np.zeros((N, 3)), 2),
+        (use_23, a23, np.stack([zero, one, -s23], -1), 1),
+        (use_12, a12, np.stack([one, -s12, zero], -1), 1),
+        (use_all, aall, np.zeros((N, 3)), 2),
     ):
         TH[:, 0] = np.where(mask[:, None], rep, TH[:, 0])
         cvalid[:, 1] &= ~mask
@@ -584,12 +608,15 @@ def rotation_families_batch(W, R):
 
 
 def _rr_b(w1, w2, R):
-    par = np.linalg.norm(np.cross(w1, w2), axis=-1) <= PAR_TOL
-    t1, _ = _angle_about_b(w1, w2, _mv(R, w2))
+    c12 = np.linalg.norm(np.cross(w1, w2), axis=-1)
+    t1, _ = _angle_about_b(w1, w2, _mv(R, w2), 0.0)
     t2, _ = _angle_r_b(w2, _tr(rexp_batch(w1, t1)) @ R)
     s = np.where(_dot(w1, w2) > 0, 1.0, -1.0)
     phi, _ = _angle_r_b(w1, R)
-    TH = np.where(par[:, None], np.stack([np.zeros_like(phi), s * phi], -1), np.stack([t1, t2], -1))
+    rep = np.stack([np.zeros_like(phi), s * phi], -1)
+    ex = rotation_error_batch(product_batch(np.stack([w1, w2], -2), rep), R) <= EXACT_TOL
+    par = (c12 <= PAR_TOL) & ((c12 <= _DEGEN) | ex)
+    TH = np.where(par[:, None], rep, np.stack([t1, t2], -1))
     n = np.where(par[:, None], np.stack([np.ones_like(s), -s], -1), 0.0)
     return TH, n, par.astype(int)
 
