@@ -35,6 +35,10 @@ EXACT_TOL = 1e-9
 DEDUP_TOL = 1e-6
 #: A point closer than this (relative) to a revolute axis does not determine the joint angle.
 FREE_TOL = 1e-10
+#: After polishing, a solution whose point on a revolute joint is this close (relative) to the joint's
+#: axis leaves that angle undetermined at the EXACT_TOL level (near a double root the polished point
+#: may stay ~sqrt(eps) off the axis): the instance is flagged continuum.
+FREE_POINT_TOL = 10 * EXACT_TOL
 #: Relative size under which an eliminant coefficient counts as zero.
 COEF_TOL = 1e-12
 
@@ -117,7 +121,7 @@ def has_free_joint(twists, p, th, scale: float) -> bool:
     for xi, a in zip(twists[::-1], th[::-1]):
         if xi[3:].any():
             u = x - np.cross(xi[3:], xi[:3])
-            if np.linalg.norm(u - xi[3:] * (xi[3:] @ u)) <= FREE_TOL * scale:
+            if np.linalg.norm(u - xi[3:] * (xi[3:] @ u)) <= FREE_POINT_TOL * scale:
                 return True
         g = twist_exp(xi, a)
         x = g[:3, :3] @ x + g[:3, 3]
@@ -158,6 +162,16 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
     for s in exact:
         if all(joint_distance(kinds, s[1], k[1]) > DEDUP_TOL for k in kept):
             kept.append(s)
+    # Near a double root two polished copies can both pass the residual test yet differ by more than
+    # DEDUP_TOL; never return more rows than the type can have: merge the closest pairs.
+    from subproblems.core import max_solutions
+
+    while len(kept) > max_solutions(code):
+        i, j = min(
+            ((i, j) for i in range(len(kept)) for j in range(i + 1, len(kept))),
+            key=lambda ij: joint_distance(kinds, kept[ij[0]][1], kept[ij[1]][1]),
+        )
+        del kept[j]  # kept is sorted by residual: j has the larger one
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
 
@@ -440,7 +454,7 @@ def _free_joint_batch(tw, p, th, scale):
         w = xi[..., 3:]
         u = x - np.cross(w, xi[..., :3])
         d = np.linalg.norm(u - w * np.sum(w * u, -1, keepdims=True), axis=-1)
-        free |= np.any(w != 0, axis=-1) & (d <= FREE_TOL * scale[:, None])
+        free |= np.any(w != 0, axis=-1) & (d <= FREE_POINT_TOL * scale[:, None])
         g = twist_exp_batch(xi, th[..., j])
         x = _mv(g[..., :3, :3], x) + g[..., :3, 3]
     return free

@@ -112,7 +112,7 @@ def recovered(code, twists, p, Q, th) -> bool:
 
 
 @pytest.mark.parametrize("code", params(CODES))
-@budget()
+@budget(3)
 @given(data=st.data())
 def test_recovers_drawn_joint_values(code, data):
     kinds = code[3:]
