@@ -28,7 +28,9 @@ def _cmd_describe(args) -> int:
 def _compile_args(p: argparse.ArgumentParser) -> None:
     _add_robot_args(p)
     p.add_argument("--free", nargs="*", default=[], metavar="JOINT", help="free joints (redundant robots)")
-    p.add_argument("--target", default="pose", choices=["pose", "position"], help="what is solved for")
+    p.add_argument(
+        "--target", default="pose", choices=["pose", "position", "orientation"], help="what is solved for"
+    )
 
 
 def _cmd_compile(args) -> int:

@@ -23,7 +23,7 @@ from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
 from subproblems import max_solutions
 
-TARGETS = ("pose", "position")
+TARGETS = ("pose", "position", "orientation")
 NUMERICAL_STARTS = 48
 NUMERICAL_ITERS = 30
 
@@ -56,6 +56,17 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     dof_needed = 6 if target == "pose" else 3
     unknown = chain.dof - len(free)
     notes = []
+    if target == "orientation":
+        sliding = [
+            j.name
+            for j in chain.joints
+            if j.kind == "T" and j.name not in free and j.name in chain.independent_names
+        ]
+        if sliding:
+            raise FreeJointError(
+                f"an orientation target cannot determine the prismatic joint(s) {', '.join(sliding)} of "
+                f"{chain.name}: name them with --free"
+            )
     if unknown > dof_needed:
         raise FreeJointError(
             f"{chain.name} has {chain.dof} joints for a {dof_needed}-DOF {target} target: name "

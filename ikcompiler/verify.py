@@ -4,8 +4,8 @@ Sample joint values inside the limits (a quarter of them snapped to the special 
 compute their poses with the *chain's own* forward kinematics, solve, and count: poses, solutions,
 recovered (the sampled vector is among the solutions), wrong (a returned solution whose FK misses the
 target by more than the tolerance), self-motion (not recovered, but the pose is singular with a
-continuum of solutions and a flagged representative was returned), missed (the rest).  The batch
-path is checked against the single-pose path on a subset.
+continuum of solutions, flagged; "unsolved" when no exact representative came back), missed (the
+rest).  The batch path is checked against the single-pose path on a subset.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ class VerifyReport:
     wrong: int
     missed: int
     self_motion: int
+    self_motion_unsolved: int
     max_error: float
     median_error: float
     batch_mismatch: int
@@ -42,7 +43,8 @@ class VerifyReport:
         return (
             f"{self.robot}: method {self.method}\n"
             f"  poses {self.poses}  solutions {self.solutions}  recovered {self.recovered} ({rate:.4%})  "
-            f"wrong {self.wrong}  missed {self.missed}  at a self-motion {self.self_motion}\n"
+            f"wrong {self.wrong}  missed {self.missed}  at a self-motion {self.self_motion} "
+            f"(of which {self.self_motion_unsolved} with no exact representative)\n"
             f"  error of returned solutions (relative to robot size): max {self.max_error:.2e}, "
             f"median {self.median_error:.2e}\n"
             f"  single-pose vs batch: {self.scalar_checked} poses compared, {self.batch_mismatch} differ"
@@ -79,22 +81,27 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
     Q = sample_configurations(chain, samples, seed)
     kinds = [chain.joints[i].kind for i in chain.independent]
     G = chain.fk_batch(Q)
-    targets = G[:, :3, 3] if module.TARGET == "position" else G
+    targets = {"position": G[:, :3, 3], "orientation": G[:, :3, :3]}.get(module.TARGET, G)
     free_pos = [chain.independent_names.index(f) for f in module.FREE_JOINTS]
     free = [Q[:, p] for p in free_pos]
-    S, valid, ls, _, cont = module.solve_batch_info(targets, *free)
-    valid = valid & ~ls
+    S, filled, ls, _, cont = module.solve_batch_info(targets, *free)
+    valid = filled & ~ls
     scale = chain.scale
-    errs, wrong, recovered, solutions, self_motion = [], 0, 0, 0, 0
+    errs, wrong, recovered, solutions, self_motion, unsolved = [], 0, 0, 0, 0, 0
     tol = module.TOLERANCE * scale
     for i in range(samples):
         sols = S[i][valid[i]]
         solutions += len(sols)
         if len(sols) == 0:
+            if (cont[i] & filled[i]).any():
+                self_motion += 1
+                unsolved += 1
             continue
         Gs = chain.fk_batch(sols)
         if module.TARGET == "position":
             e = np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1)
+        elif module.TARGET == "orientation":
+            e = scale * np.abs(Gs[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2))
         else:
             e = np.maximum(
                 np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),
@@ -128,6 +135,7 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
         wrong,
         samples - recovered - self_motion,
         self_motion,
+        unsolved,
         float(errs.max()),
         float(np.median(errs)),
         mismatch,

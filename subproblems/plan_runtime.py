@@ -237,6 +237,9 @@ def run_search(step, twists, kinds, Td, couplings=(), n_groups=0, init=None):
         # Td is a translation taking the home tool point to the goal point
         goal = Td[owner, :3, 3] + np.asarray(step["home"])[:3, 3]
         err = np.linalg.norm(poses[:, :3, 3] - goal, axis=1)
+    elif step.get("target") == "orientation":
+        goal = Td[owner] @ step["home"]
+        err = step["scale"] * np.abs(poses[:, :3, :3] - goal[:, :3, :3]).max(axis=(1, 2))
     else:
         err = pose_error(poses, Td[owner] @ step["home"], step["scale"])
     _, b_idx = np.unique(branch, return_inverse=True)
@@ -393,8 +396,11 @@ def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters
             e, J = e_pos, J[:, :3, :]
         else:
             R, Rd = G[:, :3, :3], targets[:, :3, :3]
-            e_rot = 0.5 * np.cross(R, Rd, axis=1).sum(axis=2)
-            e = np.concatenate([e_pos, e_rot], axis=1)
+            e_rot = 0.5 * _cross(np.swapaxes(R, 1, 2), np.swapaxes(Rd, 1, 2)).sum(axis=1)
+            if target == "orientation":
+                e, J = e_rot, J[:, 3:, :]
+            else:
+                e = np.concatenate([e_pos, e_rot], axis=1)
         JtJ = np.einsum("mki,mkj->mij", J, J)
         lam = 1e-12 + 1e-9 * np.einsum("mii->m", JtJ)
         JtJ = JtJ + lam[:, None, None] * np.eye(JtJ.shape[1])

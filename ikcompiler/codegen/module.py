@@ -142,7 +142,13 @@ def fk(q):
 def _targets(Ts):
     """Validate targets; return (goals (N, 4, 4), Td (N, 4, 4)) with Td = g_d g_st(0)^-1."""
     Ts = np.asarray(Ts, dtype=float)
-    if TARGET == "position":
+    if TARGET == "orientation":
+        if Ts.shape[-2:] != (3, 3):
+            raise ValueError(f"an orientation target is a 3x3 rotation or (N, 3, 3); got shape {Ts.shape}")
+        goals = np.broadcast_to(np.eye(4), (Ts.reshape(-1, 3, 3).shape[0], 4, 4)).copy()
+        goals[:, :3, :3] = Ts.reshape(-1, 3, 3)
+        Td = goals @ _HOME_INV
+    elif TARGET == "position":
         if Ts.shape[-1:] != (3,):
             raise ValueError(f"a position target is (3,) or (N, 3); got shape {Ts.shape}")
         P = Ts.reshape(-1, 3)
@@ -157,7 +163,7 @@ def _targets(Ts):
         Td = goals @ _HOME_INV
     if not np.all(np.isfinite(goals)):
         raise ValueError("target contains NaN or infinity")
-    if TARGET == "pose":
+    if TARGET in ("pose", "orientation"):
         R = goals[:, :3, :3]
         ortho = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
         if np.any(ortho > 1e-6) or np.any(np.abs(np.linalg.det(R) - 1) > 1e-6):
@@ -168,6 +174,8 @@ def _targets(Ts):
 def _error(G, goals):
     if TARGET == "position":
         return np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
+    if TARGET == "orientation":  # radians-like, scaled to lengths like the pose error
+        return SCALE * np.abs(G[:, :3, :3] - goals[:, :3, :3]).max(axis=(1, 2))
     return _rt.pose_error(G, goals, SCALE)
 
 

@@ -176,6 +176,8 @@ def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[dict]:
                 moves += _point_moves(
                     ctx, frames, seq[:-j], trail, p0, exact, known, inverted, f"rule 1: {why}{inv_txt}"
                 )
+    elif ctx.target == "orientation":
+        moves += _orientation_moves(ctx, frames, unknown, known, sums)
     elif ctx.target == "position":
         p0 = ctx.home[:3, 3]
         moves += _point_moves(ctx, frames, unknown, [], p0, True, known, False, "the tool point")
