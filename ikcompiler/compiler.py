@@ -17,6 +17,7 @@ import numpy as np
 from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
+from ikcompiler.geometry.snap import snap_chain
 from ikcompiler.model import Chain
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
@@ -77,6 +78,9 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             f"{unknown} joints for a {dof_needed}-DOF {target} target: solved from a sufficient subset of "
             "the equations; every solution is checked against the whole target"
         )
+    true_chain = chain
+    chain, snap_notes = snap_chain(chain, tol)
+    notes += [f"near-relation snapped: {n}" for n in snap_notes]
     ctx = Context(
         twists=chain.twists,
         kinds=chain.joint_types,
@@ -92,7 +96,9 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     full_upper = np.array([j.upper for j in chain.joints])
     start = frozenset(chain.index(f) for f in free)
     steps, cost, report = search(ctx, couplings, full_lower, full_upper, start)
-    geometry = tuple(analyse(chain, tol))
+    geometry = tuple(analyse(true_chain, tol))
+    plan_twists = tuple(map(tuple, chain.twists)) if snap_notes else ()
+    chain = true_chain
     all_names = tuple(j.name for j in chain.joints)
     if steps is None:
         notes.append(
@@ -156,13 +162,14 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         "closed-form",
         tuple(steps),
         free,
-        any(s.get("snapped", False) for s in steps),
+        bool(snap_notes) or any(s.get("snapped", False) for s in steps),
         max(n_groups, alt_groups),
         geometry,
         tuple(notes),
         cost,
         all_names=all_names,
         alternative=tuple(alt_steps),
+        plan_twists=plan_twists,
     )
 
 

@@ -25,6 +25,7 @@ class Plan:
     grid: int = 0
     all_names: tuple[str, ...] = ()  # every joint, coupled ones included (steps index these)
     alternative: tuple[dict, ...] = ()  # run for targets where ``steps`` meets a continuum
+    plan_twists: tuple = ()  # twists of the snapped robot the steps were derived on (empty: the true ones)
 
     @property
     def joint_names_all(self) -> tuple[str, ...]:

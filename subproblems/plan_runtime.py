@@ -401,10 +401,12 @@ def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters
                 e, J = e_rot, J[:, 3:, :]
             else:
                 e = np.concatenate([e_pos, e_rot], axis=1)
-        JtJ = np.einsum("mki,mkj->mij", J, J)
-        lam = 1e-12 + 1e-9 * np.einsum("mii->m", JtJ)
-        JtJ = JtJ + lam[:, None, None] * np.eye(JtJ.shape[1])
-        dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", J, e)[..., None])[..., 0]
+        # Columns scaled to unit norm (lengths and angles mix), then a whisper of damping so that a
+        # singular direction neither blows the step up nor stalls the others.
+        col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
+        Js = J / col[:, None, :]
+        JtJ = np.einsum("mki,mkj->mij", Js, Js) + 1e-12 * np.eye(Js.shape[2])
+        dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
         Q = Q + dq
     return Q @ A.T + b
 

@@ -101,6 +101,12 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     out.append('PLAN = """\\\n' + plan.explain() + '\n"""\n\n')
     out.append("# Screw axes of every joint at home, base frame, (v, w); mimic joints included.\n")
     out.append(f"_TWISTS = np.array({_array(chain.twists)})\n")
+    if plan.plan_twists:
+        out.append("# The chain below was derived on the snapped robot (near-relations made exact); its\n")
+        out.append("# answers are corrected by Newton steps on the true robot above and checked there.\n")
+        out.append(f"_PLAN_TWISTS = np.array({_array(plan.plan_twists)})\n")
+    else:
+        out.append("_PLAN_TWISTS = _TWISTS\n")
     out.append(f"_KINDS = {chain.joint_types!r}\n")
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     out.append("_HOME_INV = _rt.inverse_transform(_HOME)\n")
@@ -110,7 +116,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     out.append(f"_INDEPENDENT = {tuple(chain.independent)!r}\n")
     out.append(f"_FREE = {tuple(free_idx)!r}  # positions of the free joints in JOINT_NAMES\n")
     out.append(f"_N_GROUPS = {plan.n_groups}\n")
-    out.append(f"_POLISH = {4 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
+    out.append(f"_POLISH = {10 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
     out.append(f"_SEARCH = {_literal(list(plan.search))}  # joints gridded by the search fallback\n")
     out.append(f"_GRID = {plan.grid}\n")
     out.append("_STEPS = [\n")
@@ -203,15 +209,15 @@ def _solve_chunk(goals, Td, init, limits):
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
                 "target": TARGET}
-        TH, owner = _rt.run_search(step, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        TH, owner = _rt.run_search(step, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
                         independent=_INDEPENDENT, target=TARGET, iters=8)
         ls = cont = np.zeros(len(TH), dtype=bool)
     else:
-        TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
+        TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
         if _ALT_STEPS and cont.any():
             redo = np.unique(owner[cont])
-            TH2, own2, ls2, _, cont2 = _rt.run_plan(_ALT_STEPS, _TWISTS, _KINDS, Td[redo], _COUPLINGS,
+            TH2, own2, ls2, _, cont2 = _rt.run_plan(_ALT_STEPS, _PLAN_TWISTS, _KINDS, Td[redo], _COUPLINGS,
                                                     _N_GROUPS, init[redo])
             TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, redo[own2]])
             ls, cont = np.concatenate([ls, ls2]), np.concatenate([cont, cont2])

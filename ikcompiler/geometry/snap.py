@@ -1,0 +1,100 @@
+"""Snap near-relations so that the closed form applies: the "ideal" robot of a calibrated one.
+
+A calibrated URDF misses its design structure by a little (axes parallel to 1e-4 rad, wrist axes that
+miss one another by 1e-4 of the robot's size).  The compiler builds its chain of subproblems on the
+*snapped* robot, where those relations hold exactly, and every solution is then corrected by Newton
+steps on the true robot and checked there (DESIGN.md section 5).  Snapping only ever moves a relation
+that already holds to ``Tolerance.snap``; exact relations and clear non-relations are left alone.
+
+Rules, in chain order:
+
+* directions: a revolute axis (or prismatic direction) within ``snap`` of a parallel to an earlier
+  revolute axis takes that axis's direction (sign kept);
+* points: each maximal run of three or more consecutive revolute axes that nearly meet in one point is
+  moved to pass exactly through their least-squares common point (each axis keeps its direction and
+  moves perpendicularly to it); then each other consecutive pair that nearly meets has one axis (not
+  in such a run) shifted parallel to itself through the other axis's nearest point.
+"""
+
+from __future__ import annotations
+
+from ikcompiler.geometry.relations import Tolerance, lines_meet, parallel_miss, twist_line
+from ikcompiler.model import Chain, Joint
+from subproblems.screw import prismatic_twist, revolute_twist
+
+
+def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[str]]:
+    """The snapped chain and one note per relation that was snapped (empty when nothing moved)."""
+    tol = tol or Tolerance()
+    dirs = [j.axis.copy() for j in chain.joints]
+    points = [j.point.copy() if j.kind == "R" else None for j in chain.joints]
+    notes: list[str] = []
+    names = [j.name for j in chain.joints]
+    for i in range(chain.n):
+        for k in range(i):
+            if chain.joints[k].kind != "R":
+                continue
+            miss = parallel_miss(dirs[i], dirs[k])
+            if tol.exact < miss <= tol.snap:
+                dirs[i] = dirs[k] * (1.0 if dirs[i] @ dirs[k] > 0 else -1.0)
+                notes.append(f"{names[i]} snapped parallel to {names[k]} (missed by {miss:.1e} rad)")
+                break
+    run_of = [-1] * chain.n  # which snapped run of three or more concurrent axes a joint belongs to
+    i = 0
+    while i < chain.n:
+        run = [i]
+        while run[-1] + 1 < chain.n and chain.joints[run[-1] + 1].kind == "R" and chain.joints[i].kind == "R":
+            cand = run + [run[-1] + 1]
+            x, miss = lines_meet([(dirs[j], points[j]) for j in cand], chain.scale)
+            if x is None or miss > tol.snap:
+                break
+            run = cand
+        if len(run) >= 3:
+            x, miss = lines_meet([(dirs[j], points[j]) for j in run], chain.scale)
+            for j in run:
+                run_of[j] = run[0]
+            if miss > tol.exact:
+                for j in run:
+                    points[j] = x
+                notes.append(
+                    f"axes of {', '.join(names[j] for j in run)} snapped to meet at one point "
+                    f"(missed by {miss:.1e} of the robot's size)"
+                )
+        i = run[-1] + 1
+    # Consecutive pairs that nearly meet outside such runs (UR-type wrists: 4-5 and 5-6 meet, not all
+    # three): shift one axis (one not in a snapped run) parallel to itself through the other's point.
+    for i in range(chain.n - 1):
+        j = i + 1
+        if chain.joints[i].kind != "R" or chain.joints[j].kind != "R" or run_of[i] == run_of[j] != -1:
+            continue
+        x, miss = lines_meet([(dirs[i], points[i]), (dirs[j], points[j])], chain.scale)
+        if x is None or not tol.exact < miss <= tol.snap:
+            continue
+        mover, keeper = (j, i) if run_of[j] == -1 else (i, j)
+        if run_of[mover] != -1:
+            continue
+        d, r = dirs[keeper], points[keeper]
+        points[mover] = r + d * float(d @ (x - r))
+        notes.append(
+            f"axes of {names[i]}, {names[j]} snapped to meet (missed by {miss:.1e} of the robot's size)"
+        )
+    if not notes:
+        return chain, []
+    joints = tuple(
+        Joint(j.name, j.kind, revolute_twist(d, p) if j.kind == "R" else prismatic_twist(d), j.lower, j.upper)
+        for j, d, p in zip(chain.joints, dirs, points)
+    )
+    snapped = Chain(
+        f"{chain.name} (snapped)",
+        joints,
+        chain.home,
+        chain.couplings,
+        chain.base,
+        chain.tip,
+        chain.units,
+        chain.source,
+    )
+    return snapped, notes
+
+
+__all__ = ["snap_chain", "twist_line"]
