@@ -1,0 +1,339 @@
+"""Shared machinery of the class I solvers (``prod exp(xi_i th_i) = T``, m <= 3): private.
+
+Every class I type is solved the same way (seed 003 section 2; DESIGN.md rule 2):
+
+1. **Orientation.**  Only the revolute joints rotate: ``prod_R exp([w_i] th_i) = R_T`` is an orientation
+   subproblem (:func:`subproblems.rotation.rotation_families`).  It gives isolated candidates, or a
+   one-parameter family ``th + tau n`` (two revolute axes parallel in space: consecutive parallel axes,
+   or axes 1 and 3 lined up at a gimbal lock), or, for three parallel axes, only their signed sum.
+2. **Translation.**  With the revolute angles fixed, the translation is affine in the prismatic values:
+   ``p(th, d) = a + B d``; ``d`` is its linear least-squares solution (minimum norm when the directions
+   are dependent: a continuum, flagged).  On a one-parameter family the translation selects ``tau``:
+   the residual ``a(tau) - p_T`` (no prismatic joint) or ``b(tau) x (p_T - a(tau))`` (one prismatic joint
+   along ``b``) is a trigonometric polynomial of degree <= 2 in ``tau``, recovered exactly from five
+   samples; its roots are the candidates (complex ones projected onto the unit circle: least-squares
+   candidates).  If it vanishes identically the family is a true continuum: ``tau = 0``.  Three parallel
+   axes (planar 3R) are solved as the planar two-link problem for a point on axis 3.
+3. **Verification.**  Every candidate is measured against the whole equation (6 equations, <= 3
+   unknowns: the rest of the equations is checked, not assumed); near-exact ones get a few Gauss-Newton
+   steps; exact ones (residual <= ``EXACT_TOL`` times the problem scale) are kept and deduplicated; if
+   none is exact the best candidate alone is returned, flagged ``ls``.
+
+Continuum representatives: the first joint of a parallel revolute pair is 0 (``t1 = 0`` at a gimbal
+lock), the minimum-norm prismatic values for dependent directions.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from subproblems.core import BatchResult, Solution
+from subproblems.rotation import (
+    PAR_TOL,
+    _angle_about,
+    _angle_r,
+    rotation_families,
+)
+from subproblems.screw import adjoint, inverse_transform, twist_exp
+
+#: A solution is exact when its residual is at most this times the problem scale.
+EXACT_TOL = 1e-9
+#: Candidates with a residual below this (relative) are polished before the exactness check.
+POLISH_TOL = 1e-6
+#: Two exact solutions closer than this (angles modulo 2 pi; prismatic values relative) are one.
+DEDUP_TOL = 1e-6
+#: Relative singular value under which prismatic directions count as dependent.
+RANK_TOL = 1e-9
+#: Lengths under this (relative) count as zero (a point on an axis, coincident axes).
+FREE_TOL = 1e-10
+
+TWO_PI = 2.0 * math.pi
+_TAU5 = TWO_PI * np.arange(5) / 5.0
+
+
+def kinds_of(code: str) -> str:
+    return code.split("-", 1)[1]
+
+
+def wrap(a: float) -> float:
+    a = math.remainder(float(a), TWO_PI)
+    return math.pi if a <= -math.pi else a
+
+
+def fk(twists, q) -> np.ndarray:
+    g = np.eye(4)
+    for xi, t in zip(twists, q):
+        g = g @ twist_exp(xi, t)
+    return g
+
+
+def problem_scale(twists, T) -> float:
+    """max(1, |p_T|, distance of each revolute axis from the origin)."""
+    s = max(1.0, float(np.linalg.norm(T[:3, 3])))
+    for xi in twists:
+        if xi[3:].any():
+            s = max(s, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
+    return s
+
+
+def residual(twists, q, T) -> float:
+    """Same measure as :func:`subproblems.core.equation_residual` for class I."""
+    g = fk(twists, q)
+    sT = max(1.0, float(np.linalg.norm(T[:3, 3])))
+    return float(max(np.linalg.norm(g[:3, 3] - T[:3, 3]), sT * np.abs(g[:3, :3] - T[:3, :3]).max()))
+
+
+def joint_distance(kinds, a, b) -> float:
+    err = 0.0
+    for k, x, y in zip(kinds, a, b):
+        err = max(err, abs(math.remainder(x - y, TWO_PI)) if k == "R" else abs(x - y) / max(1.0, abs(y)))
+    return err
+
+
+# ----------------------------------------------------------------------------------------------------
+# translation given the revolute angles
+# ----------------------------------------------------------------------------------------------------
+
+
+def affine_translation(twists, kinds, q) -> tuple[np.ndarray, np.ndarray]:
+    """``a, B`` with translation ``a + B d`` (prismatic values ``d``) at the revolute angles of ``q``."""
+    g = np.eye(4)
+    cols = []
+    for xi, k, t in zip(twists, kinds, q):
+        if k == "T":
+            cols.append(g[:3, :3] @ xi[:3])
+        else:
+            g = g @ twist_exp(xi, t)
+    return g[:3, 3], np.array(cols).reshape(-1, 3).T
+
+
+def prismatic_lstsq(twists, kinds, q, pT) -> tuple[np.ndarray, bool]:
+    """Fill the prismatic values of ``q`` by linear least squares; True when the directions are dependent."""
+    q = np.array(q, dtype=float)
+    ip = [i for i, k in enumerate(kinds) if k == "T"]
+    if not ip:
+        return q, False
+    a, B = affine_translation(twists, kinds, q)
+    sv = np.linalg.svd(B, compute_uv=False)
+    q[ip] = np.linalg.lstsq(B, pT - a, rcond=RANK_TOL)[0]
+    return q, bool(sv.min() <= RANK_TOL * max(1.0, sv.max()))
+
+
+# ----------------------------------------------------------------------------------------------------
+# roots of trigonometric polynomials of degree <= 2
+# ----------------------------------------------------------------------------------------------------
+
+
+def trig_coefficients(samples) -> np.ndarray:
+    """``(f0, c1, s1, c2, s2)`` (rows) of a degree-2 trigonometric polynomial from values at 2 pi k / 5."""
+    f = np.asarray(samples, dtype=float)
+    c, s = np.cos(_TAU5), np.sin(_TAU5)
+    c2, s2 = np.cos(2 * _TAU5), np.sin(2 * _TAU5)
+    return np.stack([f.mean(0), 0.4 * c @ f, 0.4 * s @ f, 0.4 * c2 @ f, 0.4 * s2 @ f])
+
+
+def trig_roots(co, tol: float = 1e-12) -> list[float] | None:
+    """Roots of ``f0 + c1 cos t + s1 sin t + c2 cos 2t + s2 sin 2t`` (complex ones projected).
+
+    None when the polynomial vanishes identically, [] when it is a non-zero constant.
+    """
+    f0, c1, s1, c2, s2 = (float(x) for x in co)
+    a = np.array([(c2 - 1j * s2) / 2, (c1 - 1j * s1) / 2, f0, (c1 + 1j * s1) / 2, (c2 + 1j * s2) / 2])
+    m = float(np.abs(a).max())
+    if m == 0.0:
+        return None
+    if abs(a[0]) <= tol * m:
+        if abs(a[1]) <= tol * m:
+            return None if abs(f0) <= tol * m else []
+        a = a[1:4]
+    return [float(np.angle(z)) for z in np.roots(a) if abs(z) > 0.0]
+
+
+# ----------------------------------------------------------------------------------------------------
+# candidates
+# ----------------------------------------------------------------------------------------------------
+
+
+def _family_candidates(twists, kinds, q0, nfull, T, scale):
+    """Candidates on the orientation family ``q0 + tau nfull`` selected by the translation."""
+    pT = T[:3, 3]
+    ip = [i for i, k in enumerate(kinds) if k == "T"]
+
+    def f(tau):
+        a, B = affine_translation(twists, kinds, q0 + tau * nfull)
+        if not ip:
+            return a - pT
+        return np.cross(B[:, 0], pT - a)
+
+    co = trig_coefficients([f(t) for t in _TAU5])  # (5, 3)
+    rep = int(np.argmax(nfull != 0))
+    if np.abs(co).max() <= EXACT_TOL * scale:
+        q, _ = prismatic_lstsq(twists, kinds, q0, pT)
+        return [(q, True, (rep,))]
+    taus: list[float] = []
+    big = np.abs(co).max()
+    for j in range(3):
+        if np.abs(co[:, j]).max() > 1e-9 * big:
+            r = trig_roots(co[:, j])
+            taus += r or []
+    if not taus:
+        taus = [0.0]
+    out = []
+    for tau in taus:
+        q, _ = prismatic_lstsq(twists, kinds, q0 + tau * nfull, pT)
+        out.append((q, False, ()))
+    return out
+
+
+def _planar_candidates(twists, T, scale):
+    """S1-RRR with three parallel axes: planar two-link problem for a point on axis 3, then the sum."""
+    w = twists[0, 3:]
+    s2 = 1.0 if w @ twists[1, 3:] > 0 else -1.0
+    s3 = 1.0 if w @ twists[2, 3:] > 0 else -1.0
+    phi, _ = _angle_r(w, T[:3, :3])
+    r1, r2, r3 = (np.cross(xi[3:], xi[:3]) for xi in twists)  # axis points, all perpendicular to w
+    q = T[:3, :3] @ r3 + T[:3, 3]
+    q = q - w * float(w @ q)
+    tol = 1e-9 * scale
+    rho2, D, rho1 = np.linalg.norm(r3 - r2), np.linalg.norm(r2 - r1), np.linalg.norm(q - r1)
+    out = []
+
+    def add(t1, t2, fixed):
+        out.append((np.array([t1, t2, s3 * (phi - t1 - s2 * t2)]), bool(fixed), tuple(fixed)))
+
+    if rho2 <= tol:  # axes 2 and 3 coincide: t2 free
+        t1, free = _angle_about(w, r3 - r1, q - r1, scale)
+        add(t1, 0.0, (0, 1) if free else (1,))
+    elif D <= tol:  # axes 1 and 2 coincide: t1 free
+        t2, _ = _angle_about(w, r3 - r2, q - r2, scale)
+        add(0.0, s2 * t2, (0,))
+    else:
+        e = (r2 - r1) / D
+        ap = (D * D + rho1 * rho1 - rho2 * rho2) / (2.0 * D)
+        h = math.sqrt(max(0.0, rho1 * rho1 - ap * ap))
+        for sg in (h, -h) if h > 0 else (0.0,):
+            x = r1 + ap * e + sg * np.cross(w, e)
+            t2, _ = _angle_about(w, r3 - r2, x - r2, scale)
+            t1, free = _angle_about(w, x - r1, q - r1, scale)
+            add(t1, s2 * t2, (0,) if free else ())
+    return out
+
+
+def candidates(kinds: str, twists, T, scale):
+    """Candidate joint vectors ``(q, continuum, fixed_joints)`` of one class I instance."""
+    ir = [i for i, k in enumerate(kinds) if k == "R"]
+    ws = [twists[i, 3:] for i in ir]
+    m = len(kinds)
+    if len(ir) == 3 and all(np.linalg.norm(np.cross(ws[0], w)) <= PAR_TOL for w in ws[1:]):
+        return _planar_candidates(twists, T, scale)
+    out = []
+    for th, n, dim in rotation_families(ws, T[:3, :3]):
+        q0 = np.zeros(m)
+        q0[ir] = th
+        if dim == 0:
+            q, dep = prismatic_lstsq(twists, kinds, q0, T[:3, 3])
+            out.append((q, dep, tuple(i for i, k in enumerate(kinds) if k == "T") if dep else ()))
+        else:
+            nfull = np.zeros(m)
+            nfull[ir] = n
+            out += _family_candidates(twists, kinds, q0, nfull, T, scale)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------
+# verification
+# ----------------------------------------------------------------------------------------------------
+
+
+def _body_error(twists, q, T, scale):
+    g = fk(twists, q)
+    R, p = g[:3, :3], g[:3, 3]
+    M = R.T @ T[:3, :3]
+    ew = 0.5 * np.array([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])
+    return np.concatenate([R.T @ (T[:3, 3] - p), scale * ew])
+
+
+def _body_jacobian(twists, q, scale):
+    m = len(q)
+    J = np.zeros((6, m))
+    h = np.eye(4)
+    for i in range(m - 1, -1, -1):
+        J[:, i] = adjoint(inverse_transform(h)) @ twists[i]
+        h = twist_exp(twists[i], q[i]) @ h
+    J[3:] *= scale
+    return J
+
+
+def polish(twists, q, T, scale, fixed=(), iters: int = 5) -> np.ndarray:
+    """Gauss-Newton on the body-frame pose error over the joints not in ``fixed`` (steps kept if better)."""
+    q = np.array(q, dtype=float)
+    free = [i for i in range(len(q)) if i not in fixed]
+    if not free:
+        return q
+    err = residual(twists, q, T)
+    for _ in range(iters):
+        if err <= 1e-15 * scale:
+            break
+        e = _body_error(twists, q, T, scale)
+        J = _body_jacobian(twists, q, scale)[:, free]
+        q2 = q.copy()
+        q2[free] += np.linalg.lstsq(J, e, rcond=1e-10)[0]
+        err2 = residual(twists, q2, T)
+        if not err2 < err:
+            break
+        q, err = q2, err2
+    return q
+
+
+def finalize(kinds: str, twists, T, cands, scale) -> list[Solution]:
+    scored = []
+    for q, cont, fixed in cands:
+        q = np.asarray(q, dtype=float)
+        if not np.all(np.isfinite(q)):
+            continue
+        err = residual(twists, q, T)
+        if err <= POLISH_TOL * scale:
+            q = polish(twists, q, T, scale, fixed)
+        q = np.array([wrap(a) if k == "R" else float(a) for k, a in zip(kinds, q)])
+        scored.append((residual(twists, q, T), q, bool(cont)))
+    if not scored:
+        return [Solution(tuple(0.0 for _ in kinds), ls=True)]
+    exact = sorted((s for s in scored if s[0] <= EXACT_TOL * scale), key=lambda s: s[0])
+    if not exact:
+        err, q, cont = min(scored, key=lambda s: s[0])
+        return [Solution(tuple(float(a) for a in q), ls=True, continuum=cont)]
+    kept: list = []
+    for s in exact:
+        if all(joint_distance(kinds, s[1], k[1]) > DEDUP_TOL for k in kept):
+            kept.append(s)
+    kept.sort(key=lambda s: tuple(s[1]))
+    return [Solution(tuple(float(a) for a in q), continuum=cont) for _, q, cont in kept]
+
+
+def solve_class1(code: str, twists, T) -> list[Solution]:
+    """Every solution of ``prod exp(xi_i th_i) = T`` for the joint kinds of ``code``."""
+    kinds = kinds_of(code)
+    twists = np.asarray(twists, dtype=float)
+    T = np.asarray(T, dtype=float)
+    scale = problem_scale(twists, T)
+    return finalize(kinds, twists, T, candidates(kinds, twists, T, scale), scale)
+
+
+def batch_class1(code: str, twists, T) -> BatchResult:
+    """N instances (placeholder until the vectorised path lands): the scalar path per instance."""
+    from subproblems.core import max_solutions, solve
+
+    tw = np.asarray(twists, dtype=float)
+    T = np.asarray(T, dtype=float)
+    n, m, K = len(T), len(kinds_of(code)), max_solutions(code)
+    Q = np.zeros((n, K, m))
+    valid = np.zeros((n, K), bool)
+    ls = np.zeros((n, K), bool)
+    cont = np.zeros(n, bool)
+    for i in range(n):
+        r = solve(code, tw[i], T=T[i])
+        k = min(len(r.q), K)
+        Q[i, :k], valid[i, :k], ls[i, :k], cont[i] = r.q[:k], True, r.ls[:k], r.continuum
+    return BatchResult(code, Q, valid, ls, cont, vectorised=False)
