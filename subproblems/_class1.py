@@ -35,8 +35,9 @@ from subproblems.rotation import (
     _angle_about,
     _angle_r,
     rotation_families,
+    rotation_families_batch,
 )
-from subproblems.screw import adjoint, inverse_transform, twist_exp
+from subproblems.screw import adjoint, inverse_transform, twist_exp, twist_exp_batch
 
 #: A solution is exact when its residual is at most this times the problem scale.
 EXACT_TOL = 1e-9
@@ -321,19 +322,141 @@ def solve_class1(code: str, twists, T) -> list[Solution]:
     return finalize(kinds, twists, T, candidates(kinds, twists, T, scale), scale)
 
 
-def batch_class1(code: str, twists, T) -> BatchResult:
-    """N instances (placeholder until the vectorised path lands): the scalar path per instance."""
-    from subproblems.core import max_solutions, solve
+# ----------------------------------------------------------------------------------------------------
+# vectorised path
+# ----------------------------------------------------------------------------------------------------
 
+
+def _fk_batch(tw, Q) -> np.ndarray:
+    """``prod exp(xi_i q_i)`` for twists (N, m, 6) and joint values (N, K, m): (N, K, 4, 4)."""
+    N, K, m = Q.shape
+    g = np.broadcast_to(np.eye(4), (N, K, 4, 4)).copy()
+    for i in range(m):
+        g = g @ twist_exp_batch(np.repeat(tw[:, None, i], K, 1), Q[..., i])
+    return g
+
+
+def _residual_batch(tw, Q, T) -> np.ndarray:
+    g = _fk_batch(tw, Q)
+    sT = np.maximum(1.0, np.linalg.norm(T[:, :3, 3], axis=-1))[:, None]
+    pos = np.linalg.norm(g[..., :3, 3] - T[:, None, :3, 3], axis=-1)
+    rot = np.abs(g[..., :3, :3] - T[:, None, :3, :3]).max(axis=(-2, -1))
+    return np.maximum(pos, sT * rot)
+
+
+def _affine_batch(tw, kinds, Q):
+    """Batched :func:`affine_translation`: ``a`` (N, K, 3) and ``B`` (N, K, 3, p)."""
+    N, K, m = Q.shape
+    g = np.broadcast_to(np.eye(4), (N, K, 4, 4)).copy()
+    cols = []
+    for i, k in enumerate(kinds):
+        if k == "T":
+            cols.append(np.einsum("nkij,nj->nki", g[..., :3, :3], tw[:, i, :3]))
+        else:
+            g = g @ twist_exp_batch(np.repeat(tw[:, None, i], K, 1), Q[..., i])
+    B = np.stack(cols, -1) if cols else np.zeros((N, K, 3, 0))
+    return g[..., :3, 3], B
+
+
+def _polish_batch(tw, Q, T, scale, iters: int = 5) -> np.ndarray:
+    """Batched Gauss-Newton on the body-frame pose error (steps kept where they help)."""
+    N, K, m = Q.shape
+    err = _residual_batch(tw, Q, T)
+    sc = scale[:, None]
+    for _ in range(iters):
+        g = _fk_batch(tw, Q)
+        R, p = g[..., :3, :3], g[..., :3, 3]
+        Rt = np.swapaxes(R, -1, -2)
+        M = Rt @ T[:, None, :3, :3]
+        ew = 0.5 * np.stack(
+            [M[..., 2, 1] - M[..., 1, 2], M[..., 0, 2] - M[..., 2, 0], M[..., 1, 0] - M[..., 0, 1]], -1
+        )
+        ev = np.einsum("nkij,nkj->nki", Rt, T[:, None, :3, 3] - p)
+        e = np.concatenate([ev, sc[..., None] * ew], -1)
+        J = np.zeros((N, K, 6, m))
+        h = np.broadcast_to(np.eye(4), (N, K, 4, 4)).copy()
+        for i in range(m - 1, -1, -1):
+            hi = inverse_transform(h)
+            Rh, ph = hi[..., :3, :3], hi[..., :3, 3]
+            xi = np.repeat(tw[:, None, i], K, 1)
+            w = np.einsum("nkij,nkj->nki", Rh, xi[..., 3:])
+            v = np.einsum("nkij,nkj->nki", Rh, xi[..., :3]) + np.cross(ph, w)
+            J[..., :3, i] = v
+            J[..., 3:, i] = sc[..., None] * w
+            h = twist_exp_batch(xi, Q[..., i]) @ h
+        step = np.einsum("nkij,nkj->nki", np.linalg.pinv(J, rcond=1e-10), e)
+        Q2 = Q + step
+        err2 = _residual_batch(tw, Q2, T)
+        better = (err2 < err) & (err > 1e-15 * sc)
+        Q = np.where(better[..., None], Q2, Q)
+        err = np.where(better, err2, err)
+    return Q
+
+
+def batch_class1(code: str, twists, T) -> BatchResult:
+    """N instances at once: twists (N, m, 6), targets (N, 4, 4); slots ``max_solutions(code)``.
+
+    Instances whose orientation has a continuum family (parallel revolute axes, gimbal lock, three
+    parallel axes) or whose prismatic directions are dependent are the degenerate ones: they go
+    through the scalar path (a loop over those instances only); every other instance is solved
+    without a Python loop: orientation candidates (vectorised ``O-*``), prismatic values by batched
+    least squares, batched Gauss-Newton polish, verification and deduplication.
+    """
+    from subproblems.core import max_solutions
+
+    kinds = kinds_of(code)
     tw = np.asarray(twists, dtype=float)
     T = np.asarray(T, dtype=float)
-    n, m, K = len(T), len(kinds_of(code)), max_solutions(code)
-    Q = np.zeros((n, K, m))
-    valid = np.zeros((n, K), bool)
-    ls = np.zeros((n, K), bool)
-    cont = np.zeros(n, bool)
-    for i in range(n):
-        r = solve(code, tw[i], T=T[i])
-        k = min(len(r.q), K)
-        Q[i, :k], valid[i, :k], ls[i, :k], cont[i] = r.q[:k], True, r.ls[:k], r.continuum
-    return BatchResult(code, Q, valid, ls, cont, vectorised=False)
+    N, m, K = len(T), len(kinds), max_solutions(code)
+    ir = [i for i, k in enumerate(kinds) if k == "R"]
+    ip = [i for i, k in enumerate(kinds) if k == "T"]
+    W = tw[:, ir, 3:]
+    R, pT = T[:, :3, :3], T[:, :3, 3]
+    scale = np.maximum(1.0, np.linalg.norm(pT, axis=-1))
+    for i in ir:
+        scale = np.maximum(scale, np.linalg.norm(np.cross(tw[:, i, 3:], tw[:, i, :3]), axis=-1))
+    TH, cvalid, _, dim = rotation_families_batch(W, R)
+    Kr = TH.shape[1]
+    Q = np.zeros((N, Kr, m))
+    Q[..., ir] = TH
+    degenerate = dim > 0
+    if ip:
+        a, B = _affine_batch(tw, kinds, Q)
+        sv = np.linalg.svd(B, compute_uv=False)
+        dep = sv.min(-1) <= RANK_TOL * np.maximum(1.0, sv.max(-1))
+        degenerate |= (dep & cvalid).any(1)
+        d = np.einsum("nkij,nkj->nki", np.linalg.pinv(B, rcond=RANK_TOL), pT[:, None] - a)
+        Q[..., ip] = d
+    err = _residual_batch(tw, Q, T)
+    near = (err <= POLISH_TOL * scale[:, None]) & cvalid
+    Q = np.where(near[..., None], _polish_batch(tw, Q, T, scale), Q)
+    rev = np.array([k == "R" for k in kinds])
+    Q = np.where(rev, np.remainder(Q + math.pi, TWO_PI) - math.pi, Q)
+    Q = np.where(rev & (Q <= -math.pi), math.pi, Q)
+    err = np.where(cvalid, _residual_batch(tw, Q, T), np.inf)
+    exact = err <= EXACT_TOL * scale[:, None]
+    valid = exact.copy()
+    if Kr == 2:
+        diff = np.abs(Q[:, 0] - Q[:, 1])
+        diff = np.where(
+            rev,
+            np.abs(np.remainder(diff + math.pi, TWO_PI) - math.pi),
+            diff / np.maximum(1.0, np.abs(Q[:, 1])),
+        )
+        valid[:, 1] &= ~(valid[:, 0] & (diff.max(-1) <= DEDUP_TOL))
+    none = ~exact.any(1)
+    best = np.argmin(err, axis=1)
+    valid[np.arange(N), best] |= none
+    ls = valid & ~exact
+    Qo = np.zeros((N, K, m))
+    Vo = np.zeros((N, K), bool)
+    Lo = np.zeros((N, K), bool)
+    Qo[:, :Kr], Vo[:, :Kr], Lo[:, :Kr] = Q, valid, ls
+    cont = np.zeros(N, bool)
+    for i in np.flatnonzero(degenerate):  # degenerate instances only: the scalar path
+        sols = solve_class1(code, tw[i], T[i])[:K]
+        Qo[i], Vo[i], Lo[i] = 0.0, False, False
+        for j, sol in enumerate(sols):
+            Qo[i, j], Vo[i, j], Lo[i, j] = sol.q, True, sol.ls
+        cont[i] = any(sol.continuum for sol in sols)
+    return BatchResult(code, Qo, Vo, Lo, cont, vectorised=True)
