@@ -1,0 +1,796 @@
+"""Speed of the generated solvers, side by side with EAIK on the same poses (issue 4, "Speed").
+
+For every zoo robot (or those named with ``--robots``):
+
+* compile time: median of a few ``compile_robot`` calls;
+* single-pose ``solve``: median time per call over distinct reachable poses (FK of
+  ``sample_configurations``), plus solution counts, recovery of the sampled joint vector and the worst
+  pose error, all checked with our chain's FK;
+* batch throughput of ``solve_batch`` in poses/s (10 000 poses, fewer for slow solvers: see ``--budget``);
+* the same figures for EAIK where it applies (revolute joints only, no coupled joints, at most 6
+  unlocked joints; a 7R arm locks its free joint at one value for all poses).  EAIK is built from our
+  chain's twists (axis directions H, axis points turned into offsets P, home rotation as the tool
+  rotation) and runs in a subprocess per robot and stage, so an abort in its batch call is reported
+  and does not end the run.
+
+Then one closed-form robot's single-pose ``solve`` is profiled (cProfile, top entries by own time).
+
+Results: ``benchmarks/results/compiler.md`` (tables and notes) and ``benchmarks/results/compiler.json``.
+
+Usage::
+
+    .venv/bin/python benchmarks/compiler.py [--robots NAME ...] [--poses N] [--batch N] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import datetime as _dt
+import importlib.metadata as _md
+import json
+import math
+import os
+import platform
+import pstats
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+# Run as a script, this folder is first on sys.path: a sibling script named like one of the project's
+# packages (benchmarks/subproblems.py) would shadow it.  Import the project from the repository root.
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != ROOT / "benchmarks"]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+RESULTS = ROOT / "benchmarks" / "results"
+SEED_SINGLE = 1
+SEED_BATCH = 2
+WRONG_TOL = 1e-9  # relative to the robot's size, as DESIGN.md section 9
+SAME_TOL = 1e-6  # joint-space distance for "the sampled joint vector is among the solutions"
+SINGULAR_TOL = 1e-7  # smallest singular value of the normalised Jacobian below which a pose is singular
+WORKER_TIMEOUT = 300
+
+
+# ---- helpers ---------------------------------------------------------------------------------------
+
+
+def _median(xs) -> float:
+    return float(np.median(xs)) if len(xs) else float("nan")
+
+
+def _pose_errors(chain, sols: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Relative pose error of each solution row: max(|dp|, scale * max|dR|) / scale."""
+    if len(sols) == 0:
+        return np.zeros(0)
+    G = chain.fk_batch(sols)
+    dp = np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1)
+    dr = np.abs(G[:, :3, :3] - T[:3, :3]).max(axis=(1, 2))
+    return np.maximum(dp, chain.scale * dr) / chain.scale
+
+
+def _joint_distance(sols: np.ndarray, q: np.ndarray, kinds: str) -> np.ndarray:
+    d = sols - q
+    for c, k in enumerate(kinds):
+        if k == "R":
+            d[:, c] = np.remainder(d[:, c] + math.pi, 2 * math.pi) - math.pi
+    return np.abs(d).max(axis=1) if len(d) else np.zeros(0)
+
+
+def _unique_rows(sols: np.ndarray, kinds: str, tol: float) -> np.ndarray:
+    keep: list[np.ndarray] = []
+    for row in sols:
+        if not keep or _joint_distance(np.array(keep), row, kinds).min() > tol:
+            keep.append(row)
+    return np.array(keep) if keep else sols[:0]
+
+
+def _singular(chain, q, free_cols) -> bool:
+    """Whether the sampled joint vector is a singular configuration of the solved joints.
+
+    There the solutions form a continuum (or merge) and the sampled vector need not be among the
+    returned representatives.  Body Jacobian, linear rows in units of the robot's size.
+    """
+    J = chain.body_jacobian(q)
+    J = np.delete(J, list(free_cols), axis=1)
+    J[:3] /= chain.scale
+    return bool(np.linalg.svd(J, compute_uv=False).min() < SINGULAR_TOL)
+
+
+def _accuracy(chain, Ts, Q, per_pose_sols, kinds: str, free_cols=()) -> dict:
+    """Counts and errors of exact solutions, checked with our chain's FK."""
+    counts, in_limits, recovered, worst, wrong, missed = [], [], 0, 0.0, 0, []
+    singular = [_singular(chain, q, free_cols) for q in Q]
+    regular_hits = 0
+    tol = SAME_TOL * max(1.0, chain.scale)
+    lo, hi = chain.lower - 1e-12, chain.upper + 1e-12
+    rev = np.array([k == "R" for k in kinds])
+    for T, q, sols in zip(Ts, Q, per_pose_sols):
+        counts.append(len(sols))
+        if len(sols) == 0:
+            in_limits.append(0)
+            if len(missed) < 5 and not singular[len(counts) - 1]:
+                missed.append([float(x) for x in q])
+            continue
+        w = np.where(rev, np.remainder(sols + math.pi, 2 * math.pi) - math.pi, sols)
+        in_limits.append(int(((w >= lo) & (w <= hi)).all(axis=1).sum()))
+        e = _pose_errors(chain, sols, T)
+        worst = max(worst, float(e.max()))
+        wrong += int((e > WRONG_TOL).sum())
+        if (_joint_distance(sols, q, kinds) <= tol).any():
+            recovered += 1
+            regular_hits += not singular[len(counts) - 1]
+        elif len(missed) < 5 and not singular[len(counts) - 1]:
+            missed.append([float(x) for x in q])
+    n = len(counts)
+    n_reg = n - sum(singular)
+    return {
+        "poses": n,
+        "solutions_median": _median(counts),
+        "solutions_max": int(max(counts)) if counts else 0,
+        "in_limits_median": _median(in_limits),
+        "found_fraction": float(np.mean([c > 0 for c in counts])) if n else float("nan"),
+        "recovered_fraction": recovered / n if n else float("nan"),
+        "singular_poses": int(sum(singular)),
+        "recovered_regular_fraction": regular_hits / n_reg if n_reg else float("nan"),
+        "max_error": worst,
+        "wrong": wrong,
+        "missed_examples": missed,  # regular sampled joint vectors not among the solutions (first 5)
+    }
+
+
+def _free_setup(chain):
+    """Free joints (beyond 6 DOF: the last ones) and their one value for every pose."""
+    free = tuple(chain.independent_names[6:]) if chain.dof > 6 else ()
+    cols = [chain.independent_names.index(f) for f in free]
+    values = []
+    for c in cols:
+        lo, hi = chain.lower[c], chain.upper[c]
+        values.append(float(np.clip(0.3, lo, hi)))
+    return free, cols, values
+
+
+def _poses(chain, count: int, seed: int, cols, values):
+    from ikcompiler.verify import sample_configurations
+
+    Q = sample_configurations(chain, count, seed)
+    for c, v in zip(cols, values):
+        Q[:, c] = v
+    return Q, chain.fk_batch(Q)
+
+
+# ---- EAIK ------------------------------------------------------------------------------------------
+
+
+def eaik_reason(chain, free) -> str | None:
+    """Why EAIK does not apply to ``chain`` (None when it does)."""
+    if chain.couplings:
+        return "coupled (mimic) joints"
+    if any(k != "R" for k in chain.joint_types):
+        return f"prismatic joint(s) ({chain.joint_types})"
+    if chain.n - len(free) > 6:
+        return f"{chain.n} joints"
+    return None
+
+
+def eaik_geometry(chain, free_cols, free_values):
+    """H (n, 3), P (n+1, 3), R6T (3, 3) and fixed axes from the chain's home twists."""
+    tw = chain.twists
+    v, w = tw[:, :3], tw[:, 3:]
+    r = np.cross(w, v)  # the axis point closest to the origin (w unit, v = -w x r)
+    P = np.vstack([r[0], np.diff(r, axis=0), chain.home[:3, 3] - r[-1]])
+    idx = list(chain.independent)
+    fixed = [(idx[c], val) for c, val in zip(free_cols, free_values)]
+    return w.copy(), P, np.array(chain.home[:3, :3]), fixed
+
+
+def _run_worker(stage: str, payload: dict, tmp: Path) -> tuple[dict | None, str | None, dict]:
+    inp, out = tmp / f"{stage}_in.npz", tmp / f"{stage}_out.npz"
+    np.savez(inp, **payload)
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--eaik-worker", stage, str(inp), str(out)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=WORKER_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        return None, f"{stage}: timed out after {WORKER_TIMEOUT} s", {}
+    if proc.returncode != 0:
+        if proc.returncode < 0:
+            try:
+                sig = signal.Signals(-proc.returncode).name
+            except ValueError:
+                sig = f"signal {-proc.returncode}"
+            return None, f"its {stage} call aborted the process ({sig})", {}
+        tail = (proc.stderr or "").strip().splitlines()[-1:] or [""]
+        return None, f"{stage}: exit {proc.returncode} {tail[0][:160]}".strip(), {}
+    with np.load(out, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays.pop("meta")))
+    return meta, None, arrays
+
+
+def _eaik_worker(stage: str, inp: str, out: str) -> None:
+    """Runs in a subprocess: build EAIK's robot, time IK, save solutions (single) or timing (batch)."""
+    import eaik.pybindings.EAIK as EAIK
+
+    z = np.load(inp)
+    H, P, R6T, Ts = z["H"], z["P"], z["R6T"], z["Ts"]
+    fixed = [(int(i), float(q)) for i, q in z["fixed"]]
+    threads = int(z["threads"])
+
+    def build():
+        return EAIK.Robot(H.T.copy(), P.T.copy(), R6T.copy(), fixed, True)
+
+    meta: dict = {}
+    arrays: dict = {}
+    if stage == "single":
+        times = []
+        for _ in range(50):
+            t0 = time.perf_counter()
+            robot = build()
+            times.append(time.perf_counter() - t0)
+        meta["build_us"] = _median(times) * 1e6
+        meta["known"] = bool(robot.has_known_decomposition())
+        meta["family"] = str(robot.get_kinematic_family())
+        if not meta["known"]:
+            try:
+                robot.calculate_IK(Ts[0])
+                meta["ik_error"] = "IK call returned without error"
+            except Exception as exc:  # what EAIK says when it has no decomposition
+                first = str(exc).split("!")[0].split(".")[0]
+                meta["ik_error"] = f"its IK call raises {type(exc).__name__}: {first}"[:160]
+        else:
+            n = H.shape[0]
+            times, sols, ls = [], [], []
+            for T in Ts:
+                t0 = time.perf_counter()
+                s = robot.calculate_IK(T)
+                times.append(time.perf_counter() - t0)
+                q = np.asarray(s.Q, dtype=float).reshape(-1, n)
+                sols.append(q)
+                ls.append(np.asarray(s.is_LS, dtype=bool).reshape(-1))
+            meta["single_us"] = _median(times) * 1e6
+            k = max([len(q) for q in sols] + [1])
+            Qp = np.full((len(Ts), k, n), np.nan)
+            LSp = np.ones((len(Ts), k), dtype=bool)
+            for i, (q, f) in enumerate(zip(sols, ls)):
+                Qp[i, : len(q)] = q
+                LSp[i, : len(f)] = f
+            arrays = {"Q": Qp, "LS": LSp, "count": np.array([len(q) for q in sols])}
+    else:
+        robot = build()
+        poses = [np.ascontiguousarray(T) for T in Ts]
+        runs = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            res = robot.calculate_IK_batched(poses, threads)
+            runs.append(time.perf_counter() - t0)
+        meta["batch_s"] = min(runs)
+        meta["batch_n"] = len(poses)
+        meta["batch_pps"] = len(poses) / min(runs)
+        meta["batch_solutions_mean"] = float(np.mean([r.num_solutions() for r in res]))
+        meta["threads"] = threads
+    np.savez(out, meta=np.array(json.dumps(meta)), **arrays)
+
+
+def bench_eaik(chain, free_cols, free_values, Q1, T1, Tb, threads: int) -> dict:
+    H, P, R6T, fixed = eaik_geometry(chain, free_cols, free_values)
+    base = {
+        "H": H,
+        "P": P,
+        "R6T": R6T,
+        "fixed": np.array(fixed, dtype=float).reshape(-1, 2),
+        "threads": np.array(threads),
+    }
+    res: dict = {"applies": True}
+    with tempfile.TemporaryDirectory(prefix="ikc_bench_") as tmpdir:
+        tmp = Path(tmpdir)
+        meta, err, arrays = _run_worker("single", {**base, "Ts": T1}, tmp)
+        if err:
+            res["error"] = err
+            return res
+        res.update(meta)
+        if not meta["known"]:
+            res["error"] = f"no known decomposition; {meta.get('ik_error', '')}"
+            # what its batch call does then (known to abort the process)
+            meta, err, _ = _run_worker("batch", {**base, "Ts": Tb[:100]}, tmp)
+            res["batch_error"] = err or "batch call returned"
+            return res
+        kinds = chain.joint_types
+        tol = SAME_TOL * max(1.0, chain.scale)
+        exact, ls_counts, dupes = [], [], 0
+        for i in range(len(T1)):
+            k = int(arrays["count"][i])
+            q, ls = arrays["Q"][i, :k], arrays["LS"][i, :k]
+            ex = q[~ls]
+            u = _unique_rows(ex, kinds, tol)
+            dupes += len(ex) - len(u)
+            exact.append(u)
+            ls_counts.append(int(ls.sum()))
+        res["accuracy"] = _accuracy(chain, T1, Q1, exact, kinds, free_cols)
+        res["ls_median"] = _median(ls_counts)
+        res["duplicates"] = dupes
+        meta, err, _ = _run_worker("batch", {**base, "Ts": Tb}, tmp)
+        if err:
+            res["batch_error"] = err
+        else:
+            res.update(meta)
+    return res
+
+
+# ---- ours ------------------------------------------------------------------------------------------
+
+
+def bench_robot(name: str, opts) -> dict:
+    from ikcompiler import load_robot
+    from ikcompiler.compiler import compile_robot
+
+    row: dict = {"robot": name}
+    chain = load_robot(name)
+    free, cols, values = _free_setup(chain)
+    row.update(joints=chain.joint_types, dof=chain.dof, free=list(free), free_values=values)
+    kinds = "".join(chain.joints[i].kind for i in chain.independent)
+
+    times = []
+    for _ in range(opts.compiles):
+        t0 = time.perf_counter()
+        module = compile_robot(chain, free=free)
+        times.append(time.perf_counter() - t0)
+    row["compile_s"] = _median(times)
+    row["method"] = module.METHOD
+
+    Q1, T1 = _poses(chain, opts.poses, SEED_SINGLE, cols, values)
+    times, sols = [], []
+    start = time.perf_counter()
+    for i in range(len(T1)):
+        fv = [Q1[i, c] for c in cols]
+        t0 = time.perf_counter()
+        s = module.solve(T1[i], *fv)
+        times.append(time.perf_counter() - t0)
+        sols.append(np.asarray(s, dtype=float))
+        if time.perf_counter() - start > opts.budget and i + 1 >= opts.min_poses:
+            break
+    n1 = len(times)
+    row["single_n"] = n1
+    row["single_us"] = _median(times) * 1e6
+    row["accuracy"] = _accuracy(chain, T1[:n1], Q1[:n1], sols, kinds, cols)
+
+    Qb, Tb = _poses(chain, opts.batch, SEED_BATCH, cols, values)
+    probe = min(len(Tb), 200)
+    fv = [Qb[:probe, c] for c in cols]
+    t0 = time.perf_counter()
+    module.solve_batch(Tb[:probe], *fv)
+    dt = time.perf_counter() - t0
+    n_b = len(Tb)
+    if dt * len(Tb) / probe > opts.budget:
+        n_b = max(probe, int(opts.budget * probe / dt) // 100 * 100)
+    runs = []
+    if n_b == probe and dt * 3 > opts.budget:
+        runs.append(dt)
+    else:
+        fv = [Qb[:n_b, c] for c in cols]
+        for _ in range(3):
+            t0 = time.perf_counter()
+            module.solve_batch(Tb[:n_b], *fv)
+            runs.append(time.perf_counter() - t0)
+            if sum(runs) > opts.budget:
+                break
+    row["batch_n"] = n_b
+    row["batch_pps"] = n_b / min(runs)
+
+    reason = eaik_reason(chain, free)
+    if opts.no_eaik:
+        row["eaik"] = {"applies": False, "reason": "skipped (--no-eaik)"}
+    elif reason:
+        row["eaik"] = {"applies": False, "reason": reason}
+    else:
+        row["eaik"] = bench_eaik(chain, cols, values, Q1[:n1], T1[:n1], Tb, opts.threads)
+    row["_module"] = module
+    row["_poses"] = (T1[:n1], [[Q1[i, c] for c in cols] for i in range(n1)])
+    return row
+
+
+def _short(path: str) -> str:
+    for prefix in (str(ROOT) + "/", "site-packages/"):
+        if prefix in path:
+            path = path.split(prefix, 1)[1]
+    return path
+
+
+def profile_solve(row: dict, lines: int = 10) -> dict:
+    """cProfile of ``solve`` over the robot's single-pose targets: where the time of one call goes."""
+    module, (Ts, fvs) = row["_module"], row["_poses"]
+    Ts, fvs = Ts[:200], fvs[:200]
+    prof = cProfile.Profile()
+    t0 = time.perf_counter()
+    prof.enable()
+    for T, fv in zip(Ts, fvs):
+        module.solve(T, *fv)
+    prof.disable()
+    wall = time.perf_counter() - t0
+    stats = pstats.Stats(prof)
+    n = len(Ts)
+    total = sum(v[2] for v in stats.stats.values())  # own time of every function adds up to the total
+    entries = []
+    for (fname, line, func), (_, ncalls, tt, ct, _) in stats.stats.items():
+        where = f"{_short(fname)}:{line}({func})" if line else func
+        entries.append((where, ncalls, tt, ct))
+
+    def table(key, rows):
+        out = [f"{'calls/solve':>11} {'own us':>8} {'cum us':>8} {'cum %':>6}  function"]
+        for where, ncalls, tt, ct in sorted(rows, key=key, reverse=True)[:lines]:
+            out.append(
+                f"{ncalls / n:11.1f} {tt / n * 1e6:8.0f} {ct / n * 1e6:8.0f} {ct / total:6.0%}  {where}"
+            )
+        return "\n".join(out)
+
+    ours = [e for e in entries if e[0].startswith(("subproblems/", "ikcompiler/", "<ikcompiler:"))]
+    ours = [e for e in ours if e[3] < 0.98 * total or e[0].endswith("(solve)")]  # drop the wrappers
+    own = {}
+    for where, _, tt, _ in entries:
+        builtin = where.startswith(("<built-in", "<method", "{"))
+        group = "numpy and built-ins" if "numpy" in where or builtin else where
+        group = (
+            "generated module / runtime / subproblems"
+            if group.startswith(("subproblems/", "<ikc"))
+            else group
+        )
+        own[group] = own.get(group, 0.0) + tt
+    return {
+        "robot": row["robot"],
+        "method": row["method"],
+        "calls": n,
+        "profiled_us_per_solve": wall / n * 1e6,
+        "unprofiled_us_per_solve": row["single_us"],
+        "function_calls_per_solve": sum(v[1] for v in stats.stats.values()) / n,
+        "by_own_time": table(lambda e: e[2], entries),
+        "by_cumulative_time": table(lambda e: e[3], ours),
+        "own_time_shares": {k: v / total for k, v in sorted(own.items(), key=lambda kv: -kv[1])[:4]},
+    }
+
+
+# ---- report ----------------------------------------------------------------------------------------
+
+
+def _fmt(x, spec: str = ".3g", none: str = "-") -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return none
+    return format(x, spec)
+
+
+def _ratio(a, b) -> str:
+    if a is None or b is None or not b or not math.isfinite(a) or not math.isfinite(b):
+        return "-"
+    r = a / b
+    return f"{r:,.0f}x" if r >= 100 else f"{r:.3g}x"
+
+
+def _machine() -> dict:
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+
+    def ver(pkg):
+        try:
+            return _md.version(pkg)
+        except _md.PackageNotFoundError:
+            return None
+
+    try:
+        commit = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
+        ).stdout.strip()
+        dirty = bool(
+            subprocess.run(
+                ["git", "status", "--porcelain", "--", "ikcompiler", "subproblems"],
+                cwd=ROOT,
+                capture_output=True,
+                text=True,
+            ).stdout.strip()
+        )
+    except OSError:
+        commit, dirty = "", False
+    return {
+        "date": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "ikcompiler": ver("ikcompiler"),
+        "eaik": ver("eaik"),
+        "commit": commit + (" + uncommitted changes in ikcompiler/ or subproblems/" if dirty else ""),
+        "load_average": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+    }
+
+
+def render_markdown(rows, profile, meta, opts) -> str:
+    out = [
+        "# Compiler speed: generated solvers vs EAIK",
+        "",
+        f"Generated by `benchmarks/compiler.py` on {meta['date']}. Machine: {meta['cpu']}, "
+        f"{meta['cores']} cores, {meta['platform']}; Python {meta['python']}, numpy {meta['numpy']}, "
+        f"ikcompiler {meta['ikcompiler']} at {meta['commit']}, EAIK {meta['eaik']}. "
+        f"1-min load average at the start: {_fmt(meta['load_average'], '.2f')}.",
+        "",
+        "## Speed",
+        "",
+        "Ratios are ours / EAIK in time per pose (above 1x: we are slower). Batch: ours is numpy in one "
+        f"thread; EAIK's `calculate_IK_batched` runs {opts.threads} worker threads.",
+        "",
+        "| robot | joints | method | compile ms | EAIK build us | ratio | solve us | EAIK us | ratio "
+        "| batch poses/s | EAIK poses/s | ratio |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        e = r.get("eaik") or {}
+        if "error" in r and "method" not in r:
+            out.append(f"| {r['robot']} | {r.get('joints', '?')} | failed: {r['error']} |||||||||")
+            continue
+        comp = r.get("compile_s")
+        joints = r["joints"] + (f" (free {', '.join(r['free'])})" if r.get("free") else "")
+        batch = f"{_fmt(r.get('batch_pps'), ',.0f')}" + (
+            f" ({r['batch_n']} poses)" if r.get("batch_n", opts.batch) < opts.batch else ""
+        )
+        eb = e.get("batch_pps")
+        out.append(
+            "| "
+            + " | ".join(
+                [
+                    r["robot"],
+                    joints,
+                    r.get("method", "-"),
+                    _fmt(comp * 1e3 if comp is not None else None, ".0f"),
+                    _fmt(e.get("build_us"), ".1f"),
+                    _ratio(comp * 1e6 if comp is not None else None, e.get("build_us")),
+                    _fmt(r.get("single_us"), ".0f"),
+                    _fmt(e.get("single_us"), ".1f"),
+                    _ratio(r.get("single_us"), e.get("single_us")),
+                    batch,
+                    _fmt(eb, ",.0f"),
+                    _ratio(eb, r.get("batch_pps")),
+                ]
+            )
+            + " |"
+        )
+    out += [
+        "",
+        "## Solutions and accuracy (single-pose calls, same poses for both)",
+        "",
+        "Solutions: median exact solutions per pose, in brackets those inside the joint limits (EAIK: "
+        "least-squares rows dropped, duplicates merged; it has no limits). Recovered: fraction of poses "
+        "whose sampled joint vector is among the solutions, over the regular poses and over all (at a "
+        "singular sampled vector, smallest singular value of the normalised Jacobian below "
+        f"{SINGULAR_TOL:g}, the solutions form a continuum and a representative is returned). Max "
+        "error: worst pose error of a returned exact solution through our chain's FK, relative to "
+        f"the robot's size (wrong above {WRONG_TOL:g}).",
+        "",
+        "| robot | poses | solutions | EAIK | singular | recovered (regular) | EAIK | recovered (all) | EAIK "
+        "| max error | EAIK | wrong | EAIK | EAIK notes |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for r in rows:
+        if "accuracy" not in r:
+            continue
+        a, e = r["accuracy"], r.get("eaik") or {}
+        ea = e.get("accuracy") or {}
+        notes = []
+        if not e.get("applies"):
+            notes.append(f"n/a: {e.get('reason', '-')}")
+        if e.get("family"):
+            notes.append(e["family"])
+        if e.get("error"):
+            notes.append(e["error"])
+        if e.get("batch_error"):
+            notes.append(e["batch_error"])
+        if ea:
+            notes.append(f"median {_fmt(e.get('ls_median'), 'g')} least-squares rows/pose")
+            if e.get("duplicates"):
+                notes.append(f"{e['duplicates']} duplicate rows")
+        ours = f"{_fmt(a['solutions_median'], 'g')} ({_fmt(a['in_limits_median'], 'g')})"
+        eas = (
+            f"{_fmt(ea.get('solutions_median'), 'g')} ({_fmt(ea.get('in_limits_median'), 'g')})"
+            if ea
+            else "-"
+        )
+        out.append(
+            "| "
+            + " | ".join(
+                [
+                    r["robot"],
+                    str(a["poses"]),
+                    ours,
+                    eas,
+                    str(a["singular_poses"]),
+                    _fmt(a["recovered_regular_fraction"], ".1%"),
+                    _fmt(ea.get("recovered_regular_fraction"), ".1%"),
+                    _fmt(a["recovered_fraction"], ".1%"),
+                    _fmt(ea.get("recovered_fraction"), ".1%"),
+                    _fmt(a["max_error"], ".1e"),
+                    _fmt(ea.get("max_error"), ".1e"),
+                    str(a["wrong"]),
+                    _fmt(ea.get("wrong"), "d"),
+                    "; ".join(notes),
+                ]
+            )
+            + " |"
+        )
+    failed = [r for r in rows if "error" in r]
+    out += ["", "## Notes", ""]
+    both = [r for r in rows if (r.get("eaik") or {}).get("single_us")]
+    if both:
+
+        def spread(key_ours, key_eaik, scale=1.0, invert=False):
+            vals = []
+            for r in both:
+                a, b = r.get(key_ours), r["eaik"].get(key_eaik)
+                if a and b:
+                    vals.append(b / a if invert else a * scale / b)
+            if not vals:
+                return "-"
+            lo, mid, hi = (_ratio(x, 1.0) for x in (min(vals), _median(vals), max(vals)))
+            return f"median {mid} (range {lo}-{hi})"
+
+        out.append(
+            f"- Summary over the {len(both)} robots EAIK solves: single-pose time ours/EAIK "
+            f"{spread('single_us', 'single_us')}; batch time per pose "
+            f"{spread('batch_pps', 'batch_pps', invert=True)}; compile time vs EAIK's constructor "
+            f"{spread('compile_s', 'build_us', scale=1e6)}."
+        )
+    out.append(
+        f"- Poses: FK of `sample_configurations` (seed {SEED_SINGLE} single, {SEED_BATCH} batch); "
+        f"single-pose time is the median per call over up to {opts.poses} poses (fewer when the solver "
+        f"is slow: about {opts.budget:g} s per robot and phase), batch throughput the best of up to 3 "
+        f"`solve_batch` calls on {opts.batch} poses (fewer when slow, shown in brackets). EAIK gets the "
+        "same pose sets (its batch the full set) and one value of each free joint for all poses."
+    )
+    out.append(
+        "- EAIK is built from our chain's home twists: H = axis directions, P = differences of axis "
+        "points (home tool position last), tool rotation = home rotation; its FK and solutions are "
+        "checked with our chain's FK above. Compile time is a median of "
+        f"{opts.compiles} `compile_robot` calls; EAIK's build is a median of 50 constructor calls."
+    )
+    out.append(
+        "- Other sessions may run tests on this 2-core machine at the same time: absolute figures are "
+        "noisy, ratios less so."
+    )
+    for r in failed:
+        out.append(f"- {r['robot']}: {r['error']}")
+    if profile:
+        out += [
+            "",
+            f"## Where a single-pose solve goes ({profile['robot']}, {profile['method']})",
+            "",
+            f"cProfile over {profile['calls']} `solve` calls: {profile['profiled_us_per_solve']:.0f} us "
+            f"per call under the profiler ({profile['unprofiled_us_per_solve']:.0f} us without), "
+            f"{profile['function_calls_per_solve']:.0f} function calls per solve. Own time: "
+            + ", ".join(f"{k} {v:.0%}" for k, v in profile["own_time_shares"].items())
+            + ".",
+            "",
+            "Project functions by cumulative time (per solve):",
+            "",
+            "```",
+            profile["by_cumulative_time"],
+            "```",
+            "",
+            "All functions by own time (per solve):",
+            "",
+            "```",
+            profile["by_own_time"],
+            "```",
+        ]
+    else:
+        out += ["", "No closed-form robot among those benchmarked: no profile."]
+    return "\n".join(out) + "\n"
+
+
+def _json_clean(x):
+    """Plain JSON: non-finite floats become null, numpy scalars Python numbers."""
+    if isinstance(x, dict):
+        return {k: _json_clean(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_json_clean(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
+
+
+# ---- main ------------------------------------------------------------------------------------------
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--robots", nargs="+", metavar="NAME", help="zoo robots (default: the whole zoo)")
+    p.add_argument("--poses", type=int, help="single-pose targets per robot (300; --quick 50)")
+    p.add_argument("--batch", type=int, help="poses in the batch call (10000; --quick 1000)")
+    p.add_argument("--compiles", type=int, help="compiles per robot, median (3; --quick 1)")
+    p.add_argument("--budget", type=float, help="seconds per robot and timing phase (8; --quick 2)")
+    p.add_argument("--threads", type=int, default=os.cpu_count() or 1, help="EAIK batch threads")
+    p.add_argument("--quick", action="store_true", help="smaller defaults (see above) for a smoke run")
+    p.add_argument("--no-eaik", action="store_true", help="skip EAIK")
+    p.add_argument("--profile-robot", help="robot to profile (default: a closed-form one benchmarked)")
+    p.add_argument("--out", type=Path, default=RESULTS, help="results folder")
+    p.add_argument("--eaik-worker", nargs=3, metavar=("STAGE", "IN", "OUT"), help=argparse.SUPPRESS)
+    opts = p.parse_args(argv)
+    defaults = (50, 1000, 1, 2.0) if opts.quick else (300, 10000, 3, 8.0)
+    for key, value in zip(("poses", "batch", "compiles", "budget"), defaults):
+        if getattr(opts, key) is None:
+            setattr(opts, key, value)
+    opts.min_poses = min(20, opts.poses)
+    return opts
+
+
+def main(argv=None) -> int:
+    opts = parse_args(argv)
+    if opts.eaik_worker:
+        _eaik_worker(*opts.eaik_worker)
+        return 0
+    from ikcompiler.inputs.zoo import zoo_names
+
+    names = opts.robots or zoo_names()
+    meta = _machine()
+    print(f"ikcompiler speed benchmark: {len(names)} robots, {meta['cpu']}, EAIK {meta['eaik']}", flush=True)
+    rows = []
+    t_all = time.perf_counter()
+    for name in names:
+        t0 = time.perf_counter()
+        try:
+            row = bench_robot(name, opts)
+        except Exception as exc:  # one robot's failure is a table row, not the end of the run
+            row = {"robot": name, "error": f"{type(exc).__name__}: {exc}".splitlines()[0][:200]}
+            traceback.print_exc()
+        rows.append(row)
+        e = row.get("eaik") or {}
+        print(
+            f"  {name:14s} {row.get('method', 'FAILED'):12s} compile {_fmt(row.get('compile_s'), '.3f')} s"
+            f"  solve {_fmt(row.get('single_us'), '.0f')} us  batch {_fmt(row.get('batch_pps'), ',.0f')}/s"
+            f"  | EAIK {_fmt(e.get('single_us'), '.1f')} us {_fmt(e.get('batch_pps'), ',.0f')}/s"
+            f" {e.get('reason') or e.get('error') or e.get('batch_error') or ''}"
+            f"  ({time.perf_counter() - t0:.1f} s)",
+            flush=True,
+        )
+
+    profile = None
+    target = opts.profile_robot
+    if target is None:
+        closed = [r for r in rows if r.get("method") == "closed-form"]
+        if closed:
+            target = max(closed, key=lambda r: (r["robot"] == "puma560", r["dof"] == 6, r["dof"]))["robot"]
+    if target is not None:
+        prow = next((r for r in rows if r["robot"] == target and "_module" in r), None)
+        try:
+            if prow is None:
+                prow = bench_robot(target, argparse.Namespace(**{**vars(opts), "no_eaik": True}))
+            profile = profile_solve(prow)
+            print(
+                f"profile of {target}:\n{profile['by_cumulative_time']}\n{profile['by_own_time']}", flush=True
+            )
+        except Exception as exc:
+            print(f"profile of {target} failed: {exc}", flush=True)
+
+    for r in rows:
+        r.pop("_module", None)
+        r.pop("_poses", None)
+    opts.out.mkdir(parents=True, exist_ok=True)
+    settings = {k: str(v) if isinstance(v, Path) else v for k, v in vars(opts).items()}
+    settings.pop("eaik_worker", None)
+    doc = _json_clean({"meta": meta, "settings": settings, "robots": rows, "profile": profile})
+    (opts.out / "compiler.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    (opts.out / "compiler.md").write_text(render_markdown(rows, profile, meta, opts))
+    print(f"wrote {opts.out / 'compiler.md'} and compiler.json ({time.perf_counter() - t_all:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
