@@ -126,15 +126,18 @@ def circle_batch(xi, p):
 # ------------------------------------------------------------------------- A cos th + B sin th = C
 
 
-def trig_linear(A: float, B: float, C: float, mag: float) -> tuple[list[float], bool]:
+def trig_linear(
+    A: float, B: float, C: float, mag: float, free_mag: float | None = None
+) -> tuple[list[float], bool]:
     """Candidate angles of ``A cos th + B sin th = C`` and whether the angle is free.
 
-    ``mag`` is the natural size of the terms (same units as ``C``).  Returns the exact roots (one at a
-    tangency, two otherwise), or, when ``|C| > r``, the angle closest to satisfying it; with
+    ``mag`` is the natural size of the terms (same units as ``C``); ``free_mag`` (default ``mag``) the
+    size against which ``r ~ 0`` is judged (the problem's scale in those units).  Returns the exact
+    roots (one at a tangency, two otherwise), or, when ``|C| > r``, the angle closest to satisfying it; with
     ``r ~ 0`` the representative ``[0.0]`` and ``True``.
     """
     r = math.hypot(A, B)
-    if r <= FREE_TOL * mag:
+    if r <= FREE_TOL * max(mag, free_mag or 0.0):
         return [0.0], True
     phi = math.atan2(B, A)
     if abs(C) >= r - TANGENT_TOL * mag:
@@ -143,10 +146,10 @@ def trig_linear(A: float, B: float, C: float, mag: float) -> tuple[list[float], 
     return sorted({wrap(phi - delta), wrap(phi + delta)}), False
 
 
-def trig_linear_batch(A, B, C, mag):
+def trig_linear_batch(A, B, C, mag, free_mag=None):
     """Vectorised :func:`trig_linear`: returns th (N, 2), valid (N, 2), free (N,)."""
     r = np.hypot(A, B)
-    free = r <= FREE_TOL * mag
+    free = r <= FREE_TOL * (mag if free_mag is None else np.maximum(mag, free_mag))
     phi = np.arctan2(B, A)
     single = (np.abs(C) >= r - TANGENT_TOL * mag) | free
     t0 = np.where(C > 0, phi, phi + np.pi)

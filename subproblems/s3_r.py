@@ -76,7 +76,7 @@ def distance_angle(xi, p, q, d: float) -> list[Solution]:
     mag = d * d + mm + rho2 + TINY
     A, B = 2.0 * dot(m, b), 2.0 * dot(m, e)
     C = d * d - mm - rho2 if d >= 0.0 else -(math.hypot(A, B) + mag)
-    ths, free = trig_linear(A, B, C, mag)
+    ths, free = trig_linear(A, B, C, mag, scale * scale)
     out = []
     for th in ths:
         c, s = math.cos(th), math.sin(th)
@@ -103,7 +103,7 @@ def _batch(tw, p=None, q=None, d=None, **_):
     mag = d * d + mm + rho2 + TINY
     A, B = 2.0 * np.sum(m * b, axis=1), 2.0 * np.sum(m * e, axis=1)
     C = np.where(d >= 0.0, d * d - mm - rho2, -(np.hypot(A, B) + mag))
-    th, valid, free = trig_linear_batch(A, B, C, mag)
+    th, valid, free = trig_linear_batch(A, B, C, mag, scale * scale)
     c, s = np.cos(th)[..., None], np.sin(th)[..., None]
     xs = a[:, None] + b[:, None] * c + e[:, None] * s - q[:, None]
     ls = np.abs(np.linalg.norm(xs, axis=2) - d[:, None]) > EXACT_TOL * scale[:, None]

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subproblems import codes, solve, solve_batch
+from subproblems import solve, solve_batch
 from subproblems.screw import prismatic_twist, revolute_twist
 from tests.strategies import joint_values, twist_lists, unit_vectors
 
@@ -171,4 +171,68 @@ def test_one_joint_plane_batch_many():
         assert b.ls[i][b.valid[i]].tolist() == r.ls.tolist()
 
 
-_REGISTERED = set(codes())
+# ------------------------------------------------------------------ H-RR, H-RT, H-TR, H-TT
+
+H_PAIRS = ["H-RR", "H-RT", "H-TR", "H-TT"]
+
+
+@pytest.mark.parametrize("code", H_PAIRS)
+@budget()
+@given(data=st.data())
+def test_plane_pair_roundtrip(code, data):
+    kinds = code[2:]
+    tw, _ = data.draw(twist_lists(kinds))
+    th = data.draw(joint_values(kinds))
+    P = np.array([data.draw(points(tw)), data.draw(points(tw))])
+    H = np.array([data.draw(normals(tw)), data.draw(normals(tw))])
+    D = np.array([H[k] @ fk_point(tw, th, P[k]) for k in range(2)])
+    check_instance(code, kinds, tw, {"p": P, "h": H, "d": D}, th)
+
+
+@budget(0.5)
+@given(data=st.data())
+def test_plane_pair_unreachable(data):
+    tw, _ = data.draw(twist_lists("RR"))
+    P = np.array([data.draw(points(tw)), data.draw(points(tw))])
+    H = np.array([data.draw(unit_vectors()), data.draw(unit_vectors())])
+    D = np.array([0.0, np.linalg.norm(P[1]) + 2 * np.abs(tw[:, :3]).sum() + 1.0])
+    r = check_instance("H-RR", "RR", tw, {"p": P, "h": H, "d": D})
+    assert r.ls.all() and len(r.q) == 1
+
+
+def test_plane_pair_ur_like():
+    # UR-like: h along the (parallel) axes 2-3-4; the plane pair in th_1 (vertical axis) and th_5
+    z = revolute_twist([0, 0, 1], [0, 0, 0])
+    y5 = revolute_twist([0, 1, 0], [0.4, 0.1, 0.9])
+    P = np.array([[0.5, 0.2, 1.0], [0.1, 0.8, 0.3]])
+    H = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    th = np.array([0.8, -1.1])
+    D = np.array([H[k] @ fk_point([z, y5], th, P[k]) for k in range(2)])
+    check_instance("H-RR", "RR", [z, y5], {"p": P, "h": H, "d": D}, th)
+
+
+@pytest.mark.parametrize("code", H_PAIRS)
+def test_plane_pair_batch_many(code):
+    rng = np.random.default_rng(7)
+    n = 200
+    kinds = code[2:]
+    tw = np.array(
+        [
+            [
+                revolute_twist(rng.normal(size=3), rng.normal(size=3))
+                if k == "R"
+                else prismatic_twist(rng.normal(size=3))
+                for k in kinds
+            ]
+            for _ in range(n)
+        ]
+    )
+    th = rng.uniform(-math.pi, math.pi, (n, 2))
+    P, H = rng.normal(size=(n, 2, 3)), rng.normal(size=(n, 2, 3))
+    D = np.array([[H[i, k] @ fk_point(tw[i], th[i], P[i, k]) for k in range(2)] for i in range(n)])
+    b = solve_batch(code, tw, p=P, h=H, d=D)
+    assert b.vectorised
+    assert (b.valid & ~b.ls).any(axis=1).all()
+    for i in range(0, n, 25):
+        r = solve(code, tw[i], p=P[i], h=H[i], d=D[i])
+        assert np.allclose(b.q[i][b.valid[i]], r.q, atol=1e-12)

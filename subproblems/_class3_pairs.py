@@ -1,0 +1,501 @@
+"""Two equations in two joint values (S3-XY and H-XY): elimination engine, private.
+
+Both families have two scalar equations in ``(x, y)`` (the values of joints 1 and 2) that are
+*bilinear* in the bases ``phi(x)`` and ``psi(y)``, where a revolute value has the basis
+``(1, cos, sin)`` and a prismatic one ``(1, t, t^2)``:
+
+    E_k(x, y) = sum_ij M_k[i, j] phi_i(x) psi_j(y) = 0,      k = 1, 2.
+
+* S3 (``|| g1(x) g2(y) p_k - q_k || = d_k``): with ``Y = g2(y) p_k`` and ``Z = g1(x)^-1 q_k``,
+  ``|Y - Z|^2 - d_k^2 = |Y|^2 + |Z|^2 - 2 Y.Z - d_k^2``; ``Y`` is a circle or line in ``y``, ``Z`` one in
+  ``x``, and the squared norm of a circle point is linear in ``(1, cos, sin)`` (``|b| = |e|, b.e = 0``).
+* H (``h_k^T g1(x) g2(y) p_k = d_k``): linear in ``Y`` and in the rotated normal ``g1(x)^-T h_k``.
+
+Elimination (one unknown at a time, DESIGN.md section 4 notes):
+
+* a revolute unknown ``x`` is eliminated by Cramer's rule: each equation reads
+  ``alpha_k cos x + beta_k sin x = g_k`` with coefficients polynomial in ``y``; ``cos x = Nc / D``,
+  ``sin x = Ns / D`` and the unit circle gives ``F(y) = Nc^2 + Ns^2 - D^2 = 0``;
+* two prismatic unknowns: the resultant of the two quadratics in ``x``;
+* ``F`` is a polynomial of degree <= 8 in ``z = exp(i y)`` (revolute ``y``, roots on the unit circle)
+  or in ``y`` itself (prismatic, real roots); roots come from companion-matrix eigenvalues (batched).
+
+Then every root gives ``x`` by back-substitution (Cramer, or the better-conditioned single equation when
+``D ~ 0``), every candidate is polished by Gauss-Newton on the *original* equations and kept only if
+its residual is at most ``EXACT_TOL`` times the problem scale (so eigenvalue noise, near-double roots
+and spurious roots never come back as solutions); duplicates (1e-7) are removed.
+
+When ``F`` vanishes identically (the equations share a curve: a continuum) or no candidate is exact
+(unreachable), Levenberg-Marquardt runs from a fixed grid of starts, ``(0, 0)`` first; the first start
+that reaches an exact point gives the **representative** (``continuum``), otherwise the smallest
+residual is returned flagged ``ls``.  A joint the equations do not constrain keeps its start value
+``0`` (LM steps are minimum-norm).
+
+Everything works on ``N`` instances at once (no Python loop over instances); the scalar path runs
+the same code with ``N = 1``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems._class3 import EXACT_TOL, TINY, wrap_batch
+from subproblems.core import BatchResult, Solution
+
+DEDUP_TOL = 1e-7
+ZERO_TOL = 1e-10  # |F| / reference below which the eliminant is identically zero
+FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
+LM_ITERS = 40
+NEWTON_ITERS = 24
+
+
+# --------------------------------------------------------------------------------- parametrisation
+
+
+def _rot(w, c, s, u):
+    """Rodrigues rotation of vectors u by angle (c = cos, s = sin) about unit w (broadcasting)."""
+    wu = np.sum(w * u, axis=-1, keepdims=True)
+    return u * c + np.cross(w, u) * s + w * wu * (1.0 - c)
+
+
+def param(kind: str, xi, pts, inverse: bool = False):
+    """Basis vectors (N, 3, 3) of ``g(x) pts`` (or ``g(x)^-1 pts``) in ``phi(x)``.
+
+    Revolute: ``a + b cos + e sin`` (``e`` negated for the inverse); prismatic: ``p + v t``.
+    """
+    v, w = xi[:, :3], xi[:, 3:]
+    if kind == "R":
+        c = np.cross(w, v)
+        a = c + w * np.sum(w * (pts - c), axis=1, keepdims=True)
+        b = pts - a
+        e = np.cross(w, b)
+        return np.stack([a, b, -e if inverse else e], axis=1)
+    return np.stack([pts, -v if inverse else v, np.zeros_like(pts)], axis=1)
+
+
+def direction_param(kind: str, xi, h):
+    """Basis of ``g(x)^-T h`` (a normal carried back by the inverse rotation) in ``phi(x)``."""
+    w = xi[:, 3:]
+    if kind == "R":
+        a = w * np.sum(w * h, axis=1, keepdims=True)
+        b = h - a
+        return np.stack([a, b, -np.cross(w, b)], axis=1)
+    return np.stack([h, np.zeros_like(h), np.zeros_like(h)], axis=1)
+
+
+def norm2(kind: str, B):
+    """Coefficients (N, 3) of ``|point|^2`` in the basis, for a basis from :func:`param`."""
+    A, U, V = B[:, 0], B[:, 1], B[:, 2]
+    dot = lambda a, b: np.sum(a * b, axis=1)  # noqa: E731
+    if kind == "R":
+        return np.stack([dot(A, A) + dot(U, U), 2 * dot(A, U), 2 * dot(A, V)], axis=1)
+    return np.stack([dot(A, A), 2 * dot(A, U), dot(U, U)], axis=1)
+
+
+def s3_tensor(kinds, tw, P, Q, D):
+    """M (N, 2, 3, 3) of the S3 pair."""
+    kx, ky = kinds
+    Ms = []
+    for k in range(2):
+        Y = param(ky, tw[:, 1], P[:, k])
+        Z = param(kx, tw[:, 0], Q[:, k], inverse=True)
+        M = -2.0 * np.einsum("nix,njx->nij", Z, Y)
+        M[:, 0, :] += norm2(ky, Y)
+        M[:, :, 0] += norm2(kx, Z)
+        M[:, 0, 0] -= D[:, k] ** 2
+        Ms.append(M)
+    return np.stack(Ms, axis=1)
+
+
+def h_tensor(kinds, tw, P, H, D):
+    """M (N, 2, 3, 3) of the H pair (normals divided by their length)."""
+    kx, ky = kinds
+    hn = np.linalg.norm(H, axis=2)
+    safe = np.where(hn == 0.0, 1.0, hn)
+    H = H / safe[..., None]
+    D = np.where(hn == 0.0, D, D / safe)
+    Ms = []
+    for k in range(2):
+        Y = param(ky, tw[:, 1], P[:, k])
+        if kx == "R":
+            c1 = np.cross(tw[:, 0, 3:], tw[:, 0, :3])
+            Hd = direction_param("R", tw[:, 0], H[:, k])
+            Yc = Y.copy()
+            Yc[:, 0] -= c1
+            M = np.einsum("nix,njx->nij", Hd, Yc)
+            M[:, 0, 0] += np.sum(H[:, k] * c1, axis=1)
+        else:
+            M = np.zeros((len(D), 3, 3))
+            M[:, 0, :] = np.einsum("nx,njx->nj", H[:, k], Y)
+            M[:, 1, 0] += np.sum(H[:, k] * tw[:, 0, :3], axis=1)
+        M[:, 0, 0] -= D[:, k]
+        Ms.append(M)
+    return np.stack(Ms, axis=1)
+
+
+# ------------------------------------------------------------------------------------ the problem
+
+
+class Pair:
+    """N instances of one two-equation type: kinds, twists (N, 2, 6), points and right-hand sides."""
+
+    def __init__(self, family: str, kinds: str, tw, P, R, D):
+        self.family, self.kinds = family, kinds
+        self.tw, self.P, self.R, self.D = tw, P, R, D  # R: q points (S3) or normals h (H)
+        n = len(D)
+        norms = [np.linalg.norm(P, axis=2).max(axis=1), np.abs(D).max(axis=1)]
+        if family == "S3":
+            norms.append(np.linalg.norm(R, axis=2).max(axis=1))
+        else:
+            hn = np.linalg.norm(R, axis=2)
+            norms.append((np.abs(D) / np.where(hn == 0, 1.0, hn)).max(axis=1))
+        for j in range(2):
+            norms.append(np.linalg.norm(np.cross(tw[:, j, 3:], tw[:, j, :3]), axis=1))
+        self.scale = np.maximum(np.maximum.reduce(norms), TINY) if n else np.zeros(0)
+
+    def subset(self, idx) -> Pair:
+        return Pair(self.family, self.kinds, self.tw[idx], self.P[idx], self.R[idx], self.D[idx])
+
+    def tensor(self):
+        f = s3_tensor if self.family == "S3" else h_tensor
+        return f(self.kinds, self.tw, self.P, self.R, self.D)
+
+    def residual(self, x, y):
+        """r (N, C, 2) and J (N, C, 2, 2) of the original equations at (x, y) (N, C)."""
+        kx, ky = self.kinds
+        tw = self.tw[:, None, None, :, :]  # (N, 1, 1, 2, 6)
+        P = self.P[:, None, :, :]  # (N, 1, 2, 3)
+        xs, ys = x[..., None, None], y[..., None, None]
+        v2, w2 = tw[..., 1, :3], tw[..., 1, 3:]
+        v1, w1 = tw[..., 0, :3], tw[..., 0, 3:]
+        if ky == "R":
+            c2 = np.cross(w2, v2)
+            Y = c2 + _rot(w2, np.cos(ys), np.sin(ys), P - c2)
+            dY = np.cross(w2, Y - c2)
+        else:
+            Y = P + v2 * ys
+            dY = np.broadcast_to(v2, Y.shape)
+        if kx == "R":
+            c1 = np.cross(w1, v1)
+            cx, sx = np.cos(xs), np.sin(xs)
+            X = c1 + _rot(w1, cx, sx, Y - c1)
+            dXx = np.cross(w1, X - c1)
+            dXy = _rot(w1, cx, sx, dY)
+        else:
+            X = Y + v1 * xs
+            dXx = np.broadcast_to(v1, X.shape)
+            dXy = dY
+        if self.family == "S3":
+            diff = X - self.R[:, None]
+            dist = np.linalg.norm(diff, axis=-1)
+            r = dist - self.D[:, None]
+            u = diff / np.where(dist == 0, 1.0, dist)[..., None]
+        else:
+            hn = np.linalg.norm(self.R, axis=-1)
+            safe = np.where(hn == 0, 1.0, hn)[:, None, :, None]
+            u = self.R[:, None] / safe
+            r = np.sum(u * X, axis=-1) - self.D[:, None] / safe[..., 0]
+            r = np.where(hn[:, None] == 0, -self.D[:, None], r)
+        J = np.stack([np.sum(u * dXx, axis=-1), np.sum(u * dXy, axis=-1)], axis=-1)
+        return r, J
+
+
+# --------------------------------------------------------------------------------- polynomial part
+
+
+def _conv(a, b):
+    out = np.zeros(a.shape[:-1] + (a.shape[-1] + b.shape[-1] - 1,), dtype=np.result_type(a, b))
+    for i in range(a.shape[-1]):
+        for j in range(b.shape[-1]):
+            out[..., i + j] += a[..., i] * b[..., j]
+    return out
+
+
+_BASIS_R = np.array([[0, 1, 0], [0.5, 0, 0.5], [0.5j, 0, -0.5j]], dtype=complex)  # in z = e^{iy}, times z
+_BASIS_T = np.eye(3)
+
+
+def _eliminant(M, ke):
+    """Eliminant coefficients (N, 9) (low to high) in the kept variable's polynomial variable."""
+    row = M  # (N, 2, 3 (i), 3 (coeffs))
+    if ke == "R":
+        al, be, g = row[:, :, 1], row[:, :, 2], -row[:, :, 0]
+        D = _conv(al[:, 0], be[:, 1]) - _conv(al[:, 1], be[:, 0])
+        Nc = _conv(g[:, 0], be[:, 1]) - _conv(g[:, 1], be[:, 0])
+        Ns = _conv(al[:, 0], g[:, 1]) - _conv(al[:, 1], g[:, 0])
+        return _conv(Nc, Nc) + _conv(Ns, Ns) - _conv(D, D)
+    A, B, C = row[:, :, 2], row[:, :, 1], row[:, :, 0]
+    AC = _conv(A[:, 0], C[:, 1]) - _conv(A[:, 1], C[:, 0])
+    AB = _conv(A[:, 0], B[:, 1]) - _conv(A[:, 1], B[:, 0])
+    BC = _conv(B[:, 0], C[:, 1]) - _conv(B[:, 1], C[:, 0])
+    return _conv(AC, AC) - _conv(AB, BC)
+
+
+def _poly_roots(F):
+    """All roots (N, 8) of degree-8 polynomials (low to high); tiny leading coefficients are nudged."""
+    n = F.shape[0]
+    big = np.abs(F).max(axis=1)
+    Fn = F / np.where(big == 0, 1.0, big)[:, None]
+    lead = Fn[:, 8]
+    lead = np.where(np.abs(lead) < 1e-14, 1e-14, lead)
+    Cm = np.zeros((n, 8, 8), dtype=Fn.dtype)
+    Cm[:, 0, :] = -Fn[:, 7::-1] / lead[:, None]
+    Cm[:, np.arange(1, 8), np.arange(7)] = 1.0
+    return np.linalg.eigvals(Cm)
+
+
+# -------------------------------------------------------------------------------------- the solver
+
+
+def _basis_values(kind, u):
+    if kind == "R":
+        return np.stack([np.ones_like(u), np.cos(u), np.sin(u)], axis=-1)
+    return np.stack([np.ones_like(u), u, u * u], axis=-1)
+
+
+def _candidates(Mr, ke, ku, u):
+    psi = _basis_values(ku, u)
+    n, C = u.shape
+    rv = np.swapaxes(Mr.reshape(n, 6, 3) @ np.swapaxes(psi, 1, 2), 1, 2).reshape(n, C, 2, 3)
+    if ke == "R":
+        al, be, g = rv[..., 1], rv[..., 2], -rv[..., 0]
+        D = al[..., 0] * be[..., 1] - al[..., 1] * be[..., 0]
+        Nc = g[..., 0] * be[..., 1] - g[..., 1] * be[..., 0]
+        Ns = al[..., 0] * g[..., 1] - al[..., 1] * g[..., 0]
+        ref = (np.abs(al[..., 0]) + np.abs(be[..., 0])) * (np.abs(al[..., 1]) + np.abs(be[..., 1])) + TINY
+        nondeg = np.abs(D) > 1e-8 * ref
+        sg = np.where(D < 0, -1.0, 1.0)
+        x0 = np.arctan2(Ns * sg, Nc * sg)
+        k = (np.hypot(al[..., 1], be[..., 1]) > np.hypot(al[..., 0], be[..., 0])).astype(int)[..., None]
+        A = np.take_along_axis(al, k, -1)[..., 0]
+        B = np.take_along_axis(be, k, -1)[..., 0]
+        C = np.take_along_axis(g, k, -1)[..., 0]
+        r = np.hypot(A, B)
+        phi = np.arctan2(B, A)
+        delta = np.arccos(np.clip(C / np.where(r == 0, 1.0, r), -1.0, 1.0))
+        X = np.stack([x0, phi - delta, phi + delta], axis=-1)
+        weak = np.abs(D) <= 1e-2 * ref  # ill-conditioned Cramer: also try the single equation
+        V = np.stack([nondeg, weak, weak], axis=-1)
+        return X, V
+    A, B, C = rv[..., 2], rv[..., 1], rv[..., 0]
+    den = A[..., 1] * B[..., 0] - A[..., 0] * B[..., 1]
+    ref = (np.abs(A[..., 0]) + np.abs(B[..., 0])) * (np.abs(A[..., 1]) + np.abs(B[..., 1])) + TINY
+    nondeg = np.abs(den) > 1e-8 * ref
+    x0 = (A[..., 0] * C[..., 1] - A[..., 1] * C[..., 0]) / np.where(nondeg, den, 1.0)
+    k = (np.abs(A[..., 1]) + np.abs(B[..., 1]) > np.abs(A[..., 0]) + np.abs(B[..., 0])).astype(int)[..., None]
+    a = np.take_along_axis(A, k, -1)[..., 0]
+    b = np.take_along_axis(B, k, -1)[..., 0]
+    c = np.take_along_axis(C, k, -1)[..., 0]
+    lin = np.abs(a) <= 1e-12 * (np.abs(b) + np.abs(c) + TINY)
+    sq = np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))
+    safe_a = np.where(lin, 1.0, a)
+    r1 = np.where(lin, -c / np.where(b == 0, 1.0, b), (-b - sq) / (2 * safe_a))
+    r2 = np.where(lin, r1, (-b + sq) / (2 * safe_a))
+    X = np.stack([x0, r1, r2], axis=-1)
+    weak = np.abs(den) <= 1e-2 * ref
+    V = np.stack([nondeg, weak, weak & ~lin], axis=-1)
+    return X, V
+
+
+def _basis_deriv(kind, u):
+    if kind == "R":
+        return np.stack([np.zeros_like(u), -np.sin(u), np.cos(u)], axis=-1)
+    return np.stack([np.zeros_like(u), np.ones_like(u), 2.0 * u], axis=-1)
+
+
+def _snap_free(M, kx, ky, X, Y, iters: int = 12):
+    """Continuum points: where every coefficient of one value's basis vanishes, that value is free.
+
+    From each candidate, Gauss-Newton on the six coefficients ``sum_j M[k, i, j] psi_j(y)`` (all ``k, i``)
+    as functions of ``y`` alone finds a ``y*`` where the equations hold for every ``x`` (and
+    symmetrically for ``x``).  Returns the snapped (X, Y) and the (x free, y free) flags; a free value
+    is set to 0, its documented representative.
+    """
+    ref = np.abs(M).max(axis=(1, 2, 3))[:, None] + TINY
+
+    def solve_1d(kind, u0, contract):
+        u = u0
+        for _ in range(iters):
+            c = contract(_basis_values(kind, u))  # (N, C, 6)
+            g = contract(_basis_deriv(kind, u))
+            gg = np.sum(g * g, axis=-1)
+            step = np.sum(g * c, axis=-1) / np.where(gg == 0, 1.0, gg)
+            u = np.where(gg == 0, u, u - step)
+            u = np.where(np.isfinite(u), u, 0.0)
+        c = contract(_basis_values(kind, u))
+        moved = u - u0
+        if kind == "R":
+            moved = wrap_batch(moved)
+        near = np.abs(moved) <= 1e-3 * (1.0 if kind == "R" else np.maximum(1.0, np.abs(u0)))
+        return u, near & (np.abs(c).max(axis=-1) <= FREE_REL * ref)
+
+    n = M.shape[0]
+    Mj = M.reshape(n, 6, 3)  # rows (k, i), contracted over j
+    Mi = np.swapaxes(M, 2, 3).reshape(n, 6, 3)  # rows (k, j), contracted over i
+    ys, xfree = solve_1d(ky, Y, lambda psi: np.swapaxes(Mj @ np.swapaxes(psi, 1, 2), 1, 2))
+    xs, yfree = solve_1d(kx, X, lambda phi: np.swapaxes(Mi @ np.swapaxes(phi, 1, 2), 1, 2))
+    X = np.where(xfree, 0.0, np.where(yfree, xs, X))
+    Y = np.where(xfree, ys, np.where(yfree, 0.0, Y))
+    return X, Y, xfree, yfree
+
+
+def _lm(pb: Pair, x, y, iters: int, damping0: float):
+    """Levenberg-Marquardt (or Gauss-Newton with tiny damping) on (N, C) starts; returns x, y, cost."""
+    r, J = pb.residual(x, y)
+    cost = np.sum(r * r, axis=-1)
+    lam = np.full(x.shape, damping0)
+    for _ in range(iters):
+        JtJ = np.einsum("...ki,...kj->...ij", J, J)
+        Jtr = np.einsum("...ki,...k->...i", J, r)
+        tr = JtJ[..., 0, 0] + JtJ[..., 1, 1]
+        mu = lam * tr + TINY
+        a, b, c = JtJ[..., 0, 0] + mu, JtJ[..., 0, 1], JtJ[..., 1, 1] + mu
+        det = a * c - b * b
+        det = np.where(det == 0, TINY, det)
+        dx = -(c * Jtr[..., 0] - b * Jtr[..., 1]) / det
+        dy = -(a * Jtr[..., 1] - b * Jtr[..., 0]) / det
+        nx, ny = x + dx, y + dy
+        r2, J2 = pb.residual(nx, ny)
+        with np.errstate(over="ignore", invalid="ignore"):
+            c2 = np.sum(r2 * r2, axis=-1)
+        better = np.isfinite(c2) & (c2 < cost)
+        x, y = np.where(better, nx, x), np.where(better, ny, y)
+        cost = np.where(better, c2, cost)
+        r = np.where(better[..., None], r2, r)
+        J = np.where(better[..., None, None], J2, J)
+        lam = np.where(better, lam / 3.0, lam * 4.0)
+    return x, y, cost
+
+
+def _wrap(kind, v):
+    return wrap_batch(v) if kind == "R" else v
+
+
+def _starts(kind, scale):
+    if kind == "R":
+        return np.broadcast_to(np.array([0.0, np.pi / 2, np.pi, -np.pi / 2]), (len(scale), 4))
+    return np.array([0.0, 1.0, -1.0, 2.0])[None, :] * scale[:, None]
+
+
+def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
+    """All solutions of N instances (see the module docstring); ``K`` solution slots."""
+    kx, ky = pb.kinds
+    n = len(pb.D)
+    M = pb.tensor()
+    swap = kx == "T" and ky == "R"
+    Mr = np.swapaxes(M, 2, 3) if swap else M
+    ke, ku = (ky, kx) if swap else (kx, ky)
+    basis = _BASIS_R if ku == "R" else _BASIS_T
+    rowpoly = np.einsum("nkij,jc->nkic", Mr.astype(basis.dtype), basis)  # (N, 2, 3, 3 coeffs)
+    F = _eliminant(rowpoly, ke)
+    ref = np.abs(M).max(axis=(1, 2, 3)) ** 4 + TINY
+    identically_zero = np.abs(F).max(axis=1) <= ZERO_TOL * ref
+    # coincident revolute axes / parallel prismatic directions: only the sum of the values matters
+    if kx == ky:
+        w1 = pb.tw[:, 0, 3:] if kx == "R" else pb.tw[:, 0, :3]
+        w2 = pb.tw[:, 1, 3:] if kx == "R" else pb.tw[:, 1, :3]
+        same = np.linalg.norm(np.cross(w1, w2), axis=1) <= 1e-12
+        if kx == "R":
+            c1, c2 = np.cross(w1, pb.tw[:, 0, :3]), np.cross(w2, pb.tw[:, 1, :3])
+            same &= np.linalg.norm(np.cross(c2 - c1, w1), axis=1) <= 1e-12 * pb.scale
+        identically_zero |= same
+    z = _poly_roots(F)
+    if ku == "R":
+        mod = np.abs(z)
+        ok = (np.abs(np.log(np.where(mod == 0, 1e-300, mod))) < 0.05) & np.isfinite(mod)
+        u = np.angle(z)
+    else:
+        ok = (np.abs(z.imag) <= 0.05 * (pb.scale[:, None] + np.abs(z.real))) & np.isfinite(z.real)
+        u = z.real
+    ok &= ~identically_zero[:, None]
+    u = np.where(ok, u, 0.0)
+    E, V = _candidates(Mr, ke, ku, u)  # (N, 8, 3)
+    V &= ok[..., None]
+    U = np.broadcast_to(u[..., None], E.shape)
+    X, Y = (U, E) if swap else (E, U)
+    X, Y, V = X.reshape(n, -1), Y.reshape(n, -1), V.reshape(n, -1)
+    # keep only the valid candidates (compacted to the largest count over the instances)
+    cnt = V.sum(axis=1)
+    width = max(int(cnt.max()) if n else 1, 1)
+    order = np.argsort(~V, axis=1, kind="stable")[:, :width]
+    X, Y = np.take_along_axis(X, order, axis=1), np.take_along_axis(Y, order, axis=1)
+    V = np.arange(width)[None, :] < cnt[:, None]
+    X, Y = np.where(V, X, 0.0), np.where(V, Y, 0.0)
+    X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
+    X, Y = _wrap(kx, X), _wrap(ky, Y)
+    # a value the equations do not constrain at the other one (a continuum through this point)
+    X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y)
+    X, Y = _wrap(kx, X), _wrap(ky, Y)
+    r, _ = pb.residual(X, Y)
+    res = np.abs(r).max(axis=-1)
+    tol = EXACT_TOL * pb.scale[:, None]
+    exact = V & (res <= tol)
+    # duplicates: a candidate close to an earlier exact one
+    dx = X[:, :, None] - X[:, None, :]
+    dy = Y[:, :, None] - Y[:, None, :]
+    if kx == "R":
+        dx = wrap_batch(dx)
+    else:
+        dx = dx / np.maximum(1.0, np.abs(X))[:, None, :]
+    if ky == "R":
+        dy = wrap_batch(dy)
+    else:
+        dy = dy / np.maximum(1.0, np.abs(Y))[:, None, :]
+    close = np.maximum(np.abs(dx), np.abs(dy)) <= DEDUP_TOL
+    C = X.shape[1]
+    earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
+    dup = np.any(close & earlier & exact[:, None, :], axis=2)
+    keep = exact & ~dup
+    # fallback: continuum or nothing exact
+    cont = identically_zero | np.any(keep & (xfree | yfree), axis=1)
+    need = identically_zero | ~keep.any(axis=1)
+    LS = np.zeros((n, C), dtype=bool)
+    if need.any():
+        idx = np.nonzero(need)[0]
+        sub = pb.subset(idx)
+        sx, sy = _starts(kx, sub.scale), _starts(ky, sub.scale)
+        SX = np.repeat(sx, sy.shape[1], axis=1)
+        SY = np.tile(sy, (1, sx.shape[1]))
+        # also start from the eliminant's candidates (near misses of unreachable instances)
+        SX = np.concatenate([SX, X[idx]], axis=1)
+        SY = np.concatenate([SY, Y[idx]], axis=1)
+        FX, FY, fcost = _lm(sub, SX, SY, LM_ITERS, 1e-3)
+        FX, FY = _wrap(kx, FX), _wrap(ky, FY)
+        fr, _ = sub.residual(FX, FY)
+        fres = np.abs(fr).max(axis=-1)
+        fexact = fres <= EXACT_TOL * sub.scale[:, None]
+        first_exact = np.argmax(fexact, axis=1)
+        best = np.where(fexact.any(axis=1), first_exact, np.argmin(fcost, axis=1))
+        rows = np.arange(len(idx))
+        X[idx, 0], Y[idx, 0] = FX[rows, best], FY[rows, best]
+        keep[idx] = False
+        keep[idx, 0] = True
+        LS[idx, 0] = ~fexact[rows, best]
+    # pack into K slots, sorted by x then y
+    key = np.where(keep, X, np.inf)
+    key2 = np.where(keep, Y, np.inf)
+    order = np.lexsort((key2, key), axis=1)
+    X = np.take_along_axis(X, order, axis=1)[:, :K]
+    Y = np.take_along_axis(Y, order, axis=1)[:, :K]
+    keep = np.take_along_axis(keep, order, axis=1)[:, :K]
+    LS = np.take_along_axis(LS, order, axis=1)[:, :K]
+    if X.shape[1] < K:
+        pad = K - X.shape[1]
+        X, Y = np.pad(X, ((0, 0), (0, pad))), np.pad(Y, ((0, 0), (0, pad)))
+        keep, LS = np.pad(keep, ((0, 0), (0, pad))), np.pad(LS, ((0, 0), (0, pad)))
+    Q = np.stack([np.where(keep, X, 0.0), np.where(keep, Y, 0.0)], axis=-1)
+    return BatchResult(code, Q, keep, LS & keep, cont)
+
+
+def to_solutions(b: BatchResult) -> list[Solution]:
+    """Solutions of instance 0 of a batch result."""
+    out = []
+    for k in np.nonzero(b.valid[0])[0]:
+        out.append(
+            Solution(
+                (float(b.q[0, k, 0]), float(b.q[0, k, 1])),
+                ls=bool(b.ls[0, k]),
+                continuum=bool(b.continuum[0]),
+            )
+        )
+    return out
