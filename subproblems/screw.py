@@ -134,10 +134,16 @@ def twist_exp_batch(xi, theta) -> np.ndarray:
     W[..., 2, 0], W[..., 2, 1] = -w[..., 1], w[..., 0]
     R = np.eye(3) + s * W + (1.0 - c) * (W @ W)
     revolute = np.any(w != 0.0, axis=-1)
-    wxv = np.cross(w, v)
-    t_rev = (
-        np.einsum("...ij,...j->...i", np.eye(3) - R, wxv) + w * (np.sum(w * v, axis=-1) * theta)[..., None]
+    # w x v written out: numpy's cross spends most of its time on axis bookkeeping for small arrays
+    wxv = np.stack(
+        [
+            w[..., 1] * v[..., 2] - w[..., 2] * v[..., 1],
+            w[..., 2] * v[..., 0] - w[..., 0] * v[..., 2],
+            w[..., 0] * v[..., 1] - w[..., 1] * v[..., 0],
+        ],
+        axis=-1,
     )
+    t_rev = wxv - (R @ wxv[..., None])[..., 0] + w * (np.sum(w * v, axis=-1) * theta)[..., None]
     t_pri = v * theta[..., None]
     g = np.zeros(theta.shape + (4, 4))
     g[..., :3, :3] = R
