@@ -29,7 +29,10 @@ def _compile_args(p: argparse.ArgumentParser) -> None:
     _add_robot_args(p)
     p.add_argument("--free", nargs="*", default=[], metavar="JOINT", help="free joints (redundant robots)")
     p.add_argument(
-        "--target", default="pose", choices=["pose", "position", "orientation"], help="what is solved for"
+        "--target",
+        default="pose",
+        choices=["pose", "position", "orientation", "position+direction"],
+        help="what is solved for",
     )
 
 

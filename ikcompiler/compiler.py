@@ -7,6 +7,7 @@ says why and falls back to a numerical multi-start solver (always available, fla
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import types
@@ -18,13 +19,15 @@ from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.snap import snap_chain
-from ikcompiler.model import Chain
+from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
 from subproblems import max_solutions
+from subproblems.plan_runtime import COUPLED_ROOT_SLOTS
 
-TARGETS = ("pose", "position", "orientation")
+TARGETS = ("pose", "position", "orientation", "position+direction")
+VIRTUAL_ROLL = "_tool_roll"
 NUMERICAL_STARTS = 48
 NUMERICAL_ITERS = 30
 
@@ -42,11 +45,41 @@ def _coupling_tuples(chain: Chain):
     return [(chain.index(c.joint), chain.index(c.master), c.a, c.b) for c in chain.couplings]
 
 
+def with_tool_roll(chain: Chain) -> Chain:
+    """The chain plus a virtual revolute joint about the tool's z axis through the tool origin.
+
+    A position + direction target (the tool origin and where its z axis points) is a pose target of
+    this 6-joint-or-more chain with the roll left free: every solution of the pose problem, minus its
+    roll value, is a solution of the 5-D problem and vice versa.
+    """
+    from subproblems.screw import revolute_twist
+
+    roll = Joint(VIRTUAL_ROLL, "R", revolute_twist(chain.home[:3, 2], chain.home[:3, 3]))
+    return Chain(
+        chain.name,
+        chain.joints + (roll,),
+        chain.home,
+        chain.couplings,
+        chain.base,
+        chain.tip,
+        chain.units,
+        chain.source,
+        chain.notes,
+    )
+
+
 def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> Plan:
     """Search the cheapest subproblem chain for ``chain``; see the module docstring."""
     tol = tol or Tolerance()
     if target not in TARGETS:
         raise CompileError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    if target == "position+direction":
+        plan = compile_plan(with_tool_roll(chain), target="pose", free=free, tol=tol)
+        note = (
+            f"position + direction target: a virtual joint {VIRTUAL_ROLL} about the tool z axis makes it "
+            "a pose target; its value is dropped from every solution"
+        )
+        return dataclasses.replace(plan, target=target, virtual=True, notes=plan.notes + (note,))
     free = tuple(free)
     for f in free:
         if f not in chain.independent_names:
@@ -90,6 +123,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         target=target,
         tol=tol,
         samples=_samples(chain),
+        couplings=tuple(_coupling_tuples(chain)),
     )
     couplings = _coupling_tuples(chain)
     full_lower = np.array([j.lower for j in chain.joints])
@@ -195,7 +229,9 @@ def solution_slots(plan: Plan) -> int:
         return 16
     k = 1
     for s in plan.steps:
-        if s["kind"] != "SUM":
+        if s["kind"] == "S3C":
+            k *= COUPLED_ROOT_SLOTS
+        elif s["kind"] != "SUM":
             k *= max_solutions(s["code"])
     return max(1, min(k, 64))
 
@@ -206,8 +242,15 @@ def compile_source(chain: Chain, *, target: str = "pose", free=(), tol: Toleranc
 
     tol = tol or Tolerance()
     plan = compile_plan(chain, target=target, free=free, tol=tol)
+    solved = with_tool_roll(chain) if plan.virtual else chain
     return generate(
-        plan, chain, slots=solution_slots(plan), version=__version__, scale=chain.scale, tol=tol.exact
+        plan,
+        solved,
+        slots=solution_slots(plan),
+        version=__version__,
+        scale=chain.scale,
+        tol=tol.exact,
+        output=chain,
     )
 
 

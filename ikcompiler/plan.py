@@ -26,6 +26,7 @@ class Plan:
     all_names: tuple[str, ...] = ()  # every joint, coupled ones included (steps index these)
     alternative: tuple[dict, ...] = ()  # run for targets where ``steps`` meets a continuum
     plan_twists: tuple = ()  # twists of the snapped robot the steps were derived on (empty: the true ones)
+    virtual: bool = False  # the last joint is a virtual tool roll (position + direction targets)
 
     @property
     def joint_names_all(self) -> tuple[str, ...]:

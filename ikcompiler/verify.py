@@ -102,6 +102,11 @@ def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int 
             e = np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1)
         elif module.TARGET == "orientation":
             e = scale * np.abs(Gs[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2))
+        elif module.TARGET == "position+direction":
+            e = np.maximum(
+                np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),
+                scale * np.abs(Gs[:, :3, 2] - G[i, :3, 2]).max(axis=1),
+            )
         else:
             e = np.maximum(
                 np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),

@@ -135,6 +135,58 @@ def _step_inputs(step, twists, kinds, Td, TH, SIG):
     raise ValueError(f"unknown step kind {kind!r}")
 
 
+COUPLED_ROOT_SLOTS = 8  # a coupled pair (th_k = a th_j + b, |a| <= 3) gives at most 8 roots here
+
+
+def _solve_coupled_distance(step, twists, kinds, Td, TH):
+    """Rule 3 with a coupled pair in the middle: ``|| E_j(th) E_k(a th + b) p - c || = d``.
+
+    One unknown angle through two exponentials (the Shadow finger's th_4 = th_3): the squared distance
+    is a trigonometric polynomial in th, whose roots are found on the circle by
+    :func:`subproblems.roots.find_roots_batch` (sign changes refined to machine precision, double roots
+    polished).  Returns a BatchResult whose single column is the variable joint's angle.
+    """
+    from subproblems.core import BatchResult
+    from subproblems.roots import find_roots_batch
+
+    xi_t, K, Tp, G_all = _equation(step, twists, kinds, Td, TH)
+    sign = -1.0 if step.get("inverted") else 1.0
+    if step.get("inverted"):
+        Tp = inverse_transform(Tp)
+    p = _line_point(K[step["trail"][0]] if step["trail"] else G_all, step["p0"])
+    c = _line_point(K[step["lead"][0]], step["c0"])
+    d2 = np.sum((_apply(Tp, p) - c) ** 2, axis=1)
+    first, second = step["solve_pair"]
+    var, (a, b) = step["var"], step["coupling"]
+    x1, x2 = sign * xi_t[first], sign * xi_t[second]
+    M = p.shape[0]
+
+    def f(X):
+        G = X.shape[1]
+        th = X.ravel()
+        th1 = th if first == var else a * th + b
+        th2 = th if second == var else a * th + b
+        E = twist_exp_batch(np.repeat(x1, G, axis=0), th1) @ twist_exp_batch(np.repeat(x2, G, axis=0), th2)
+        x = np.einsum("mij,mj->mi", E[:, :3, :3], np.repeat(p, G, axis=0)) + E[:, :3, 3]
+        return (np.sum((x - np.repeat(c, G, axis=0)) ** 2, axis=1) - np.repeat(d2, G)).reshape(M, G)
+
+    X, valid = find_roots_batch(f, -math.pi, math.pi, M, grid=96, periodic=True)
+    K_ = COUPLED_ROOT_SLOTS
+    Q = np.zeros((M, K_, 1))
+    V = np.zeros((M, K_), dtype=bool)
+    k = min(K_, X.shape[1])
+    Q[:, :k, 0], V[:, :k] = X[:, :k], valid[:, :k]
+    return BatchResult(step["code"], Q, V, np.zeros((M, K_), dtype=bool), np.zeros(M, dtype=bool))
+
+
+def solve_step(step, twists, kinds, Td, TH, SIG=None):
+    """The subproblem of one step for every instance, as a BatchResult."""
+    if step["kind"] == "S3C":
+        return _solve_coupled_distance(step, twists, kinds, Td, TH)
+    tw, inputs = _step_inputs(step, twists, kinds, Td, TH, SIG)
+    return solve_batch(step["code"], tw, **inputs)
+
+
 def _apply_couplings(TH, couplings) -> None:
     for dep, master, a, b in couplings:
         known_m, known_d = ~np.isnan(TH[:, master]), ~np.isnan(TH[:, dep])
@@ -188,8 +240,7 @@ def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
             TH[:, j] = acc / s_j
             _apply_couplings(TH, couplings)
             continue
-        tw, inputs = _step_inputs(step, twists, kinds, Td[owner], TH, SIG)
-        res = solve_batch(step["code"], tw, **inputs)
+        res = solve_step(step, twists, kinds, Td[owner], TH, SIG)
         rows, slots = np.nonzero(res.valid)
         TH, SIG, owner = TH[rows], SIG[rows], owner[rows]
         branch = branch[rows] * res.valid.shape[1] + slots
@@ -272,8 +323,12 @@ def pose_error(G, T, scale: float) -> np.ndarray:
     return np.maximum(dp, scale * dR)
 
 
-def within_limits(Q, kinds, lower, upper, eps=1e-9) -> np.ndarray:
-    """Rows of Q (M, dof) inside the limits; a revolute value counts in any of its 2 pi representations."""
+def within_limits(Q, kinds, lower, upper, eps=1e-7) -> np.ndarray:
+    """Rows of Q (M, dof) inside the limits; a revolute value counts in any of its 2 pi representations.
+
+    ``eps`` forgives roundoff at a limit: a double root (a fully stretched finger at its 0 limit) is
+    only located to about sqrt(machine epsilon).
+    """
     ok = np.ones(Q.shape[0], dtype=bool)
     for c, k in enumerate(kinds):
         lo, hi, v = lower[c] - eps, upper[c] + eps, Q[:, c]

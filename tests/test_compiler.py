@@ -142,3 +142,22 @@ def test_cli_explain_and_compile(tmp_path, capsys):
     assert out.exists()
     assert main(["compile", "no_such_robot"]) == 2
     assert "error" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "name, target, free",
+    [
+        ("shadow_index", "position", ()),
+        ("shadow_thumb", "position+direction", ()),
+        ("puma560", "orientation", ("j1", "j2", "j3")),
+        ("ur5", "position", ("wrist_1_joint", "wrist_2_joint", "wrist_3_joint")),
+    ],
+)
+def test_reduced_targets_compile_and_verify(name, target, free):
+    chain = load_robot(name)
+    module = compile_robot(chain, target=target, free=free)
+    assert module.TARGET == target
+    report = verify(chain, module, samples=60, seed=5, scalar_checks=5)
+    assert report.wrong == 0, report.text()
+    assert report.batch_mismatch == 0, report.text()
+    assert report.missed <= 0.05 * report.poses, report.text()

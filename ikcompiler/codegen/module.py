@@ -59,7 +59,7 @@ def _literal(v) -> str:
 
 
 STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lead", "c0")
-STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters")
+STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters", "solve_pair", "var", "coupling")
 
 
 def _step_source(k: int, step: dict, line: str) -> str:
@@ -67,34 +67,39 @@ def _step_source(k: int, step: dict, line: str) -> str:
     return f"    # {line}\n    {{{body}}},\n"
 
 
-def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float) -> str:
-    """The module source for ``plan`` on ``chain``."""
+def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float, output=None) -> str:
+    """The module source for ``plan`` on ``chain``.
+
+    ``output`` is the robot whose joints the module returns when ``chain`` carries extra virtual joints
+    (a tool roll for position + direction targets); by default the chain itself.
+    """
+    output = output or chain
     A, b = chain.coupling_matrix()
     couplings = []
     for c in chain.couplings:
         couplings.append((chain.index(c.joint), chain.index(c.master), c.a, c.b))
-    free_idx = [chain.independent_names.index(f) for f in plan.free]
+    free_idx = [output.independent_names.index(f) for f in plan.free]
     lines = plan.step_lines()
     plan_doc = "\n".join(("    " + s).rstrip() for s in plan.explain().splitlines())
     out = [
         HEADER.format(
             robot=plan.robot,
             version=version,
-            kinds=chain.joint_types,
-            joint_names=", ".join(chain.independent_names),
+            kinds=output.joint_types,
+            joint_names=", ".join(output.independent_names),
             target=plan.target,
             method=plan.method,
             plan_doc=plan_doc,
             imports="{imports}",
         )
     ]
-    out.append(f"\nJOINT_NAMES = {tuple(chain.independent_names)!r}\n")
-    out.append(f"JOINT_TYPES = {''.join(chain.joints[i].kind for i in chain.independent)!r}\n")
+    out.append(f"\nJOINT_NAMES = {tuple(output.independent_names)!r}\n")
+    out.append(f"JOINT_TYPES = {''.join(output.joints[i].kind for i in output.independent)!r}\n")
     out.append(f"METHOD = {plan.method!r}\n")
     out.append(f"TARGET = {plan.target!r}\n")
     out.append(f"FREE_JOINTS = {tuple(plan.free)!r}\n")
-    out.append(f"LOWER = np.array({_array(chain.lower)})\n")
-    out.append(f"UPPER = {_array(chain.upper)}\n")
+    out.append(f"LOWER = np.array({_array(output.lower)})  # joint limits, JOINT_NAMES order\n")
+    out.append(f"UPPER = np.array({_array(output.upper)})\n")
     out.append(f"SCALE = {_num(scale)}  # robot size; tolerances are relative to it\n")
     out.append(f"TOLERANCE = {_num(tol)}  # a solution is exact when its error <= TOLERANCE * SCALE\n")
     out.append(f"MAX_SOLUTIONS = {slots}\n")
@@ -113,7 +118,11 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float)
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
     out.append(f"_A = np.array({_array(A)})  # all joint values = _A @ q + _B\n")
     out.append(f"_B = np.array({_array(b)})\n")
-    out.append(f"_INDEPENDENT = {tuple(chain.independent)!r}\n")
+    out.append(f"_INDEPENDENT = {tuple(output.independent)!r}  # returned joints, JOINT_NAMES order\n")
+    out.append(f"_VARY = {tuple(chain.independent)!r}  # joints Newton steps move (a virtual roll too)\n")
+    out.append(f"_VARY_LOWER = np.array({_array(chain.lower)})\n")
+    out.append(f"_VARY_UPPER = np.array({_array(chain.upper)})\n")
+    out.append(f"_SOLVE_TARGET = {'pose' if plan.virtual else plan.target!r}  # what the chain solves for\n")
     out.append(f"_FREE = {tuple(free_idx)!r}  # positions of the free joints in JOINT_NAMES\n")
     out.append(f"_N_GROUPS = {plan.n_groups}\n")
     out.append(f"_POLISH = {10 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
@@ -142,6 +151,7 @@ BODY = '''
 def fk(q):
     """Tool pose (4x4) for joint values q in JOINT_NAMES order."""
     q = np.asarray(q, dtype=float).reshape(1, -1)
+    q = np.concatenate([q, np.zeros((1, len(_VARY) - q.shape[1]))], axis=1)  # virtual joints at 0
     return _rt.fk_batch(_TWISTS, q @ _A.T + _B, _HOME)[0]
 
 
@@ -169,7 +179,7 @@ def _targets(Ts):
         Td = goals @ _HOME_INV
     if not np.all(np.isfinite(goals)):
         raise ValueError("target contains NaN or infinity")
-    if TARGET in ("pose", "orientation"):
+    if TARGET in ("pose", "orientation", "position+direction"):
         R = goals[:, :3, :3]
         ortho = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
         if np.any(ortho > 1e-6) or np.any(np.abs(np.linalg.det(R) - 1) > 1e-6):
@@ -182,6 +192,9 @@ def _error(G, goals):
         return np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
     if TARGET == "orientation":  # radians-like, scaled to lengths like the pose error
         return SCALE * np.abs(G[:, :3, :3] - goals[:, :3, :3]).max(axis=(1, 2))
+    if TARGET == "position+direction":  # the tool origin and its z axis; the roll is free
+        dp = np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
+        return np.maximum(dp, SCALE * np.abs(G[:, :3, 2] - goals[:, :3, 2]).max(axis=1))
     return _rt.pose_error(G, goals, SCALE)
 
 
@@ -198,20 +211,20 @@ def _solve_chunk(goals, Td, init, limits):
     N = len(goals)
     if METHOD == "numerical":
         step = _STEPS[0]
-        lo, hi = np.maximum(LOWER, -SCALE), np.minimum(UPPER, SCALE)
+        lo, hi = np.maximum(_VARY_LOWER, -SCALE), np.minimum(_VARY_UPPER, SCALE)
         Q0, owner = _rt.numerical_seeds(N, step["starts"], lo, hi)
         TH = Q0 @ _A.T + _B
         fixed = ~np.isnan(init[owner])
         TH = np.where(fixed, init[owner], TH)
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                        independent=_INDEPENDENT, target=TARGET, iters=step["iters"])
+                        independent=_VARY, target=_SOLVE_TARGET, iters=step["iters"])
         ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
-                "target": TARGET}
+                "target": _SOLVE_TARGET}
         TH, owner = _rt.run_search(step, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
         TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                        independent=_INDEPENDENT, target=TARGET, iters=8)
+                        independent=_VARY, target=_SOLVE_TARGET, iters=8)
         ls = cont = np.zeros(len(TH), dtype=bool)
     else:
         TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
@@ -225,17 +238,17 @@ def _solve_chunk(goals, Td, init, limits):
             # A self-motion: the representative a step chose may not complete the pose; Newton steps
             # on every joint pull it onto a nearby exact solution of the continuum.
             TH[cont] = _rt.polish(TH[cont], goals[owner[cont]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                                  independent=_INDEPENDENT, target=TARGET, iters=60)
+                                  independent=_VARY, target=_SOLVE_TARGET, iters=60)
         if _POLISH and len(TH):
             TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                            independent=_INDEPENDENT, target=TARGET, iters=_POLISH)
+                            independent=_VARY, target=_SOLVE_TARGET, iters=_POLISH)
     if len(TH):
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
         err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
         near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
         if near.any():
             TH[near] = _rt.polish(TH[near], goals[owner[near]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                                  independent=_INDEPENDENT, target=TARGET, iters=3)
+                                  independent=_VARY, target=_SOLVE_TARGET, iters=3)
     return _rt.finish(TH, owner, ls, N, twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
                       slots=MAX_SOLUTIONS, error=_error, cont=cont,

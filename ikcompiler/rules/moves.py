@@ -33,6 +33,7 @@ class Context:
     target: str = "pose"
     tol: Tolerance = field(default_factory=Tolerance)
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    couplings: tuple = ()  # (joint, master, a, b) index tuples
 
     @property
     def n(self) -> int:
@@ -239,6 +240,44 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
     return moves
 
 
+def _coupled_distance_move(ctx, frames, base, lead, mid, why) -> list[dict]:
+    """Rule 3 when the two middle joints are coupled revolute joints: one unknown, a root search."""
+    pair = {(dep, master): (a, b) for dep, master, a, b in ctx.couplings}
+    j, k = mid
+    if ctx.kinds[j] != "R" or ctx.kinds[k] != "R":
+        return []
+    if (k, j) in pair:
+        var, coupling = j, pair[(k, j)]
+    elif (j, k) in pair:
+        var, coupling = k, pair[(j, k)]
+    else:
+        return []
+    if abs(coupling[0]) > 3:
+        return []
+    if len(lead) == 1:
+        c0, c_exact = _axis_point(ctx, lead[0]), True
+    else:
+        c0, c_exact = _concurrent(ctx, frames, lead)
+    if c0 is None:
+        return []
+    return [
+        dict(
+            base,
+            snapped=base["snapped"] or not c_exact,
+            kind="S3C",
+            code="S3-1D",
+            solve=[var],
+            solve_pair=list(mid),
+            var=var,
+            coupling=[float(coupling[0]), float(coupling[1])],
+            lead=lead,
+            c0=[float(x) for x in c0],
+            rule=f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}; "
+            f"{_name_list(ctx, mid)} are coupled: one angle, all roots of the distance equation",
+        )
+    ]
+
+
 def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> list[dict]:
     base = {"known": known, "inverted": inverted, "trail": trail, "p0": [float(x) for x in p0]}
     base["snapped"] = not exact
@@ -248,7 +287,12 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
         moves.append(dict(base, kind="S2", code=code, solve=list(rest), rule=f"{why}: point to point"))
     for i in range(1, len(rest)):
         lead, mid = rest[:i], rest[i:]
-        if len(mid) != 1 or any(ctx.kinds[j] != "R" for j in lead):
+        if any(ctx.kinds[j] != "R" for j in lead):
+            continue
+        if len(mid) == 2:
+            moves += _coupled_distance_move(ctx, frames, base, lead, mid, why)
+            continue
+        if len(mid) != 1:
             continue
         if i == 1:
             c0, c_exact = _axis_point(ctx, lead[0]), True

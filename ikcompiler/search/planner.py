@@ -23,9 +23,9 @@ import networkx as nx
 import numpy as np
 
 from ikcompiler.rules.moves import Context, propose
-from subproblems import codes, max_solutions, solve_batch
+from subproblems import codes, max_solutions
 from subproblems.core import SubproblemError
-from subproblems.plan_runtime import _step_inputs
+from subproblems.plan_runtime import COUPLED_ROOT_SLOTS, solve_step
 from subproblems.screw import inverse_transform
 
 # Price of each subproblem beyond its branching: closed-form geometry is cheap, eliminations are not.
@@ -36,6 +36,8 @@ GENERAL_PRICE = {"S2-RRR": 3.0, "S2-RRT": 1.0, "S2-TRR": 1.0, "S2-RTR": 1.5, "S1
 def move_cost(code: str) -> float:
     if code == "SUM":
         return PRICE["SUM"]
+    if code == "S3-1D":  # a coupled pair's distance equation: a root search, priced above closed form
+        return math.log2(COUPLED_ROOT_SLOTS) + 1.0
     prefix = code.split("-")[0]
     if code not in codes():
         return math.inf  # no solver registered for this subproblem type
@@ -116,8 +118,7 @@ def validate(ctx: Context, move: dict, trials: Trials, couplings, tol: float) ->
     th = trials.theta
     TH = np.where(np.isin(np.arange(ctx.n), move["known"]), th, np.nan)
     try:
-        tw, inputs = _step_inputs(move, ctx.twists, ctx.kinds, trials.Td, TH, None)
-        res = solve_batch(move["code"], tw, **inputs)
+        res = solve_step(move, ctx.twists, ctx.kinds, trials.Td, TH)
     except (SubproblemError, KeyError, ValueError, np.linalg.LinAlgError) as exc:
         return f"{type(exc).__name__}: {exc}"
     if res.continuum.any():
