@@ -300,6 +300,8 @@ def polish_batch(tw, p, q, th, scale, iters: int = 6):
     f = x - q[:, None, :]
     r = np.linalg.norm(f, axis=-1)
     for _ in range(iters):
+        if not np.any(r > 1e-15 * scale[:, None]):
+            break  # every candidate is already exact to roundoff: skip the remaining iterations
         JtJ = np.swapaxes(J, -1, -2) @ J
         mu = 1e-14 * (np.trace(JtJ, axis1=-2, axis2=-1) + 1e-300)
         A = JtJ + mu[..., None, None] * np.eye(m)
