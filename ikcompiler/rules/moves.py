@@ -254,28 +254,28 @@ def _coupled_distance_move(ctx, frames, base, lead, mid, why) -> list[dict]:
         return []
     if abs(coupling[0]) > 3:
         return []
-    if len(lead) == 1:
-        c0, c_exact = _axis_point(ctx, lead[0]), True
-    else:
-        c0, c_exact = _concurrent(ctx, frames, lead)
+    c0, c_exact = _fixed_center(ctx, frames, lead)
     if c0 is None:
         return []
-    return [
-        dict(
-            base,
-            snapped=base["snapped"] or not c_exact,
-            kind="S3C",
-            code="S3-1D",
-            solve=[var],
-            solve_pair=list(mid),
-            var=var,
-            coupling=[float(coupling[0]), float(coupling[1])],
-            lead=lead,
-            c0=[float(x) for x in c0],
-            rule=f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}; "
-            f"{_name_list(ctx, mid)} are coupled: one angle, all roots of the distance equation",
-        )
-    ]
+    rule = (
+        f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}; "
+        f"{_name_list(ctx, mid)} are coupled: one angle, all roots of the distance equation"
+    )
+    extra = {"solve_pair": list(mid), "var": var, "coupling": [float(coupling[0]), float(coupling[1])]}
+    return [_lead_move(base, c_exact, "S3C", "S3-1D", [var], lead, rule, c0=[float(x) for x in c0], **extra)]
+
+
+def _fixed_center(ctx, frames, lead):
+    """A point fixed by the leading revolute joints: on the axis (one joint) or their common point."""
+    if len(lead) == 1:
+        return _axis_point(ctx, lead[0]), True
+    return _concurrent(ctx, frames, lead)
+
+
+def _lead_move(base, exact, kind, code, solve, lead, rule, **extra) -> dict:
+    """A point move that also uses the leading joints ``lead`` (rules 3 and 6)."""
+    snapped = base["snapped"] or not exact
+    return dict(base, snapped=snapped, kind=kind, code=code, solve=list(solve), lead=lead, rule=rule, **extra)
 
 
 def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> list[dict]:
@@ -294,49 +294,21 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
             continue
         if len(mid) != 1:
             continue
-        if i == 1:
-            c0, c_exact = _axis_point(ctx, lead[0]), True
-        else:
-            c0, c_exact = _concurrent(ctx, frames, lead)
+        c0, c_exact = _fixed_center(ctx, frames, lead)
         if c0 is not None:
-            moves.append(
-                dict(
-                    base,
-                    snapped=base["snapped"] or not c_exact,
-                    kind="S3",
-                    code=_code("S3", ctx, mid),
-                    solve=list(mid),
-                    lead=lead,
-                    c0=[float(x) for x in c0],
-                    rule=f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}",
-                )
-            )
+            rule = f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}"
+            code = _code("S3", ctx, mid)
+            moves.append(_lead_move(base, c_exact, "S3", code, mid, lead, rule, c0=[float(x) for x in c0]))
         signs, p_exact = _parallel(ctx, frames, lead)
         if signs is not None:
-            moves.append(
-                dict(
-                    base,
-                    snapped=base["snapped"] or not p_exact,
-                    kind="HL",
-                    code=_code("H", ctx, mid),
-                    solve=list(mid),
-                    lead=lead,
-                    rule=f"{why}; rule 6: projection on the common axis of {_name_list(ctx, lead)}",
-                )
-            )
+            rule = f"{why}; rule 6: projection on the common axis of {_name_list(ctx, lead)}"
+            moves.append(_lead_move(base, p_exact, "HL", _code("H", ctx, mid), mid, lead, rule))
     if len(rest) >= 2 and all(ctx.kinds[j] == "R" for j in rest[1:]):
         signs, p_exact = _parallel(ctx, frames, rest[1:])
         if signs is not None:
-            moves.append(
-                dict(
-                    base,
-                    snapped=base["snapped"] or not p_exact,
-                    kind="HT",
-                    code=_code("H", ctx, rest[:1]),
-                    solve=list(rest[:1]),
-                    lead=rest[1:],
-                    rule=f"{why}; rule 6: the parallel axes of {_name_list(ctx, rest[1:])} keep the "
-                    "component along their direction",
-                )
+            rule = (
+                f"{why}; rule 6: the parallel axes of {_name_list(ctx, rest[1:])} keep the "
+                "component along their direction"
             )
+            moves.append(_lead_move(base, p_exact, "HT", _code("H", ctx, rest[:1]), rest[:1], rest[1:], rule))
     return moves
