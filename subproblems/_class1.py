@@ -118,8 +118,17 @@ def prismatic_lstsq(twists, kinds, q, pT) -> tuple[np.ndarray, bool]:
         return q, False
     a, B = affine_translation(twists, kinds, q)
     sv = np.linalg.svd(B, compute_uv=False)
-    q[ip] = np.linalg.lstsq(B, pT - a, rcond=RANK_TOL)[0]
-    return q, bool(sv.min() <= RANK_TOL * max(1.0, sv.max()))
+    rhs = pT - a
+    d = np.linalg.lstsq(B, rhs, rcond=RANK_TOL)[0]
+    dep = bool(sv.min() <= RANK_TOL * max(1.0, sv.max()))
+    if dep and sv.min() > 0.0:
+        # nearly dependent directions: prefer the full solve when only it satisfies the translation
+        tol = EXACT_TOL * max(1.0, float(np.linalg.norm(pT)))
+        d_full = np.linalg.lstsq(B, rhs, rcond=1e-15)[0]
+        if np.linalg.norm(B @ d - rhs) > tol and np.linalg.norm(B @ d_full - rhs) <= tol:
+            d, dep = d_full, False
+    q[ip] = d
+    return q, dep
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -288,7 +297,7 @@ def polish(twists, q, T, scale, fixed=(), iters: int = 5) -> np.ndarray:
     return q
 
 
-def finalize(kinds: str, twists, T, cands, scale) -> list[Solution]:
+def finalize(kinds: str, twists, T, cands, scale, max_count: int = 0) -> list[Solution]:
     scored = []
     for q, cont, fixed in cands:
         q = np.asarray(q, dtype=float)
@@ -309,6 +318,9 @@ def finalize(kinds: str, twists, T, cands, scale) -> list[Solution]:
     for s in exact:
         if all(joint_distance(kinds, s[1], k[1]) > DEDUP_TOL for k in kept):
             kept.append(s)
+    # Never more than theory allows: near a continuum (e.g. nearly coincident parallel axes) several
+    # distinct candidates can each meet the tolerance; the best ones are kept.
+    kept = kept[:max_count] if max_count else kept
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in q), continuum=cont) for _, q, cont in kept]
 
@@ -319,7 +331,9 @@ def solve_class1(code: str, twists, T) -> list[Solution]:
     twists = np.asarray(twists, dtype=float)
     T = np.asarray(T, dtype=float)
     scale = problem_scale(twists, T)
-    return finalize(kinds, twists, T, candidates(kinds, twists, T, scale), scale)
+    from subproblems.core import max_solutions
+
+    return finalize(kinds, twists, T, candidates(kinds, twists, T, scale), scale, max_solutions(code))
 
 
 # ----------------------------------------------------------------------------------------------------
