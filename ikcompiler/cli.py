@@ -47,6 +47,10 @@ def _cmd_compile(args) -> int:
         f"wrote {out}: {module.JOINT_TYPES} solver, method {module.METHOD}, "
         f"up to {module.MAX_SOLUTIONS} solutions"
     )
+    if module.METHOD != "closed-form":
+        print(
+            f"note: no closed-form chain; see `ikc explain {args.robot}` for what was tried", file=sys.stderr
+        )
     return 0
 
 
@@ -67,7 +71,13 @@ def _cmd_verify(args) -> int:
     chain = load_robot(args.robot, base=args.base, tip=args.tip)
     module = compile_robot(chain, target=args.target, free=args.free)
     print(f"verifying {chain.name} on {args.samples} random poses ...", file=sys.stderr)
-    report = verify(chain, module, samples=args.samples, seed=args.seed)
+
+    def progress(done, total):
+        print(f"  solved {done}/{total} poses", file=sys.stderr, flush=True)
+
+    report = verify(
+        chain, module, samples=args.samples, seed=args.seed, progress=progress, special=args.special
+    )
     print(report.text())
     return 0 if report.ok else 1
 
@@ -106,6 +116,9 @@ def build_parser() -> argparse.ArgumentParser:
     _compile_args(p)
     p.add_argument("--samples", type=int, default=200, help="number of random poses (default 200)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--special", type=float, default=0.25, help="chance of a special angle 0, +-pi/2, pi per joint (0.25)"
+    )
     p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)

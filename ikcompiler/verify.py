@@ -51,7 +51,8 @@ class VerifyReport:
         )
 
 
-def sample_configurations(chain, count: int, seed: int = 0, free_values=None) -> np.ndarray:
+def sample_configurations(chain, count: int, seed: int = 0, special: float = 0.25) -> np.ndarray:
+    """Joint values inside the limits; each revolute value is a special angle with probability ``special``."""
     rng = np.random.default_rng(seed)
     lo = np.where(np.isfinite(chain.lower), chain.lower, -math.pi)
     hi = np.where(np.isfinite(chain.upper), chain.upper, math.pi)
@@ -60,11 +61,11 @@ def sample_configurations(chain, count: int, seed: int = 0, free_values=None) ->
         if k == "T" and not (np.isfinite(chain.lower[c]) and np.isfinite(chain.upper[c])):
             lo[c], hi[c] = -chain.scale, chain.scale
     Q = rng.uniform(lo, hi, size=(count, chain.dof))
-    special = rng.random(size=Q.shape) < 0.25
+    snap = rng.random(size=Q.shape) < special
     pick = SPECIAL[rng.integers(0, len(SPECIAL), size=Q.shape)]
     for c, k in enumerate(kinds):
         if k == "R":
-            ok = special[:, c] & (pick[:, c] >= lo[c]) & (pick[:, c] <= hi[c])
+            ok = snap[:, c] & (pick[:, c] >= lo[c]) & (pick[:, c] <= hi[c])
             Q[ok, c] = pick[ok, c]
     return Q
 
@@ -77,14 +78,26 @@ def _same(a, b, kinds) -> np.ndarray:
     return np.abs(d).max(axis=-1)
 
 
-def verify(chain, module, samples: int = 200, seed: int = 0, scalar_checks: int = 20) -> VerifyReport:
-    Q = sample_configurations(chain, samples, seed)
+VERIFY_CHUNK = 500
+
+
+def verify(
+    chain, module, samples: int = 200, seed: int = 0, scalar_checks: int = 20, progress=None, special=0.25
+) -> VerifyReport:
+    """Sample, solve and count (see the module docstring); ``progress(done, total)`` after each chunk."""
+    Q = sample_configurations(chain, samples, seed, special)
     kinds = [chain.joints[i].kind for i in chain.independent]
     G = chain.fk_batch(Q)
     targets = {"position": G[:, :3, 3], "orientation": G[:, :3, :3]}.get(module.TARGET, G)
     free_pos = [chain.independent_names.index(f) for f in module.FREE_JOINTS]
     free = [Q[:, p] for p in free_pos]
-    S, filled, ls, _, cont = module.solve_batch_info(targets, *free)
+    parts = []
+    for start in range(0, samples, VERIFY_CHUNK):
+        stop = min(samples, start + VERIFY_CHUNK)
+        parts.append(module.solve_batch_info(targets[start:stop], *[f[start:stop] for f in free]))
+        if progress is not None:
+            progress(stop, samples)
+    S, filled, ls, _, cont = (np.concatenate(x) for x in zip(*parts))
     valid = filled & ~ls
     scale = chain.scale
     errs, wrong, recovered, solutions, self_motion, unsolved = [], 0, 0, 0, 0, 0
