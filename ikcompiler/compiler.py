@@ -55,17 +55,7 @@ def with_tool_roll(chain: Chain) -> Chain:
     from subproblems.screw import revolute_twist
 
     roll = Joint(VIRTUAL_ROLL, "R", revolute_twist(chain.home[:3, 2], chain.home[:3, 3]))
-    return Chain(
-        chain.name,
-        chain.joints + (roll,),
-        chain.home,
-        chain.couplings,
-        chain.base,
-        chain.tip,
-        chain.units,
-        chain.source,
-        chain.notes,
-    )
+    return dataclasses.replace(chain, joints=chain.joints + (roll,))
 
 
 def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> Plan:

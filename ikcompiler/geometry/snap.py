@@ -18,6 +18,8 @@ Rules, in chain order:
 
 from __future__ import annotations
 
+import dataclasses
+
 from ikcompiler.geometry.relations import Tolerance, lines_meet, parallel_miss, twist_line
 from ikcompiler.model import Chain, Joint
 from subproblems.screw import prismatic_twist, revolute_twist
@@ -84,17 +86,7 @@ def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[
         Joint(j.name, j.kind, revolute_twist(d, p) if j.kind == "R" else prismatic_twist(d), j.lower, j.upper)
         for j, d, p in zip(chain.joints, dirs, points)
     )
-    snapped = Chain(
-        f"{chain.name} (snapped)",
-        joints,
-        chain.home,
-        chain.couplings,
-        chain.base,
-        chain.tip,
-        chain.units,
-        chain.source,
-    )
-    return snapped, notes
+    return dataclasses.replace(chain, name=f"{chain.name} (snapped)", joints=joints), notes
 
 
 __all__ = ["snap_chain", "twist_line"]
