@@ -33,8 +33,11 @@ Degenerate cases and what is returned:
   planar case); flagged ``continuum``;
 * the slid point on axis 2 with ``y`` on it too: ``th_2 = 0``, flagged ``continuum``.
 
-The vectorised path is the algebraic one for every instance (the scalar path takes the geometric
-shortcut when axes 1 and 2 intersect), so the two paths check each other.
+The vectorised path is the algebraic one for skew and parallel axes 1, 2 (there it checks the
+scalar path's own algebra with another root finder); for intersecting axes it takes the same
+law-of-cosines shortcut as the scalar path, followed by the algebraic S2-RR candidates of
+``solve_s2_rr_batch`` (the eliminant's multiple roots there are not accurate enough to decide
+duplicates or free joints).
 
 >>> import numpy as np
 >>> from subproblems import solve
@@ -74,7 +77,7 @@ from subproblems._class2 import (
     trig_roots_batch,
 )
 from subproblems.core import BatchResult, Solution, register
-from subproblems.s2_rr import PARALLEL_TOL, rr_candidates
+from subproblems.s2_rr import PARALLEL_TOL, rr_candidates, rr_theta1_candidates_batch
 
 
 def _eliminant(x1, x2, x3, p, q):
@@ -213,10 +216,60 @@ def rrt_batch(tw, p, q) -> BatchResult:
     rep[4:] = True
     is_rep = np.repeat(rep, 3)[None, :]
     fin = np.isfinite(cand).all(-1) & (~is_rep | free1[:, None])
-    # with a free th_1, prefer the th_1 = 0 representative when it works (as the scalar path)
+    # Intersecting axes 1, 2: the construction of the scalar path (law of cosines for t, then S2-RR).
+    # At a multiple root of the eliminant (tangent circles, a slid point on axis 2, ...) its
+    # eigenvalues are only accurate to eps^(1/k); the polished copies then stay up to ~1e-6 apart or
+    # ~1e-6 off an axis, so they neither deduplicate nor reveal a free joint.  The law of cosines
+    # clamps its discriminant and hands S2-RR the exact slid point, as the scalar path does.
+    inter, cand_i, free_i = _intersecting_candidates(tw, p, q, scale)
+    fin &= ~inter[:, None]
+    free1 = free1 & ~inter
     cand = np.where(fin[..., None], cand, np.nan)
+    cand = np.concatenate([cand, cand_i], axis=1)
+    free2 = np.concatenate([free2, free_i], axis=1)
     r = finalize_batch("S2-RRT", tw, p, q, cand, free2, free1)
+    # with a free th_1, prefer the th_1 = 0 representative when it works (as the scalar path)
     return _prefer_zero_rep(r, free1)
+
+
+@np.errstate(all="ignore")
+def _intersecting_candidates(tw, p, q, scale):
+    """Vectorised intersecting-axes branch of :func:`rrt_candidates`.
+
+    Returns the mask of instances whose axes 1 and 2 intersect (N,), candidates (N, 12, 3) (NaN for
+    the other instances) and their free flags (N, 12).
+    """
+    x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
+    w1, w2, v = x1[:, 3:], x2[:, 3:], x3[:, :3]
+    r1, r2 = np.cross(w1, x1[:, :3]), np.cross(w2, x2[:, :3])
+    n = np.cross(w1, w2)
+    nn = np.linalg.norm(n, axis=-1)
+    nz = np.where(nn > PARALLEL_TOL, nn, 1.0)
+    inter = (nn > PARALLEL_TOL) & (np.abs(np.sum((r2 - r1) * n, -1)) / nz <= FREE_TOL * scale)
+    # the common point c = r1 + a w1 (least squares of r1 + a w1 = r2 + b w2, as the scalar path)
+    c12 = np.sum(w1 * w2, -1)
+    d = r2 - r1
+    det = np.where(inter, nn * nn, 1.0)  # |w1 x w2|^2 = 1 - (w1 . w2)^2, accurately
+    a = (np.sum(w1 * d, -1) - c12 * np.sum(w2 * d, -1)) / det
+    c = r1 + a[:, None] * w1
+    pc, qc = p - c, q - c
+    t = quadratic_roots_batch(np.ones_like(a), 2 * np.sum(pc * v, -1), np.sum(pc * pc - qc * qc, -1))
+    N = len(a)
+    # S2-RR for each t: instances (N, 2) flattened to (2N,)
+    pt = (p[:, None] + t[..., None] * v[:, None]).reshape(-1, 3)
+    x1r, x2r = np.repeat(x1, 2, axis=0), np.repeat(x2, 2, axis=0)
+    qr, sr = np.repeat(q, 2, axis=0), np.repeat(scale, 2)
+    th1, _ = rr_theta1_candidates_batch(x1r, x2r, pt, qr, sr)  # (2N, 6)
+    c0, cc, cs = circle_of_batch(x1r, qr)
+    y = c0[:, None] + cc[:, None] * np.cos(th1)[..., None] - cs[:, None] * np.sin(th1)[..., None]
+    th2, f2 = rotation_angle_batch(x2r[:, None], pt[:, None], y, sr[:, None])
+    f1 = np.linalg.norm(cc, axis=-1)[:, None] <= FREE_TOL * sr[:, None]
+    K = th1.shape[1]
+    T = np.broadcast_to(t.reshape(-1)[:, None], th1.shape)
+    cand = np.stack([th1, th2, T], -1).reshape(N, 2 * K, 3)
+    free = np.broadcast_to(f1 | f2, th1.shape).reshape(N, 2 * K)
+    cand = np.where(inter[:, None, None], cand, np.nan)
+    return inter, cand, free
 
 
 def _prefer_zero_rep(r: BatchResult, free1) -> BatchResult:

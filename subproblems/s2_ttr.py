@@ -15,7 +15,8 @@ Degenerate cases and what is returned:
 * the circle of ``p`` misses the plane: the angle bringing it closest, then least-squares
   translations, flagged ``ls``;
 * ``n`` parallel to the axis, or ``p`` on the axis: the plane condition holds for every angle (or
-  none): ``th = 0``, flagged ``continuum`` (``ls`` if it holds for none);
+  none): ``th = 0``, flagged ``continuum`` (``ls`` if it holds for none); likewise when it holds to
+  within the exactness tolerance for every angle (an axis nearly parallel to ``n``);
 * parallel translations (``v_1 = +-v_2``): only ``t_1 +- t_2`` matters: ``t_2 = 0`` and S2-TR for
   ``(t_1, th)``, flagged ``continuum``.
 
@@ -36,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from subproblems._class2 import (
+    EXACT_TOL,
     circle_of,
     finalize,
     inverted,
@@ -58,7 +60,13 @@ def ttr_candidates(twists, p, q, scale):
         return [((t1, 0.0, th), free) for (t1, th), free in tr_candidates([x1, x3], p, q, scale)], True
     n = n / nn
     c0, cc, cs = circle_of(x3, p)
-    roots = trig_roots(float(n @ (c0 - q)), float(n @ cc), float(n @ cs), ref=scale)
+    f0, c1, s1 = float(n @ (c0 - q)), float(n @ cc), float(n @ cs)
+    # With the translations solved by least squares, the whole residual is |f0 + c1 cos + s1 sin|.
+    # When it is within EXACT_TOL * scale for every angle (e.g. an axis tilted from the plane's
+    # normal by ~1e-10), every angle is an exact solution: a continuum at the exactness level.
+    # Roots of such a tiny sinusoid are roundoff (a double root splits by ~1e-3), not solutions.
+    flat = abs(f0) + float(np.hypot(c1, s1)) <= EXACT_TOL * scale
+    roots = None if flat else trig_roots(f0, c1, s1, ref=scale)
     cont = roots is None
     V = np.column_stack([v1, v2])
     out = []
