@@ -47,7 +47,6 @@ import numpy as np
 from subproblems._class3 import (
     EXACT_TOL,
     FREE_TOL,
-    TINY,
     batch_inputs,
     circle,
     circle_batch,
@@ -77,7 +76,9 @@ def plane_residual(twists, qrow, p=None, h=None, d=None, **_) -> float:
 
 
 def _scale(*norms) -> float:
-    return max(max(norms), TINY)
+    # Floored at 1 (user units), as in class II: geometry at the origin (p = 0, d = 0) has no size of
+    # its own, and a zero scale would call roundoff of 1e-18 inexact.
+    return max(max(norms), 1.0)
 
 
 def rotate_to_plane(xi, p, h, d: float) -> list[Solution]:
@@ -164,7 +165,7 @@ def _h_r_batch(tw, p, h, d):
     scale = np.maximum.reduce(
         [np.linalg.norm(p, axis=1), np.linalg.norm(a, axis=1), np.abs(dn), np.linalg.norm(b, axis=1)]
     )
-    scale = np.maximum(scale, TINY)
+    scale = np.maximum(scale, 1.0)
     A = np.where(zero, 0.0, np.sum(hu * b, axis=1))
     B = np.where(zero, 0.0, np.sum(hu * e, axis=1))
     C = np.where(zero, d, dn - np.sum(hu * a, axis=1))
@@ -178,7 +179,7 @@ def _h_t_batch(tw, p, h, d):
     x = batch_inputs("H-T", tw, p=p, h=h, d=d)
     xi, p, h, d = x["xi"], x["p"], x["h"], x["d"]
     hu, dn, zero = _normalised(h, d)
-    scale = np.maximum(np.maximum(np.linalg.norm(p, axis=1), np.abs(dn)), TINY)
+    scale = np.maximum(np.maximum(np.linalg.norm(p, axis=1), np.abs(dn)), 1.0)
     A = np.where(zero, 0.0, np.sum(hu * xi[:, :3], axis=1))
     C = np.where(zero, d, dn - np.sum(hu * p, axis=1))
     free = np.abs(A) <= FREE_TOL

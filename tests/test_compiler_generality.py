@@ -46,7 +46,7 @@ _len = st.sampled_from([0.0, 0.0, 0.1, 0.25, 0.4])
 _alpha = st.sampled_from([0.0, math.pi / 2, -math.pi / 2, math.pi / 3])
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 @given(
     st.lists(st.tuples(_len, _alpha, _len), min_size=6, max_size=6),
     st.sampled_from(["RRRRRR", "RRRRRR", "TRRRRR", "RRTRRR", "RRRTRR"]),

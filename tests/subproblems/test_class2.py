@@ -211,10 +211,31 @@ def test_scalar_and_vectorised_paths_agree(code, data):
         if r.continuum:
             continue
         Es, Eb = _exact_set(r.q, r.ls), _exact_set(Qb, lsb)
+        same = _same_root_check(code, tws[i], ps[i], qs[i], kinds, scale)
         for row in Es:
-            assert contains_solution(Eb, row, kinds, 1e-6), f"batch misses {row}"
+            assert any(same(row, other) for other in Eb), f"batch misses {row}"
         for row in Eb:
-            assert contains_solution(Es, row, kinds, 1e-6), f"scalar misses {row}"
+            assert any(same(row, other) for other in Es), f"scalar misses {row}"
+
+
+def _same_root_check(code, tw, p, q, kinds, scale):
+    """Two exact rows are the same solution: equal to 1e-6, or a hair apart (< 1e-3) around a double
+    root, where both pass the residual test and so does every point between them: at a tangency the
+    root is only located to about sqrt(tolerance), so the two paths may pick different points of it."""
+
+    def same(a, b):
+        if contains_solution(np.atleast_2d(b), a, kinds, 1e-6):
+            return True
+        if not contains_solution(np.atleast_2d(b), a, kinds, 1e-3):
+            return False
+        diff = np.array(
+            [math.remainder(y - x, 2 * math.pi) if k == "R" else y - x for k, x, y in zip(kinds, a, b)]
+        )
+        return all(
+            np.linalg.norm(fk_point(tw, a + f * diff, p) - q) <= TOL * scale for f in (0.25, 0.5, 0.75)
+        )
+
+    return same
 
 
 # ---------------------------------------------------------------------------------------------------
