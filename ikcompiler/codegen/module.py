@@ -62,7 +62,7 @@ STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lea
 STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters", "solve_pair", "var", "coupling")
 
 
-def _step_source(k: int, step: dict, line: str) -> str:
+def _step_source(step: dict, line: str) -> str:
     body = ", ".join(f"{f!r}: {_literal(step[f])}" for f in STEP_FIELDS if f in step)
     return f"    # {line}\n    {{{body}}},\n"
 
@@ -129,8 +129,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_SEARCH = {_literal(list(plan.search))}  # joints gridded by the search fallback\n")
     out.append(f"_GRID = {plan.grid}\n")
     out.append("_STEPS = [\n")
-    for k, (step, line) in enumerate(zip(plan.steps, lines), start=1):
-        out.append(_step_source(k, step, line))
+    for step, line in zip(plan.steps, lines):
+        out.append(_step_source(step, line))
     out.append("]\n")
     out.append(
         "# Alternative chain, run for the targets where a step above meets a continuum (a joint left\n"
@@ -138,7 +138,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append("# free by that step's geometry but fixed by the rest of the target).\n")
     out.append("_ALT_STEPS = [\n")
     for step, line in zip(plan.alternative, plan.step_lines(plan.alternative)):
-        out.append(_step_source(0, step, line))
+        out.append(_step_source(step, line))
     out.append("]\n")
     out.append(BODY)
     text = "".join(out)
@@ -207,6 +207,12 @@ def _init(N, free):
     return init
 
 
+def _newton(TH, goals, iters):
+    """Newton steps on the true robot for candidate rows TH toward their goals."""
+    return _rt.polish(TH, goals, twists=_TWISTS, home=_HOME, A=_A, b=_B, independent=_VARY,
+                      target=_SOLVE_TARGET, iters=iters)
+
+
 def _solve_chunk(goals, Td, init, limits):
     N = len(goals)
     if METHOD == "numerical":
@@ -216,15 +222,13 @@ def _solve_chunk(goals, Td, init, limits):
         TH = Q0 @ _A.T + _B
         fixed = ~np.isnan(init[owner])
         TH = np.where(fixed, init[owner], TH)
-        TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                        independent=_VARY, target=_SOLVE_TARGET, iters=step["iters"])
+        TH = _newton(TH, goals[owner], step["iters"])
         ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
                 "target": _SOLVE_TARGET}
         TH, owner = _rt.run_search(step, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
-        TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                        independent=_VARY, target=_SOLVE_TARGET, iters=8)
+        TH = _newton(TH, goals[owner], 8)
         ls = cont = np.zeros(len(TH), dtype=bool)
     else:
         TH, owner, ls, _, cont = _rt.run_plan(_STEPS, _PLAN_TWISTS, _KINDS, Td, _COUPLINGS, _N_GROUPS, init)
@@ -237,18 +241,15 @@ def _solve_chunk(goals, Td, init, limits):
         if cont.any():
             # A self-motion: the representative a step chose may not complete the pose; Newton steps
             # on every joint pull it onto a nearby exact solution of the continuum.
-            TH[cont] = _rt.polish(TH[cont], goals[owner[cont]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                                  independent=_VARY, target=_SOLVE_TARGET, iters=60)
+            TH[cont] = _newton(TH[cont], goals[owner[cont]], 60)
         if _POLISH and len(TH):
-            TH = _rt.polish(TH, goals[owner], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                            independent=_VARY, target=_SOLVE_TARGET, iters=_POLISH)
+            TH = _newton(TH, goals[owner], _POLISH)
     if len(TH):
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
         err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
         near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
         if near.any():
-            TH[near] = _rt.polish(TH[near], goals[owner[near]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
-                                  independent=_VARY, target=_SOLVE_TARGET, iters=3)
+            TH[near] = _newton(TH[near], goals[owner[near]], 3)
     return _rt.finish(TH, owner, ls, N, twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
                       slots=MAX_SOLUTIONS, error=_error, cont=cont,

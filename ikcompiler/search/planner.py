@@ -26,7 +26,7 @@ from ikcompiler.rules.moves import Context, propose
 from subproblems import codes, max_solutions
 from subproblems.core import SubproblemError
 from subproblems.plan_runtime import COUPLED_ROOT_SLOTS, solve_step
-from subproblems.screw import inverse_transform
+from subproblems.screw import twist_exp
 
 # Price of each subproblem beyond its branching: closed-form geometry is cheap, eliminations are not.
 PRICE = {"S1": 0.6, "S2": 0.5, "S3": 0.5, "O": 0.3, "H": 0.4, "SUM": 0.05}
@@ -70,8 +70,6 @@ class Trials:
         g = np.empty((count, 4, 4))
         for k, t in enumerate(th):
             G = np.eye(4)
-            from subproblems.screw import twist_exp
-
             for i in range(ctx.n):
                 G = G @ twist_exp(ctx.twists[i], t[i])
             g[k] = G
@@ -215,4 +213,4 @@ def finalize_steps(steps: list[dict]) -> tuple[list[dict], int]:
     return out, len(ids)
 
 
-__all__ = ["search", "validate", "finalize_steps", "move_cost", "SearchReport", "inverse_transform"]
+__all__ = ["search", "validate", "finalize_steps", "move_cost", "SearchReport"]
