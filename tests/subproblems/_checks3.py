@@ -45,6 +45,23 @@ def signed_residuals(code, tw, qrow, inputs) -> np.ndarray:
     return np.array(out)
 
 
+def random_twists(rng, kinds: str, n: int) -> np.ndarray:
+    """(n, m, 6) twists in general position, one row of joint kinds per instance."""
+    from subproblems.screw import prismatic_twist, revolute_twist
+
+    return np.array(
+        [
+            [
+                revolute_twist(rng.normal(size=3), rng.normal(size=3))
+                if k == "R"
+                else prismatic_twist(rng.normal(size=3))
+                for k in kinds
+            ]
+            for _ in range(n)
+        ]
+    )
+
+
 def near_singular(code, tw, inputs, q_true, scale) -> bool:
     """True when the equations' Jacobian at q_true is nearly rank-deficient (ill-conditioned roots)."""
     eps = 1e-6

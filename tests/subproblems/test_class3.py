@@ -20,7 +20,7 @@ from subproblems import codes, max_solutions, solve, solve_batch
 from subproblems.screw import prismatic_twist, revolute_twist
 from tests.strategies import joint_values, twist_lists
 
-from ._checks3 import check_instance, fk_point
+from ._checks3 import check_instance, fk_point, random_twists
 
 EXAMPLES = settings().max_examples
 _coord = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)
@@ -266,17 +266,7 @@ def test_pair_batch_many(code):
     rng = np.random.default_rng(5)
     n = 300
     kinds = code[3:]
-    tw = np.array(
-        [
-            [
-                revolute_twist(rng.normal(size=3), rng.normal(size=3))
-                if k == "R"
-                else prismatic_twist(rng.normal(size=3))
-                for k in kinds
-            ]
-            for _ in range(n)
-        ]
-    )
+    tw = random_twists(rng, kinds, n)
     th = rng.uniform(-math.pi, math.pi, (n, 2))
     P, Q = rng.normal(size=(n, 2, 3)), rng.normal(size=(n, 2, 3))
     D = np.array(

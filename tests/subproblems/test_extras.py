@@ -19,7 +19,7 @@ from subproblems import solve, solve_batch
 from subproblems.screw import prismatic_twist, revolute_twist
 from tests.strategies import joint_values, twist_lists, unit_vectors
 
-from ._checks3 import check_instance, fk_point
+from ._checks3 import check_instance, fk_point, random_twists
 
 EXAMPLES = settings().max_examples
 _coord = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)
@@ -216,17 +216,7 @@ def test_plane_pair_batch_many(code):
     rng = np.random.default_rng(7)
     n = 200
     kinds = code[2:]
-    tw = np.array(
-        [
-            [
-                revolute_twist(rng.normal(size=3), rng.normal(size=3))
-                if k == "R"
-                else prismatic_twist(rng.normal(size=3))
-                for k in kinds
-            ]
-            for _ in range(n)
-        ]
-    )
+    tw = random_twists(rng, kinds, n)
     th = rng.uniform(-math.pi, math.pi, (n, 2))
     P, H = rng.normal(size=(n, 2, 3)), rng.normal(size=(n, 2, 3))
     D = np.array([[H[i, k] @ fk_point(tw[i], th[i], P[i, k]) for k in range(2)] for i in range(n)])
