@@ -10,7 +10,7 @@ from __future__ import annotations
 from ikcompiler.errors import IkcError
 from ikcompiler.model import Chain, Coupling, Joint
 
-__all__ = ["Chain", "Coupling", "Joint", "IkcError", "load_robot"]
+__all__ = ["Chain", "Coupling", "Joint", "IkcError", "compile_robot", "load_robot"]
 __version__ = "0.1.0"
 
 
@@ -19,3 +19,11 @@ def load_robot(robot, *, base: str | None = None, tip: str | None = None) -> Cha
     from ikcompiler.inputs import load_robot as _load
 
     return _load(robot, base=base, tip=tip)
+
+
+def compile_robot(robot, **options):
+    """Compile a robot (a Chain, path or zoo name) into a solver module; see
+    :func:`ikcompiler.compiler.compile_robot` for the options (base, tip, target, free, tol, out)."""
+    from ikcompiler.compiler import compile_robot as _compile
+
+    return _compile(robot, **options)

@@ -1,0 +1,435 @@
+"""Emit a plan as straight-line arithmetic: the fast path of a generated module.
+
+The reference runtime (:mod:`subproblems.plan_runtime`) interprets a plan with 4x4 numpy matrices; it
+is general but pays numpy's per-call overhead on every small product.  Here the same plan is written
+out as one function of plain arithmetic with the robot's constants folded in (a joint about the z axis
+costs a cosine, a sine and a handful of products, not a matrix product), calling the kernels of
+:mod:`subproblems.fast` for the subproblems.  The function takes a *backend* ``m``: with
+``subproblems.fast.SCALAR`` it runs on floats for one pose, with ``ARRAY`` on numpy arrays over many
+poses; the solution slots of each step become nested loops over a fixed, small number of slots.
+
+Each leaf of the loop nest is one candidate: the joint values, its pose error measured by forward
+kinematics, and a ``defer`` flag for instances near a degenerate geometry (which the module hands to the
+reference path).  :func:`fast_chain_source` returns ``None`` when a plan has a step this path does
+not cover (searches, snapped robots, coupled-pair roots, subproblems without a kernel); such modules
+use the reference path alone.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from subproblems import plan_runtime as rt
+
+ZERO = 1e-15  # constants below this (rounding noise of a URDF's rpy) fold to zero
+FAST_TARGETS = ("pose", "position", "orientation")
+
+
+class Unsupported(Exception):
+    """The plan has a step the fast path does not cover."""
+
+
+def _fmt(x: float) -> str:
+    return repr(float(x)) if x != 0.0 else "0.0"
+
+
+class _Code:
+    """Lines of the emitted function, with constant folding of linear combinations."""
+
+    def __init__(self):
+        self.lines: list[str] = []
+        self.depth = 1
+        self.count = 0
+
+    def emit(self, text: str) -> None:
+        self.lines.append("    " * self.depth + text)
+
+    def let(self, expr: str, hint: str = "t") -> str:
+        name = f"{hint}{self.count}"
+        self.count += 1
+        self.emit(f"{name} = {expr}")
+        return name
+
+    def lin(self, terms, hint: str = "t"):
+        """``sum coef * value`` with values floats or names; folds to a float or a name when it can."""
+        const = 0.0
+        coefs: dict[str, float] = {}
+        for coef, value in terms:
+            if abs(coef) <= ZERO:
+                continue
+            if isinstance(value, str):
+                coefs[value] = coefs.get(value, 0.0) + coef
+            else:
+                const += coef * value
+        coefs = {k: v for k, v in coefs.items() if abs(v) > ZERO}
+        if not coefs:
+            return const if abs(const) > ZERO else 0.0
+        parts = []
+        for name, coef in coefs.items():
+            if abs(coef) <= ZERO:
+                continue
+            if coef == 1.0:
+                parts.append(f"+ {name}")
+            elif coef == -1.0:
+                parts.append(f"- {name}")
+            else:
+                parts.append(f"{'-' if coef < 0 else '+'} {_fmt(abs(coef))}*{name}")
+        if abs(const) > ZERO:
+            parts.append(f"{'-' if const < 0 else '+'} {_fmt(abs(const))}")
+        if not parts:
+            return 0.0
+        if len(parts) == 1 and parts[0].startswith("+ ") and "*" not in parts[0] and abs(const) <= ZERO:
+            return parts[0][2:]
+        expr = " ".join(parts)
+        expr = expr[2:] if expr.startswith("+ ") else "-" + expr[2:]
+        return self.let(expr, hint)
+
+    @staticmethod
+    def product(a, b):
+        """A term (coef, value) for ``a * b``, or None when it is zero."""
+        if isinstance(a, str) and isinstance(b, str):
+            return (1.0, f"{a}*{b}")
+        if isinstance(a, str):
+            return None if abs(b) <= ZERO else (b, a)
+        if isinstance(b, str):
+            return None if abs(a) <= ZERO else (a, b)
+        return None if abs(a * b) <= ZERO else (a * b, 1.0)
+
+    def dot(self, a, b, hint="t"):
+        return self.lin([t for t in (self.product(x, y) for x, y in zip(a, b)) if t], hint)
+
+    def mat_mul(self, A, B):
+        """3x4 rigid transforms as 12 entries (rotation row-major, then translation)."""
+        out = []
+        for i in range(3):
+            for j in range(3):
+                out.append(self.dot([A[3 * i + k] for k in range(3)], [B[3 * k + j] for k in range(3)], "r"))
+        for i in range(3):
+            terms = [self.product(A[3 * i + k], B[9 + k]) for k in range(3)]
+            out.append(self.lin([t for t in terms if t] + [(1.0, A[9 + i])], "p"))
+        return out
+
+    def mat_vec(self, A, x, translate: bool):
+        out = []
+        for i in range(3):
+            terms = [self.product(A[3 * i + k], x[k]) for k in range(3)]
+            if translate:
+                terms.append((1.0, A[9 + i]))
+            out.append(self.lin([t for t in terms if t], "v"))
+        return out
+
+    def inverse(self, A):
+        R = [A[3 * j + i] for i in range(3) for j in range(3)]
+        t = []
+        for i in range(3):
+            terms = [self.product(R[3 * i + k], A[9 + k]) for k in range(3)]
+            t.append(self.lin([(-coef, v) for coef, v in (x for x in terms if x)], "p"))
+        return R + t
+
+    def scaled(self, sign: float, x):
+        if sign > 0:
+            return list(x)
+        return [self.lin([(-1.0, v)]) if isinstance(v, str) else -v for v in x]
+
+
+def _render(x) -> str:
+    if isinstance(x, (list, tuple)):
+        return "(" + ", ".join(_render(v) for v in x) + ("," if len(x) == 1 else "") + ")"
+    return x if isinstance(x, str) else _fmt(x)
+
+
+def _call(kernel: str, *args) -> str:
+    return f"_fk.{kernel}(m, {', '.join(_render(a) for a in args)})"
+
+
+IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+
+
+class _Emitter:
+    """Walks the plan, emitting the loop nest."""
+
+    def __init__(self, twists, kinds, home, couplings, free_joints, scale, target):
+        self.c = _Code()
+        self.twists = np.where(np.abs(twists) <= ZERO, 0.0, twists)
+        self.kinds = kinds
+        self.home = np.where(np.abs(home) <= ZERO, 0.0, home)
+        self.couplings = couplings
+        self.scale = scale
+        self.target = target
+        self.q: dict[int, str] = {}  # joint -> variable holding its value
+        self.sig: dict[int, str] = {}
+        self.cs: dict[int, tuple[str, str]] = {}
+        self.exps: dict[int, list] = {}
+        self.products: dict[tuple, list] = {(): IDENTITY}
+        self.flags: list[str] = []
+        for k, j in enumerate(free_joints):
+            self.q[j] = f"free[{k}]"
+        self._couple()
+
+    # -- joint values and their motions ------------------------------------------------------------
+    def _couple(self):
+        changed = True
+        while changed:
+            changed = False
+            for dep, master, a, b in self.couplings:
+                if master in self.q and dep not in self.q:
+                    self.q[dep] = self.c.lin([(a, self.q[master]), (b, 1.0)], "q")
+                    changed = True
+                elif dep in self.q and master not in self.q:
+                    self.q[master] = self.c.lin([(1.0 / a, self.q[dep]), (-b / a, 1.0)], "q")
+                    changed = True
+
+    def axis(self, j):
+        v, w = self.twists[j][:3], self.twists[j][3:]
+        return w, np.cross(w, v)  # direction and the axis point nearest the origin
+
+    def exp(self, j):
+        if j in self.exps:
+            return self.exps[j]
+        c = self.c
+        if self.kinds[j] == "T":
+            v = self.twists[j][:3]
+            E = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0] + [c.lin([(vi, self.q[j])], "p") for vi in v]
+        else:
+            w, r = self.axis(j)
+            cj = c.let(f"m.cos({self.q[j]})", "c")
+            sj = c.let(f"m.sin({self.q[j]})", "s")
+            skew = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+            E = []
+            for i in range(3):
+                for k in range(3):
+                    E.append(c.lin([(w[i] * w[k], 1.0), ((i == k) - w[i] * w[k], cj), (skew[i][k], sj)], "e"))
+            rp = r - (w @ r) * w
+            wr = np.cross(w, r)
+            E += [c.lin([(rp[i], 1.0), (-rp[i], cj), (-wr[i], sj)], "e") for i in range(3)]
+        self.exps[j] = E
+        return E
+
+    def prefix(self, joints: tuple):
+        """The product of the motions of ``joints`` (in index order), cached by its joint tuple."""
+        if joints in self.products:
+            return self.products[joints]
+        P = self.c.mat_mul(self.prefix(joints[:-1]), self.exp(joints[-1]))
+        self.products[joints] = P
+        return P
+
+    def equation(self, known):
+        """``G_u`` for every unknown joint u and ``G_all`` (rule 7: solved factors moved right)."""
+        sofar: tuple = ()
+        G_u = {}
+        for i in range(len(self.kinds)):
+            if i in known:
+                sofar = sofar + (i,)
+            else:
+                G_u[i] = sofar
+        return G_u, sofar
+
+    def twist(self, j, key, sign):
+        """Joint j's axis carried by the motion ``key``: ``(w, r)`` (revolute) or ``(v,)`` (prismatic)."""
+        G = self.prefix(key)
+        if self.kinds[j] == "T":
+            return (self.c.scaled(sign, self.c.mat_vec(G, self.twists[j][:3], False)),)
+        w, r = self.axis(j)
+        return self.c.scaled(sign, self.c.mat_vec(G, w, False)), self.c.mat_vec(G, r, True)
+
+    # -- steps -------------------------------------------------------------------------------------
+    def step(self, step, Td):
+        kind = step["kind"]
+        c = self.c
+        if kind == "SUM":
+            j, g, members = step["solve"][0], step["group"], step["members"]
+            s_j = dict(members)[j]
+            terms = [(1.0 / s_j, self.sig[g])] + [(-s / s_j, self.q[m]) for m, s in members if m != j]
+            self.q[j] = c.lin(terms, "q")
+            self._couple()
+            return
+        if kind not in ("S2", "S3", "HL", "HT", "O"):
+            raise Unsupported(f"step kind {kind}")
+        known = set(step["known"])
+        missing = [j for j in known if j not in self.q]
+        if missing:
+            raise Unsupported(f"joints {missing} known to the plan but not to the emitter")
+        G_u, all_key = self.equation(known)
+        sign = -1.0 if step.get("inverted") else 1.0
+        Tp = c.mat_mul(Td, c.inverse(self.prefix(all_key)))
+        if step.get("inverted"):
+            Tp = c.inverse(Tp)
+        code = step["code"]
+        if kind == "O":
+            ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
+            fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
+            outs = [f"a{c.count}_{i}" for i in range(len(ws))]
+            self._loop(outs, _call(fn, *ws, Tp[:9]))
+            for col, g in enumerate(step["group_ids"]):
+                group = step["groups"][col]
+                if len(group) == 1:
+                    j, s = group[0]
+                    self.q[j] = c.lin([(s, outs[col])], "q")
+                else:
+                    self.sig[g] = outs[col]
+            self._couple()
+            return
+        p0 = step["p0"]
+        point = c.mat_vec(self.prefix(G_u[step["trail"][0]] if step["trail"] else all_key), p0, True)
+        Tpp = c.mat_vec(Tp, point, True)
+        solve = step["solve"]
+        args = [self.twist(j, G_u[j], sign) for j in solve]
+        letters = code.split("-")[1]
+        if kind == "S2":
+            if code == "S2-R":
+                call = _call("point_r", args[0][0], args[0][1], point, Tpp)
+            elif code == "S2-RR":
+                (w1, r1), (w2, r2) = args
+                fn = "point_rr_parallel" if step.get("_axes") == "parallel" else "point_rr_meet"
+                if step.get("_axes") not in ("parallel", "meet"):
+                    raise Unsupported("S2-RR with skew axes")
+                call = _call(fn, w1, r1, w2, r2, point, Tpp)
+            else:
+                raise Unsupported(code)
+        elif kind == "S3":
+            centre = c.mat_vec(self.prefix(G_u[step["lead"][0]]), step["c0"], True)
+            diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
+            d = c.let(f"m.sqrt({_render(c.dot(diff, diff))})", "d")
+            if code == "S3-R":
+                call = _call("dist_r", args[0][0], args[0][1], point, centre, d)
+            elif code == "S3-T":
+                call = _call("dist_t", args[0][0], point, centre, d)
+            else:
+                raise Unsupported(code)
+        else:  # HL, HT: rule 6 with the axis h of a parallel group
+            lead = step["lead"][0]
+            h = self.twist(lead, G_u[lead], 1.0)[0] if self.kinds[lead] == "R" else None
+            if h is None:
+                raise Unsupported("rule 6 along a prismatic group")
+            if kind == "HL":
+                p_in, d = point, c.dot(h, Tpp, "d")
+                tw = args[0]
+            else:  # HT: h . exp(-xi' th) T'p = h . p
+                p_in, d = Tpp, c.dot(h, point, "d")
+                tw = tuple([c.scaled(-1.0, args[0][0])] + list(args[0][1:]))
+            if letters == "R":
+                call = _call("plane_r", tw[0], tw[1], p_in, h, d)
+            elif letters == "T":
+                call = _call("plane_t", tw[0], p_in, h, d)
+            else:
+                raise Unsupported(code)
+        outs = [f"a{c.count}_{i}" for i in range(len(solve))]
+        self._loop(outs, call)
+        for j, name in zip(solve, outs):
+            self.q[j] = name
+        self._couple()
+
+    def _loop(self, outs, call):
+        flag = f"f{self.c.count}"
+        self.c.count += 1
+        self.c.emit(f"for {', '.join(outs)}, {flag} in {call}:")
+        self.c.depth += 1
+        self.flags.append(flag)
+
+    def leaf(self, independent, goal):
+        c = self.c
+        n = len(self.kinds)
+        missing = [j for j in range(n) if j not in self.q]
+        if missing:
+            raise Unsupported(f"joints {missing} not solved by the plan")
+        F = c.mat_mul(self.prefix(tuple(range(n))), [float(x) for x in self.home[:3, :3].ravel()] +
+                      [float(x) for x in self.home[:3, 3]])
+        parts = []
+        if self.target in ("pose", "position"):
+            dp = [c.lin([(1.0, F[9 + i]), (-1.0, goal[9 + i])]) for i in range(3)]
+            parts.append(c.let(f"m.sqrt({_sumsq(dp)})", "ep"))
+        if self.target in ("pose", "orientation"):
+            dR = [c.lin([(1.0, F[i]), (-1.0, goal[i])]) for i in range(9)]
+            parts.append(c.let(f"{_fmt(self.scale)}*m.maxabs({', '.join(_render(x) for x in dR)})", "er"))
+        err = f"m.max2({parts[0]}, {parts[1]})" if len(parts) == 2 else parts[0]
+        defer = " | ".join(self.flags) if self.flags else "False"
+        qs = ", ".join(_render(self.q[j]) for j in independent)
+        c.emit(f"out.append(({qs}, {err}, {defer}))")
+
+
+_ASSIGN = re.compile(r"^\s*(\w+) = ")
+_NAME = re.compile(r"\b[A-Za-z_]\w*\b")
+
+
+def _without_dead_code(lines: list[str]) -> list[str]:
+    """Drop assignments whose name is never read (the emitter computes some axis points eagerly)."""
+    while True:
+        reads: dict[str, int] = {}
+        for line in lines:
+            m = _ASSIGN.match(line)
+            rhs = line[m.end():] if m else line
+            for name in _NAME.findall(rhs):
+                reads[name] = reads.get(name, 0) + 1
+        kept = [ln for ln in lines if not ((m := _ASSIGN.match(ln)) and m.group(1) not in reads)]
+        if len(kept) == len(lines):
+            return kept
+        lines = kept
+
+
+def _sumsq(xs) -> str:
+    return " + ".join(f"{_render(x)}*{_render(x)}" for x in xs) or "0.0"
+
+
+def classify_pairs(steps, twists, kinds, home, scale, samples: int = 6, seed: int = 5):
+    """Mark each S2-RR step with the relation of its two (transformed) axes: ``meet``, ``parallel``
+    or ``skew``, measured over random configurations (the relation the planner relies on persists)."""
+    rng = np.random.default_rng(seed)
+    n = len(kinds)
+    TH = rng.uniform(-math.pi, math.pi, size=(samples, n))
+    Td = rt.fk_batch(twists, rng.uniform(-math.pi, math.pi, size=(samples, n)), np.eye(4))
+    out = []
+    for step in steps:
+        step = dict(step)
+        if step.get("code") == "S2-RR" and step["kind"] == "S2":
+            tw, _ = rt._step_inputs(step, twists, kinds, Td, TH, None)
+            w1, w2 = tw[:, 0, 3:], tw[:, 1, 3:]
+            r1, r2 = np.cross(w1, tw[:, 0, :3]), np.cross(w2, tw[:, 1, :3])
+            n12 = np.cross(w1, w2)
+            nn = np.linalg.norm(n12, axis=1)
+            if np.all(nn <= 1e-9):
+                step["_axes"] = "parallel"
+            else:
+                gap = np.abs(np.sum((r2 - r1) * n12, axis=1)) / np.maximum(nn, 1e-300)
+                step["_axes"] = "meet" if np.all((gap <= 1e-9 * scale) & (nn > 1e-6)) else "skew"
+        out.append(step)
+    return out
+
+
+def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | None:
+    """Source of ``_fast_chain(m, goal, free)`` for ``plan``, or None when the plan is not covered."""
+    if plan.method != "closed-form" or plan.search or plan.snapped or plan.virtual:
+        return None
+    if plan.target not in FAST_TARGETS:
+        return None
+    twists = np.asarray(chain.twists, dtype=float)
+    couplings = [(chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings]
+    steps = classify_pairs(plan.steps, twists, chain.joint_types, chain.home, scale)
+    em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, free_joints, scale,
+                  plan.target)
+    c = em.c
+    goal = [f"g{i}" for i in range(12)]
+    c.emit(f"{', '.join(goal)} = goal")
+    H = np.asarray(chain.home, float)
+    Hinv = np.linalg.inv(H)
+    if plan.target == "position":
+        Td = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0] + [c.lin([(1.0, goal[9 + i]), (-H[i, 3], 1.0)])
+                                                             for i in range(3)]
+    else:
+        Td = c.mat_mul(goal if plan.target == "pose" else goal[:9] + [0.0, 0.0, 0.0],
+                       [float(x) for x in Hinv[:3, :3].ravel()] + [float(x) for x in Hinv[:3, 3]])
+    c.emit("out = []")
+    try:
+        for step in steps:
+            em.step(step, Td)
+        em.leaf(independent, goal)
+    except Unsupported:
+        return None
+    body = "\n".join(_without_dead_code(c.lines))
+    doc = (
+        '    """Every candidate of the chain above as straight-line arithmetic on backend ``m``: a list of\n'
+        '    (joint values..., pose error, defer) over the solution slots of each step."""\n'
+    )
+    return "\n\ndef _fast_chain(m, goal, free=()):\n" + doc + body + "\n    return out\n"

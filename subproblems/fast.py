@@ -1,0 +1,454 @@
+"""Plain-arithmetic kernels of the subproblems that generated fast paths call, one source for two backends.
+
+Every kernel here is written with ``+ - * /`` on 3-tuples and the few functions of a *backend* ``m``:
+``m.sin, m.cos, m.sqrt, m.atan2, m.acos, m.clip1`` (clamp to [-1, 1]), ``m.pos`` (clamp below at 0),
+``m.big`` (max with a tiny positive number) and ``m.small`` (``x <= y``).  With :data:`SCALAR` the
+numbers are Python floats and one call costs a few microseconds; with :data:`ARRAY` they are numpy arrays
+over N instances, vectorised with no Python loop over instances.  One source for both paths keeps
+them in agreement by construction.
+
+Each kernel returns a fixed number of *slots*, one per candidate, each a tuple of joint values followed
+by a ``defer`` flag.  A candidate is not verified here: an unreachable instance gives its clamped
+(nearest) candidate, and the caller measures every candidate by forward kinematics.  ``defer`` is set
+where the geometry of this instance is close to a degenerate case (a point on an axis, a gimbal lock,
+parallel circles): the candidate there may be one representative of a continuum, so the caller sends
+the instance to the reference path (:mod:`subproblems.plan_runtime`), which classifies it properly.
+
+Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
+
+* :func:`plane_r`   H-R   ``h . exp(w th)(p) = d``            2 slots
+* :func:`plane_t`   H-T   ``h . (p + v th) = d``               1 slot
+* :func:`dist_r`    S3-R  ``|exp(w th)(p) - q| = d``           2 slots
+* :func:`dist_t`    S3-T  ``|p + v th - q| = d``               2 slots
+* :func:`point_r`   S2-R  ``exp(w th)(p) = q``                 1 slot
+* :func:`point_rr_meet`  S2-RR, axes meeting at ``c``          2 slots
+* :func:`point_rr_parallel`  S2-RR, parallel axes              2 slots
+* :func:`rot_r`, :func:`rot_rr`, :func:`rot_rrr`   O-R, O-RR, O-RRR on a rotation ``R`` (9-tuple,
+  row-major): 1, 1 and 2 slots
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+NEAR = 1e-7  # relative size below which an instance is treated as degenerate and deferred
+# Relative (squared) distance from a double root below which two roots are one tangent root: there
+# roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
+TANGENT = 1e-10
+TINY = 1e-300
+
+SCALAR = SimpleNamespace(
+    sin=math.sin,
+    cos=math.cos,
+    sqrt=math.sqrt,
+    atan2=math.atan2,
+    acos=math.acos,
+    clip1=lambda x: -1.0 if x < -1.0 else (1.0 if x > 1.0 else x),
+    pos=lambda x: x if x > 0.0 else 0.0,
+    big=lambda x: x if x > TINY else TINY,
+    maxabs=lambda *xs: max(map(abs, xs)),
+    max2=max,
+    name="scalar",
+)
+
+ARRAY = SimpleNamespace(
+    sin=np.sin,
+    cos=np.cos,
+    sqrt=np.sqrt,
+    atan2=np.arctan2,
+    acos=np.arccos,
+    clip1=lambda x: np.clip(x, -1.0, 1.0),
+    pos=lambda x: np.maximum(x, 0.0),
+    big=lambda x: np.maximum(x, TINY),
+    maxabs=lambda *xs: functools.reduce(np.maximum, map(np.abs, xs)),
+    max2=np.maximum,
+    name="array",
+)
+
+
+# ---------------------------------------------------------------------------------------------------
+# 3-vector arithmetic on tuples (floats or arrays alike)
+
+
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def axpy(s, a, b):
+    """``s a + b``."""
+    return (s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2])
+
+
+def mat_vec(R, x):
+    return (
+        R[0] * x[0] + R[1] * x[1] + R[2] * x[2],
+        R[3] * x[0] + R[4] * x[1] + R[5] * x[2],
+        R[6] * x[0] + R[7] * x[1] + R[8] * x[2],
+    )
+
+
+def mat_t_vec(R, x):
+    return (
+        R[0] * x[0] + R[3] * x[1] + R[6] * x[2],
+        R[1] * x[0] + R[4] * x[1] + R[7] * x[2],
+        R[2] * x[0] + R[5] * x[1] + R[8] * x[2],
+    )
+
+
+def rotate(m, w, th, x):
+    """``exp([w] th) x`` (Rodrigues)."""
+    c, s = m.cos(th), m.sin(th)
+    wx = cross(w, x)
+    k = dot(w, x) * (1.0 - c)
+    return (c * x[0] + s * wx[0] + k * w[0], c * x[1] + s * wx[1] + k * w[1], c * x[2] + s * wx[2] + k * w[2])
+
+
+# ---------------------------------------------------------------------------------------------------
+# building blocks
+
+
+def angle_about(m, w, u, v):
+    """The angle that turns ``u`` toward ``v`` about ``w`` (their components across ``w``): S1-R.
+
+    Returns ``(th, defer)``; ``defer`` when either vector is (nearly) along ``w``, where every angle
+    is equally good.
+    """
+    uw, vw = dot(w, u), dot(w, v)
+    up = axpy(-uw, w, u)
+    vp = axpy(-vw, w, v)
+    th = m.atan2(dot(w, cross(up, vp)), dot(up, vp))
+    size = dot(u, u) + dot(v, v) + TINY
+    defer = (dot(up, up) <= NEAR * NEAR * size) | (dot(vp, vp) <= NEAR * NEAR * size)
+    return th, defer
+
+
+def trig_roots(m, a, b, c, size):
+    """Both roots of ``a cos th + b sin th = c`` (clamped to the nearest when ``|c| > rho``).
+
+    ``defer`` when ``rho = |(a, b)|`` is negligible against ``size``: then no angle or every angle
+    solves the equation.
+    """
+    rho = m.sqrt(a * a + b * b)
+    phi = m.atan2(b, a)
+    x = c / m.big(rho)
+    delta = m.acos(m.clip1(x))
+    defer = (rho <= NEAR * size) | (abs(x * x - 1.0) <= TANGENT)
+    return (phi + delta, defer), (phi - delta, defer)
+
+
+# ---------------------------------------------------------------------------------------------------
+# the kernels
+
+
+def plane_r(m, w, r, p, h, d):
+    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r)."""
+    u = sub(p, r)
+    uw = dot(w, u)
+    up = axpy(-uw, w, u)
+    a = dot(h, up)
+    b = dot(h, cross(w, u))
+    c = d - dot(h, r) - uw * dot(h, w)
+    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * dot(u, u)) + TINY)
+
+
+def plane_t(m, v, p, h, d):
+    """H-T: ``h . (p + v th) = d``; defer when ``h`` is (nearly) across the slide."""
+    hv = dot(h, v)
+    defer = (hv * hv) <= NEAR * NEAR * dot(h, h)
+    return ((d - dot(h, p)) / (hv + (hv >= 0.0) * TINY - (hv < 0.0) * TINY), defer),
+
+
+def dist_r(m, w, r, p, q, d):
+    """S3-R: ``|exp(w th)(p) - q| = d``: the plane equation with normal ``q - r``."""
+    u = sub(p, r)
+    z = sub(q, r)
+    uw = dot(w, u)
+    up = axpy(-uw, w, u)
+    a = dot(z, up)
+    b = dot(z, cross(w, u))
+    c = 0.5 * (dot(u, u) + dot(z, z) - d * d) - uw * dot(z, w)
+    return trig_roots(m, a, b, c, m.sqrt(dot(z, z) * dot(u, u)) + TINY)
+
+
+def dist_t(m, v, p, q, d):
+    """S3-T: ``|p + v th - q| = d``: a quadratic (clamped to its vertex when it has no real root)."""
+    e = sub(p, q)
+    ve = dot(v, e)
+    disc = ve * ve - dot(e, e) + d * d
+    root = m.sqrt(m.pos(disc))
+    tangent = abs(disc) <= TANGENT * (ve * ve + d * d)
+    return (-ve + root, tangent), (-ve - root, tangent)
+
+
+def point_r(m, w, r, p, q):
+    """S2-R: ``exp(w th)(p) = q``."""
+    return angle_about(m, w, sub(p, r), sub(q, r)),
+
+
+def point_rr_meet(m, w1, r1, w2, r2, p, q):
+    """S2-RR, axes meeting: ``exp(w1 t1) exp(w2 t2)(p) = q`` (Paden-Kahan 2).
+
+    With ``c`` the meeting point, the middle point ``z = exp(w2 t2)(p) - c = exp(-w1 t1)(q) - c`` keeps
+    its components along ``w2`` (from ``p``) and along ``w1`` (from ``q``); its length fixes the
+    component across both.  A tangent instance (the two ``z`` nearly equal) defers.
+    """
+    k = dot(w1, w2)
+    n = cross(w1, w2)
+    nn = dot(n, n)
+    # the meeting point: r1 + s w1 with s = ((r2 - r1) x w2) . n / |n|^2
+    s = dot(cross(sub(r2, r1), w2), n) / m.big(nn)
+    c = axpy(s, w1, r1)
+    u, v = sub(p, c), sub(q, c)
+    a1, a2 = dot(w1, v), dot(w2, u)
+    alpha = (a1 - k * a2) / m.big(nn)
+    beta = (a2 - k * a1) / m.big(nn)
+    uu = dot(u, u)
+    g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * k) / m.big(nn)
+    gamma = m.sqrt(m.pos(g2))
+    degenerate = (nn <= NEAR) | (abs(g2) * nn <= TANGENT * uu)
+    out = []
+    for g in (gamma, -gamma):
+        z = (
+            alpha * w1[0] + beta * w2[0] + g * n[0],
+            alpha * w1[1] + beta * w2[1] + g * n[1],
+            alpha * w1[2] + beta * w2[2] + g * n[2],
+        )
+        t2, f2 = angle_about(m, w2, u, z)
+        t1, f1 = angle_about(m, w1, z, v)
+        out.append((t1, t2, degenerate | f1 | f2))
+    return tuple(out)
+
+
+def point_rr_parallel(m, w1, r1, w2, r2, p, q):
+    """S2-RR, parallel axes (``w2 = +-w1``): ``exp(w1 t1) exp(w2 t2)(p) = q`` (a planar 2R arm).
+
+    The middle point ``z = exp(w2 t2)(p)`` keeps its height along the axes (from ``p``), its distance
+    to axis 2 (from ``p``) and its distance to axis 1 (from ``q``): two circles in the plane across
+    the axes meet in at most two points.
+    """
+    w = w1
+    e = sub(r1, r2)
+    e = axpy(-dot(w, e), w, e)  # axis 2 to axis 1, across the axes
+    ee = dot(e, e)
+    u2 = sub(p, r2)
+    u2 = axpy(-dot(w, u2), w, u2)
+    v1 = sub(q, r1)
+    v1 = axpy(-dot(w, v1), w, v1)
+    rho2, rho1 = dot(u2, u2), dot(v1, v1)
+    x = (rho2 - rho1 + ee) / (2.0 * m.big(ee))  # along e, in units of |e|
+    y2 = rho2 / m.big(ee) - x * x
+    y = m.sqrt(m.pos(y2))
+    f = cross(w, e)
+    coincident = (ee <= NEAR * NEAR * (rho1 + rho2 + TINY)) | (abs(y2) * ee <= TANGENT * rho2)
+    height = dot(w, sub(p, r2))
+    out = []
+    for s in (y, -y):
+        z = (  # the middle point, relative to r2 (its height along w kept from p)
+            x * e[0] + s * f[0] + height * w[0],
+            x * e[1] + s * f[1] + height * w[1],
+            x * e[2] + s * f[2] + height * w[2],
+        )
+        t2, f2 = angle_about(m, w2, sub(p, r2), z)
+        t1, f1 = angle_about(m, w1, sub(axpy(1.0, z, r2), r1), sub(q, r1))
+        out.append((t1, t2, coincident | f1 | f2))
+    return tuple(out)
+
+
+def rot_r(m, w, R):
+    """O-R: ``exp([w] th) = R``: ``cos th = (tr R - w.Rw) / 2``, ``sin th`` from the skew part along w."""
+    c = 0.5 * (R[0] + R[4] + R[8] - dot(w, mat_vec(R, w)))
+    s = 0.5 * (w[0] * (R[7] - R[5]) + w[1] * (R[2] - R[6]) + w[2] * (R[3] - R[1]))
+    return (m.atan2(s, c), c != c),
+
+
+def rot_rr(m, w1, w2, R):
+    """O-RR: ``exp([w1] t1) exp([w2] t2) = R``: t1 turns w2 onto R w2, t2 turns R^T w1 onto w1."""
+    t1, f1 = angle_about(m, w1, w2, mat_vec(R, w2))
+    t2, f2 = angle_about(m, w2, mat_t_vec(R, w1), w1)
+    return (t1, t2, f1 | f2),
+
+
+def rot_rrr(m, w1, w2, w3, R):
+    """O-RRR: ``exp([w1] t1) exp([w2] t2) exp([w3] t3) = R``.
+
+    ``w1 . R w3 = w1 . exp([w2] t2) w3`` gives t2 (two roots); then t1 turns ``exp([w2] t2) w3`` onto
+    ``R w3`` and t3 turns ``R^T w1`` onto ``exp(-[w2] t2) w1``.  Gimbal lock (``exp([w2] t2) w3``
+    along ``w1``) defers.
+    """
+    Rw3 = mat_vec(R, w3)
+    Rtw1 = mat_t_vec(R, w1)
+    out = []
+    for t2, f2 in plane_r(m, w2, (0.0, 0.0, 0.0), w3, w1, dot(w1, Rw3)):
+        z = rotate(m, w2, t2, w3)
+        t1, f1 = angle_about(m, w1, z, Rw3)
+        t3, f3 = angle_about(m, w3, Rtw1, rotate(m, w2, -t2, w1))
+        out.append((t1, t2, t3, f1 | f2 | f3))
+    return tuple(out)
+
+
+# ---------------------------------------------------------------------------------------------------
+# the end of a generated fast path: measure, wrap, limit, deduplicate, pack
+
+NEAR_MISS = 1e-4  # candidates missing by less than this (relative) need Newton steps: reference path
+
+
+def _wrap(x: float) -> float:
+    w = (x + math.pi) % (2 * math.pi) - math.pi
+    return math.pi if w == -math.pi else w
+
+
+def _inside(v: float, lo: float, hi: float, revolute: bool, eps: float = 1e-7) -> bool:
+    if lo - eps <= v <= hi + eps:
+        return True
+    return revolute and (lo - eps <= v + 2 * math.pi <= hi + eps or lo - eps <= v - 2 * math.pi <= hi + eps)
+
+
+def goal_entries(T, target: str):
+    """The 12 entries (rotation row-major, translation) of one clean target as floats, else None.
+
+    None for anything unusual (wrong shape, NaN, not a rotation): the caller then goes the reference
+    way, which raises the documented error.
+    """
+    try:
+        a = T.tolist() if isinstance(T, np.ndarray) else [list(r) if hasattr(r, "__len__") else r for r in T]
+        if target == "position":
+            if len(a) != 3:
+                return None
+            g = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, float(a[0]), float(a[1]), float(a[2]))
+        else:
+            if len(a) != (3 if target == "orientation" else 4) or any(len(r) != len(a) for r in a):
+                return None
+            t = (0.0, 0.0, 0.0)
+            if target != "orientation":
+                t = (float(a[0][3]), float(a[1][3]), float(a[2][3]))
+            g = tuple(float(a[i][j]) for i in range(3) for j in range(3)) + t
+    except (TypeError, ValueError):
+        return None
+    if not all(math.isfinite(x) for x in g):
+        return None
+    if target != "position":
+        c0, c1, c2 = (g[0], g[3], g[6]), (g[1], g[4], g[7]), (g[2], g[5], g[8])
+        gram = (dot(c0, c0) - 1, dot(c1, c1) - 1, dot(c2, c2) - 1, dot(c0, c1), dot(c0, c2), dot(c1, c2))
+        if max(abs(x) for x in gram) > 1e-6 or abs(dot(cross(c0, c1), c2) - 1) > 1e-6:
+            return None
+    return g
+
+
+def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
+    """Solutions of one target from the leaves of a fast chain, or None to take the reference path.
+
+    Returns rows ``(inexact, error, q)`` sorted exact first, then by error; duplicates (equal modulo
+    2 pi) and, with ``limits``, rows outside the limits are left out.
+    """
+    exact_tol, near = tol * scale, NEAR_MISS * scale
+    same = 1e-9 * max(1.0, scale)
+    rows = []
+    for leaf in leaves:
+        err = leaf[-2]
+        if leaf[-1] or not err <= exact_tol and err < near or err != err:
+            return None
+        q = [(_wrap(x) if k == "R" else x) for x, k in zip(leaf[:-2], kinds)]
+        if limits and not all(_inside(v, lo, hi, k == "R") for v, lo, hi, k in zip(q, lower, upper, kinds)):
+            continue
+        rows.append((err > exact_tol, err, q))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    kept = []
+    for row in rows:
+        q = row[2]
+        for other in kept:
+            o = other[2]
+            if all(abs(_wrap(a - b) if k == "R" else a - b) <= same for a, b, k in zip(q, o, kinds)):
+                break
+        else:
+            kept.append(row)
+            if len(kept) == slots:
+                break
+    return kept
+
+
+def goal_columns(goals, target: str):
+    """The 12 goal entries of N targets (N, 4, 4) as arrays."""
+    R = [goals[:, i, j] for i in range(3) for j in range(3)]
+    t = [goals[:, i, 3] for i in range(3)]
+    if target == "orientation":
+        t = [np.zeros(len(goals))] * 3
+    return tuple(R + t)
+
+
+def _same_angle(d, revolute: bool, tol: float):
+    """|d| within tol, modulo 2 pi for a revolute joint (both values already wrapped to (-pi, pi])."""
+    a = np.abs(d)
+    return (a <= tol) | (np.abs(a - 2 * math.pi) <= tol) if revolute else a <= tol
+
+
+def finish_many(leaves, N, *, kinds, lower, upper, limits, scale, tol, slots):
+    """Solutions of N targets from the leaves of a fast chain, vectorised.
+
+    Returns ``Q (N, slots, dof), valid, ls, residual, continuum`` and ``defer (N,)``: the targets to
+    solve on the reference path instead (their rows here are empty).
+    """
+    dof, L = len(kinds), len(leaves)
+    Q = np.empty((N, L, dof))
+    err = np.empty((N, L))
+    flag = np.zeros((N, L), dtype=bool)
+    for k, leaf in enumerate(leaves):
+        for j in range(dof):
+            Q[:, k, j] = leaf[j]
+        err[:, k] = leaf[dof]
+        flag[:, k] = leaf[dof + 1]
+    exact_tol = tol * scale
+    inexact = err > exact_tol
+    defer = (flag | (inexact & (err < NEAR_MISS * scale)) | np.isnan(err)).any(axis=1)
+    defer |= np.isnan(Q).any(axis=(1, 2))
+    keep = np.repeat(~defer[:, None], L, axis=1)
+    for j, k in enumerate(kinds):
+        col = Q[:, :, j]
+        if k == "R":
+            w = np.remainder(col + math.pi, 2 * math.pi) - math.pi
+            col = Q[:, :, j] = np.where(w == -math.pi, math.pi, w)
+        if limits:
+            lo, hi = lower[j] - 1e-7, upper[j] + 1e-7
+            inside = (col >= lo) & (col <= hi)
+            if k == "R":
+                inside |= ((col + 2 * math.pi >= lo) & (col + 2 * math.pi <= hi)) | (
+                    (col - 2 * math.pi >= lo) & (col - 2 * math.pi <= hi)
+                )
+            keep &= inside
+    # order: exact first, then by error; rows not kept last
+    key = np.where(keep, inexact * 1e300 + np.nan_to_num(err), np.inf)
+    order = np.argsort(key, axis=1, kind="stable")
+    Q = np.take_along_axis(Q, order[..., None], axis=1)
+    err, keep, inexact = (np.take_along_axis(x, order, axis=1) for x in (err, keep, inexact))
+    # duplicates: equal (modulo 2 pi) to an earlier kept row of the same target
+    first, second = np.triu_indices(L, 1)
+    same = keep[:, first].copy()
+    for j, k in enumerate(kinds):
+        same &= _same_angle(Q[:, first, j] - Q[:, second, j], k == "R", 1e-9 * max(1.0, scale))
+    dup = np.zeros((N, L), dtype=bool)
+    for k in range(len(second)):  # at most L (L - 1) / 2 pairs, L the chain's leaves
+        dup[:, second[k]] |= same[:, k]
+    keep &= ~dup
+    rank = np.cumsum(keep, axis=1) - 1
+    n_idx, c_idx = np.nonzero(keep & (rank < slots))
+    r_idx = rank[n_idx, c_idx]
+    Qo = np.zeros((N, slots, dof))
+    valid = np.zeros((N, slots), dtype=bool)
+    LS = np.zeros((N, slots), dtype=bool)
+    RES = np.full((N, slots), np.inf)
+    Qo[n_idx, r_idx] = Q[n_idx, c_idx]
+    valid[n_idx, r_idx] = True
+    LS[n_idx, r_idx] = inexact[n_idx, c_idx]
+    RES[n_idx, r_idx] = err[n_idx, c_idx]
+    return Qo, valid, LS, RES, np.zeros((N, slots), dtype=bool), defer
