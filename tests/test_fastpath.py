@@ -1,0 +1,96 @@
+"""The generated fast path (straight-line arithmetic, floats and arrays) against the reference runtime.
+
+Every zoo robot whose plan the fast path covers must give the same solution sets as the reference
+runtime (``FAST_PATH = False``) on random poses with special angles, single and batched; targets the
+fast path defers (near a degenerate geometry) are solved by the reference runtime inside the same call.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ikcompiler import compile_robot, load_robot
+from ikcompiler.inputs.zoo import zoo_names
+from ikcompiler.verify import sample_configurations
+
+FREE = {"panda": ("panda_joint7",)}
+COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
+    "arm4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara", "shadow_index", "shadow_thumb",
+    "stanford", "ur5",
+}
+POSES = 60
+
+
+def _set_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest distance from a row of ``a`` to its nearest row of ``b`` (angles modulo 2 pi)."""
+    if len(a) == 0:
+        return 0.0
+    if len(b) == 0:
+        return math.inf
+    d = np.abs(a[:, None, :] - b[None, :, :])
+    d = np.minimum(d, np.abs(d - 2 * math.pi))
+    return float(d.max(axis=2).min(axis=1).max())
+
+
+@pytest.fixture(scope="module", params=sorted(zoo_names()))
+def robot(request):
+    name = request.param
+    module = compile_robot(name, free=FREE.get(name, ()))
+    yield name, module, load_robot(name)
+    module.FAST_PATH = module._fast_chain is not None
+
+
+def test_fast_path_coverage(robot):
+    name, module, _ = robot
+    assert module.FAST_PATH == (name in COVERED), f"{name}: fast path {module.FAST_PATH}"
+
+
+def _poses(module, chain):
+    Q = sample_configurations(chain, POSES, seed=7, special=0.3)
+    Ts = np.array([module.fk(q) for q in Q])
+    free = [Q[:, module.JOINT_NAMES.index(f)] for f in module.FREE_JOINTS]
+    return Q, Ts, free
+
+
+@pytest.mark.parametrize("name", sorted(COVERED))
+def test_scalar_fast_path_matches_reference(name):
+    module, chain = compile_robot(name, free=FREE.get(name, ())), load_robot(name)
+    assert module.FAST_PATH
+    _, Ts, free = _poses(module, chain)
+    for k, T in enumerate(Ts):
+        fr = [f[k] for f in free]
+        fast = module.solve(T, *fr)
+        module.FAST_PATH = False
+        ref = module.solve(T, *fr)
+        module.FAST_PATH = True
+        assert _set_distance(fast, ref) <= 1e-6 and _set_distance(ref, fast) <= 1e-6, (name, k, fast, ref)
+        assert len(fast) == len(ref), (name, k, fast, ref)
+
+
+def test_batch_fast_path_matches_scalar_and_reference(robot):
+    name, module, chain = robot
+    _, Ts, free = _poses(module, chain)
+    Q, valid = module.solve_batch(Ts, *free)
+    module.FAST_PATH = False
+    Qr, valid_r = module.solve_batch(Ts, *free)
+    module.FAST_PATH = module._fast_chain is not None
+    assert np.array_equal(valid.sum(axis=1), valid_r.sum(axis=1)), name
+    for k, T in enumerate(Ts):
+        single = module.solve(T, *[f[k] for f in free])
+        assert len(single) == valid[k].sum(), (name, k)
+        assert _set_distance(Q[k][valid[k]], single) <= 1e-9, (name, k)
+        assert _set_distance(Qr[k][valid_r[k]], Q[k][valid[k]]) <= 1e-6, (name, k)
+
+
+def test_fast_solutions_round_trip(robot):
+    name, module, chain = robot
+    _, Ts, free = _poses(module, chain)
+    q, res, ls, _ = module.solve_info(Ts[0], *[f[0] for f in free])
+    for row, r, flag in zip(q, res, ls):
+        err = np.abs(module.fk(row) - Ts[0]).max()
+        if not flag:
+            assert err <= 1e-9 * max(1.0, module.SCALE) * 4, (name, row, err)
+        assert r >= 0.0 and np.isfinite(r)
