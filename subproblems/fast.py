@@ -21,6 +21,8 @@ Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 * :func:`dist_r`    S3-R  ``|exp(w th)(p) - q| = d``           2 slots
 * :func:`dist_t`    S3-T  ``|p + v th - q| = d``               2 slots
 * :func:`point_r`   S2-R  ``exp(w th)(p) = q``                 1 slot
+* :func:`turn_slide2` S1-RTT ``exp(xi1 t1) exp(v2 t2) exp(v3 t3) = T``  1 slot
+* :func:`slide3`    S2-TTT, S1-TTT ``v1 t1 + v2 t2 + v3 t3 = b`` 1 slot
 * :func:`point_rr_meet`  S2-RR, axes meeting at ``c``          2 slots
 * :func:`point_rr_parallel`  S2-RR, parallel axes              2 slots
 * :func:`rot_r`, :func:`rot_rr`, :func:`rot_rrr`   O-R, O-RR, O-RRR on a rotation ``R`` (9-tuple,
@@ -39,6 +41,7 @@ NEAR = 1e-7  # relative size below which an instance is treated as degenerate an
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
 TANGENT = 1e-10
+NEAR2 = NEAR * NEAR
 TINY = 1e-300
 
 SCALAR = SimpleNamespace(
@@ -110,28 +113,34 @@ def mat_t_vec(R, x):
 def rotate(m, w, th, x):
     """``exp([w] th) x`` (Rodrigues)."""
     c, s = m.cos(th), m.sin(th)
-    wx = cross(w, x)
-    k = dot(w, x) * (1.0 - c)
-    return (c * x[0] + s * wx[0] + k * w[0], c * x[1] + s * wx[1] + k * w[1], c * x[2] + s * wx[2] + k * w[2])
-
-
-# ---------------------------------------------------------------------------------------------------
-# building blocks
+    w0, w1, w2 = w
+    x0, x1, x2 = x
+    k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c)
+    return (
+        c * x0 + s * (w1 * x2 - w2 * x1) + k * w0,
+        c * x1 + s * (w2 * x0 - w0 * x2) + k * w1,
+        c * x2 + s * (w0 * x1 - w1 * x0) + k * w2,
+    )
 
 
 def angle_about(m, w, u, v):
     """The angle that turns ``u`` toward ``v`` about ``w`` (their components across ``w``): S1-R.
 
     Returns ``(th, defer)``; ``defer`` when either vector is (nearly) along ``w``, where every angle
-    is equally good.
+    is equally good.  (Written out component by component: this is the innermost call of every
+    chain, and helper calls cost more than the arithmetic on floats.)
     """
-    uw, vw = dot(w, u), dot(w, v)
-    up = axpy(-uw, w, u)
-    vp = axpy(-vw, w, v)
-    th = m.atan2(dot(w, cross(up, vp)), dot(up, vp))
-    size = dot(u, u) + dot(v, v) + TINY
-    defer = (dot(up, up) <= NEAR * NEAR * size) | (dot(vp, vp) <= NEAR * NEAR * size)
-    return th, defer
+    w0, w1, w2 = w
+    u0, u1, u2 = u
+    v0, v1, v2 = v
+    uw = w0 * u0 + w1 * u1 + w2 * u2
+    vw = w0 * v0 + w1 * v1 + w2 * v2
+    a0, a1, a2 = u0 - uw * w0, u1 - uw * w1, u2 - uw * w2
+    b0, b1, b2 = v0 - vw * w0, v1 - vw * w1, v2 - vw * w2
+    sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0)
+    th = m.atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2)
+    lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + TINY)
+    return th, (a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)
 
 
 def trig_roots(m, a, b, c, size):
@@ -192,6 +201,32 @@ def dist_t(m, v, p, q, d):
     return (-ve + root, tangent), (-ve - root, tangent)
 
 
+def slide3(m, v1, v2, v3, b):
+    """S2-TTT / S1-TTT: ``v1 t1 + v2 t2 + v3 t3 = b`` (Cramer's rule); defer when the slides are
+    (nearly) coplanar."""
+    c23, c31, c12 = cross(v2, v3), cross(v3, v1), cross(v1, v2)
+    det = dot(v1, c23)
+    scale = m.sqrt(dot(v1, v1) * dot(v2, v2) * dot(v3, v3)) + TINY
+    inv = 1.0 / (det + (det >= 0.0) * TINY - (det < 0.0) * TINY)
+    return (dot(b, c23) * inv, dot(b, c31) * inv, dot(b, c12) * inv, abs(det) <= NEAR * scale),
+
+
+def turn_slide2(m, w, r, v2, v3, R, t):
+    """S1-RTT: ``exp(xi1 t1) exp(v2 t2) exp(v3 t3) = (R, t)`` with xi1 about the axis (w, r).
+
+    The rotation gives t1 (O-R); the slides then move ``x = R1^T (t - r) + r`` (the translation seen
+    before the turn): ``v2 t2 + v3 t3 = x``, solved by normal equations; defer when the slides are
+    (nearly) parallel."""
+    ((t1, f1),) = rot_r(m, w, R)
+    x = rotate(m, w, -t1, sub(t, r))
+    x = (x[0] + r[0], x[1] + r[1], x[2] + r[2])
+    a, b, e = dot(v2, v2), dot(v2, v3), dot(v3, v3)
+    det = a * e - b * b
+    inv = 1.0 / m.big(det)
+    y2, y3 = dot(v2, x), dot(v3, x)
+    return ((t1, (e * y2 - b * y3) * inv, (a * y3 - b * y2) * inv, f1 | (det <= NEAR * a * e)),)
+
+
 def point_r(m, w, r, p, q):
     """S2-R: ``exp(w th)(p) = q``."""
     return angle_about(m, w, sub(p, r), sub(q, r)),
@@ -236,33 +271,33 @@ def point_rr_parallel(m, w1, r1, w2, r2, p, q):
 
     The middle point ``z = exp(w2 t2)(p)`` keeps its height along the axes (from ``p``), its distance
     to axis 2 (from ``p``) and its distance to axis 1 (from ``q``): two circles in the plane across
-    the axes meet in at most two points.
+    the axes meet in at most two points.  Coincident axes and tangent circles defer.
     """
-    w = w1
-    e = sub(r1, r2)
-    e = axpy(-dot(w, e), w, e)  # axis 2 to axis 1, across the axes
-    ee = dot(e, e)
-    u2 = sub(p, r2)
-    u2 = axpy(-dot(w, u2), w, u2)
-    v1 = sub(q, r1)
-    v1 = axpy(-dot(w, v1), w, v1)
-    rho2, rho1 = dot(u2, u2), dot(v1, v1)
+    w0, w1_, w2_ = w1
+    # e: from axis 2 to axis 1, across the axes; u2: p from axis 2, across; v1: q from axis 1, across
+    e0, e1, e2 = r1[0] - r2[0], r1[1] - r2[1], r1[2] - r2[2]
+    h = w0 * e0 + w1_ * e1 + w2_ * e2
+    e0, e1, e2 = e0 - h * w0, e1 - h * w1_, e2 - h * w2_
+    u0, u1, u2 = p[0] - r2[0], p[1] - r2[1], p[2] - r2[2]
+    height = w0 * u0 + w1_ * u1 + w2_ * u2
+    a0, a1, a2 = u0 - height * w0, u1 - height * w1_, u2 - height * w2_
+    v0, v1, v2 = q[0] - r1[0], q[1] - r1[1], q[2] - r1[2]
+    h = w0 * v0 + w1_ * v1 + w2_ * v2
+    b0, b1, b2 = v0 - h * w0, v1 - h * w1_, v2 - h * w2_
+    ee = e0 * e0 + e1 * e1 + e2 * e2
+    rho2 = a0 * a0 + a1 * a1 + a2 * a2
+    rho1 = b0 * b0 + b1 * b1 + b2 * b2
     x = (rho2 - rho1 + ee) / (2.0 * m.big(ee))  # along e, in units of |e|
     y2 = rho2 / m.big(ee) - x * x
     y = m.sqrt(m.pos(y2))
-    f = cross(w, e)
-    coincident = (ee <= NEAR * NEAR * (rho1 + rho2 + TINY)) | (abs(y2) * ee <= TANGENT * rho2)
-    height = dot(w, sub(p, r2))
+    f0, f1, f2 = w1_ * e2 - w2_ * e1, w2_ * e0 - w0 * e2, w0 * e1 - w1_ * e0  # w x e
+    degenerate = (ee <= NEAR2 * (rho1 + rho2 + TINY)) | (abs(y2) * ee <= TANGENT * rho2)
     out = []
     for s in (y, -y):
-        z = (  # the middle point, relative to r2 (its height along w kept from p)
-            x * e[0] + s * f[0] + height * w[0],
-            x * e[1] + s * f[1] + height * w[1],
-            x * e[2] + s * f[2] + height * w[2],
-        )
-        t2, f2 = angle_about(m, w2, sub(p, r2), z)
-        t1, f1 = angle_about(m, w1, sub(axpy(1.0, z, r2), r1), sub(q, r1))
-        out.append((t1, t2, coincident | f1 | f2))
+        z = (x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2)  # middle point from axis 2, across
+        t2, g2 = angle_about(m, w2, (a0, a1, a2), z)
+        t1, g1 = angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2))
+        out.append((t1, t2, degenerate | g1 | g2))
     return tuple(out)
 
 
@@ -289,11 +324,28 @@ def rot_rrr(m, w1, w2, w3, R):
     """
     Rw3 = mat_vec(R, w3)
     Rtw1 = mat_t_vec(R, w1)
+    k12, k23 = dot(w1, w2), dot(w2, w3)
+    w23, w21 = cross(w2, w3), cross(w2, w1)
+    # w1 . exp([w2] t2) w3 = a cos t2 + b sin t2 + k12 k23
+    a = dot(w1, w3) - k12 * k23
+    b = dot(w1, w23)
+    c = dot(w1, Rw3) - k12 * k23
     out = []
-    for t2, f2 in plane_r(m, w2, (0.0, 0.0, 0.0), w3, w1, dot(w1, Rw3)):
-        z = rotate(m, w2, t2, w3)
+    for t2, f2 in trig_roots(m, a, b, c, 1.0):
+        c2, s2 = m.cos(t2), m.sin(t2)
+        k3, k1 = k23 * (1.0 - c2), k12 * (1.0 - c2)
+        z = (  # exp([w2] t2) w3
+            c2 * w3[0] + s2 * w23[0] + k3 * w2[0],
+            c2 * w3[1] + s2 * w23[1] + k3 * w2[1],
+            c2 * w3[2] + s2 * w23[2] + k3 * w2[2],
+        )
+        y = (  # exp(-[w2] t2) w1
+            c2 * w1[0] - s2 * w21[0] + k1 * w2[0],
+            c2 * w1[1] - s2 * w21[1] + k1 * w2[1],
+            c2 * w1[2] - s2 * w21[2] + k1 * w2[2],
+        )
         t1, f1 = angle_about(m, w1, z, Rw3)
-        t3, f3 = angle_about(m, w3, Rtw1, rotate(m, w2, -t2, w1))
+        t3, f3 = angle_about(m, w3, Rtw1, y)
         out.append((t1, t2, t3, f1 | f2 | f3))
     return tuple(out)
 
@@ -353,29 +405,53 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
     2 pi) and, with ``limits``, rows outside the limits are left out.
     """
     exact_tol, near = tol * scale, NEAR_MISS * scale
-    same = 1e-9 * max(1.0, scale)
+    same = 1e-9 * (scale if scale > 1.0 else 1.0)
+    two_pi = 2 * math.pi
+    revolute = [k == "R" for k in kinds]
+    bounds = list(zip(revolute, lower, upper))
     rows = []
     for leaf in leaves:
         err = leaf[-2]
-        if leaf[-1] or not err <= exact_tol and err < near or err != err:
+        if leaf[-1] or exact_tol < err < near or err != err:
             return None
-        q = [(_wrap(x) if k == "R" else x) for x, k in zip(leaf[:-2], kinds)]
-        if limits and not all(_inside(v, lo, hi, k == "R") for v, lo, hi, k in zip(q, lower, upper, kinds)):
-            continue
-        rows.append((err > exact_tol, err, q))
-    rows.sort(key=lambda r: (r[0], r[1]))
+        q = list(leaf[:-2])
+        for j, rev in enumerate(revolute):
+            if rev:
+                x = q[j]
+                if not -math.pi < x <= math.pi:
+                    x = (x + math.pi) % two_pi - math.pi
+                    q[j] = math.pi if x == -math.pi else x
+        if limits:
+            for v, (rev, lo, hi) in zip(q, bounds):
+                if lo - 1e-7 <= v <= hi + 1e-7:
+                    continue
+                if rev and (lo - 1e-7 <= v + two_pi <= hi + 1e-7 or lo - 1e-7 <= v - two_pi <= hi + 1e-7):
+                    continue
+                break
+            else:
+                rows.append((err > exact_tol, err, q))
+        else:
+            rows.append((err > exact_tol, err, q))
+    rows.sort(key=_row_order)
     kept = []
     for row in rows:
         q = row[2]
         for other in kept:
-            o = other[2]
-            if all(abs(_wrap(a - b) if k == "R" else a - b) <= same for a, b, k in zip(q, o, kinds)):
-                break
+            for a, b, rev in zip(q, other[2], revolute):
+                d = a - b if a > b else b - a
+                if d > same and not (rev and abs(d - two_pi) <= same):
+                    break  # differs in this joint
+            else:
+                break  # equal in every joint: a duplicate
         else:
             kept.append(row)
             if len(kept) == slots:
                 break
     return kept
+
+
+def _row_order(row):
+    return row[0], row[1]
 
 
 def goal_columns(goals, target: str):

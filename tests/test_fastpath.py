@@ -18,8 +18,8 @@ from ikcompiler.verify import sample_configurations
 
 FREE = {"panda": ("panda_joint7",)}
 COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
-    "arm4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara", "shadow_index", "shadow_thumb",
-    "stanford", "ur5",
+    "arm4dof", "cylindrical", "gantry", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
+    "shadow_index", "shadow_thumb", "stanford", "ur5",
 }
 POSES = 60
 

@@ -246,7 +246,7 @@ class _Emitter:
             self.q[j] = c.lin(terms, "q")
             self._couple()
             return
-        if kind not in ("S2", "S3", "HL", "HT", "O"):
+        if kind not in ("S1", "S2", "S3", "HL", "HT", "O"):
             raise Unsupported(f"step kind {kind}")
         known = set(step["known"])
         missing = [j for j in known if j not in self.q]
@@ -258,6 +258,20 @@ class _Emitter:
         if step.get("inverted"):
             Tp = c.inverse(Tp)
         code = step["code"]
+        if kind == "S1":
+            tws = [self.twist(j, G_u[j], sign) for j in step["solve"]]
+            if code == "S1-TTT":
+                call = _call("slide3", tws[0][0], tws[1][0], tws[2][0], Tp[9:])
+            elif code == "S1-RTT":
+                call = _call("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
+            else:
+                raise Unsupported(code)
+            outs = [f"a{c.count}_{i}" for i in range(3)]
+            self._loop(outs, call)
+            for j, name in zip(step["solve"], outs):
+                self.q[j] = name
+            self._couple()
+            return
         if kind == "O":
             ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
             fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
@@ -287,6 +301,9 @@ class _Emitter:
                 if step.get("_axes") not in ("parallel", "meet"):
                     raise Unsupported("S2-RR with skew axes")
                 call = _call(fn, w1, r1, w2, r2, point, Tpp)
+            elif code == "S2-TTT":
+                b = [c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
+                call = _call("slide3", args[0][0], args[1][0], args[2][0], b)
             else:
                 raise Unsupported(code)
         elif kind == "S3":
