@@ -463,6 +463,20 @@ def goal_columns(goals, target: str):
     return tuple(R + t)
 
 
+def leaf_arrays(leaves, N, dof):
+    """The leaves of a fast chain run on arrays as ``Q (N, L, dof)``, ``error (N, L)``, ``defer (N, L)``."""
+    L = len(leaves)
+    Q = np.empty((N, L, dof))
+    err = np.empty((N, L))
+    flag = np.zeros((N, L), dtype=bool)
+    for k, leaf in enumerate(leaves):
+        for j in range(dof):
+            Q[:, k, j] = leaf[j]
+        err[:, k] = leaf[dof]
+        flag[:, k] = leaf[dof + 1]
+    return Q, err, flag
+
+
 def _same_angle(d, revolute: bool, tol: float):
     """|d| within tol, modulo 2 pi for a revolute joint (both values already wrapped to (-pi, pi])."""
     a = np.abs(d)
@@ -476,14 +490,7 @@ def finish_many(leaves, N, *, kinds, lower, upper, limits, scale, tol, slots):
     solve on the reference path instead (their rows here are empty).
     """
     dof, L = len(kinds), len(leaves)
-    Q = np.empty((N, L, dof))
-    err = np.empty((N, L))
-    flag = np.zeros((N, L), dtype=bool)
-    for k, leaf in enumerate(leaves):
-        for j in range(dof):
-            Q[:, k, j] = leaf[j]
-        err[:, k] = leaf[dof]
-        flag[:, k] = leaf[dof + 1]
+    Q, err, flag = leaf_arrays(leaves, N, dof)
     exact_tol = tol * scale
     inexact = err > exact_tol
     defer = (flag | (inexact & (err < NEAR_MISS * scale)) | np.isnan(err)).any(axis=1)

@@ -19,8 +19,9 @@ from ikcompiler.verify import sample_configurations
 FREE = {"panda": ("panda_joint7",)}
 COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
     "arm4dof", "cylindrical", "gantry", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
-    "shadow_index", "shadow_thumb", "stanford", "ur5",
+    "shadow_index", "shadow_thumb", "stanford", "ur5", "jaco",
 }
+SEARCH = {"jaco"}  # search fallback: seeds are local minima on a grid, so the sets may differ slightly
 POSES = 60
 
 
@@ -55,7 +56,7 @@ def _poses(module, chain):
     return Q, Ts, free
 
 
-@pytest.mark.parametrize("name", sorted(COVERED))
+@pytest.mark.parametrize("name", sorted(COVERED - SEARCH))
 def test_scalar_fast_path_matches_reference(name):
     module, chain = compile_robot(name, free=FREE.get(name, ())), load_robot(name)
     assert module.FAST_PATH
@@ -77,6 +78,8 @@ def test_batch_fast_path_matches_scalar_and_reference(robot):
     module.FAST_PATH = False
     Qr, valid_r = module.solve_batch(Ts, *free)
     module.FAST_PATH = module._fast_chain is not None
+    if name in SEARCH:
+        return  # compared by recovery below
     assert np.array_equal(valid.sum(axis=1), valid_r.sum(axis=1)), name
     for k, T in enumerate(Ts):
         single = module.solve(T, *[f[k] for f in free])
@@ -94,3 +97,24 @@ def test_fast_solutions_round_trip(robot):
         if not flag:
             assert err <= 1e-9 * max(1.0, module.SCALE) * 4, (name, row, err)
         assert r >= 0.0 and np.isfinite(r)
+
+
+@pytest.mark.parametrize("name", sorted(SEARCH))
+def test_search_on_the_fast_chain_recovers_as_the_reference(name):
+    """A search plan grids its searched joints through the fast chain: on generic poses it must find
+    the sampled joint vector about as often as the reference runtime, and return nothing wrong."""
+    module, chain = compile_robot(name), load_robot(name)
+    Q = sample_configurations(chain, 80, seed=4, special=0.0)
+    Ts = np.array([module.fk(q) for q in Q])
+    recovered = {}
+    for fast in (True, False):
+        module.FAST_PATH = fast
+        S, V = module.solve_batch(Ts)
+        hits = 0
+        for k in range(len(Q)):
+            for row in S[k][V[k]]:
+                assert np.abs(module.fk(row) - Ts[k]).max() <= 1e-8 * module.SCALE, (name, k, row)
+            hits += _set_distance(Q[k][None], S[k][V[k]]) <= 1e-6
+        recovered[fast] = hits
+    module.FAST_PATH = True
+    assert recovered[True] >= recovered[False] - 2 and recovered[True] >= 0.95 * len(Q), recovered

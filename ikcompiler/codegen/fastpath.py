@@ -416,15 +416,21 @@ def classify_pairs(steps, twists, kinds, home, scale, samples: int = 6, seed: in
 
 
 def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | None:
-    """Source of ``_fast_chain(m, goal, free)`` for ``plan``, or None when the plan is not covered."""
-    if plan.method != "closed-form" or plan.search or plan.snapped or plan.virtual:
+    """Source of ``_fast_chain(m, goal, free)`` for ``plan``, or None when the plan is not covered.
+
+    ``free`` holds the values of ``free_joints`` and then, for a search plan, of the searched joints
+    (the chain is then the closed form that treats them as known).  A snapped plan is emitted on the
+    snapped robot's twists: its leaves are candidates that Newton steps then correct on the true robot.
+    """
+    if plan.method not in ("closed-form", "1d-search", "2d-search") or plan.virtual:
         return None
     if plan.target not in FAST_TARGETS:
         return None
-    twists = np.asarray(chain.twists, dtype=float)
+    twists = np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float)
     couplings = [(chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings]
     steps = classify_pairs(plan.steps, twists, chain.joint_types, chain.home, scale)
-    em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, free_joints, scale,
+    known = list(free_joints) + list(plan.search)
+    em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, known, scale,
                   plan.target)
     c = em.c
     goal = [f"g{i}" for i in range(12)]

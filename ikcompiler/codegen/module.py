@@ -227,7 +227,8 @@ def _newton(TH, goals, iters):
                       target=_SOLVE_TARGET, iters=iters)
 
 
-def _reference_chunk(goals, Td, init, limits):
+def _candidates(goals, Td, init):
+    """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum)."""
     N = len(goals)
     if METHOD == "numerical":
         step = _STEPS[0]
@@ -258,16 +259,59 @@ def _reference_chunk(goals, Td, init, limits):
             TH[cont] = _newton(TH[cont], goals[owner[cont]], 60)
         if _POLISH and len(TH):
             TH = _newton(TH, goals[owner], _POLISH)
+    return TH, owner, ls, cont
+
+
+def _complete(TH, owner, ls, cont, goals, limits):
+    """Check candidates on the true robot (a few Newton steps for near misses), wrap, pack."""
     if len(TH):
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
         err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
         near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
         if near.any():
             TH[near] = _newton(TH[near], goals[owner[near]], 3)
-    return _rt.finish(TH, owner, ls, N, twists=_TWISTS, kinds=_KINDS, home=_HOME,
+    return _rt.finish(TH, owner, ls, len(goals), twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
                       slots=MAX_SOLUTIONS, error=_error, cont=cont,
                       limits=(LOWER, UPPER) if limits else None)
+
+
+def _reference_chunk(goals, Td, init, limits):
+    return _complete(*_candidates(goals, Td, init), goals, limits)
+
+
+def _fast_leaves(goals, init, searched=()):
+    """Leaves of the fast chain for N targets as arrays: Q (N, L, n), error (N, L), defer (N, L)."""
+    free = tuple(init[:, _INDEPENDENT[pos]] for pos in _FREE) + tuple(searched)
+    with np.errstate(all="ignore"):  # degenerate instances may divide by ~0; their defer flag is set
+        leaves = _fast_chain(_fk.ARRAY, _fk.goal_columns(goals, TARGET), free)
+    return _fk.leaf_arrays(leaves, len(goals), len(JOINT_NAMES))
+
+
+def _fast_search_candidates(goals, init, instances=32768):
+    """Search fallback on the fast chain: every grid value of the searched joints through the closed
+    form; the local minima of each branch's error along the grid are polished by Newton steps."""
+    axes = [np.linspace(-np.pi, np.pi, _GRID, endpoint=False)] * len(_SEARCH)
+    mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(_SEARCH))
+    P = len(mesh)
+    THs, owners = [], []
+    step = max(1, instances // P)  # targets per pass, to bound memory
+    for start in range(0, len(goals), step):
+        n = min(step, len(goals) - start)
+        rep = np.repeat(np.arange(start, start + n), P)
+        Q, err, _ = _fast_leaves(goals[rep], init[rep], [np.tile(mesh[:, k], n) for k in range(len(_SEARCH))])
+        E = np.where(np.isnan(err), np.inf, err).reshape((n,) + (_GRID,) * len(_SEARCH) + (err.shape[1],))
+        is_min = np.isfinite(E)
+        for ax in range(1, 1 + len(_SEARCH)):
+            for shift in (1, -1):
+                is_min &= E <= np.roll(E, shift, axis=ax)
+        rows, leaf = np.nonzero(is_min.reshape(n * P, -1))
+        THs.append(Q[rows, leaf] @ _A.T + _B)
+        owners.append(rep[rows])
+    TH, owner = np.concatenate(THs), np.concatenate(owners)
+    TH = _newton(TH, goals[owner], 8)
+    none = np.zeros(len(TH), dtype=bool)
+    return TH, owner, none, none
 
 
 def _finish_kwargs(limits):
@@ -278,10 +322,20 @@ def _finish_kwargs(limits):
 def _solve_chunk(goals, Td, init, limits):
     if not FAST_PATH or _fast_chain is None:
         return _reference_chunk(goals, Td, init, limits)
-    free = tuple(init[:, _INDEPENDENT[pos]] for pos in _FREE)
-    with np.errstate(all="ignore"):  # degenerate instances may divide by ~0; they are deferred below
-        leaves = _fast_chain(_fk.ARRAY, _fk.goal_columns(goals, TARGET), free)
-    *parts, defer = _fk.finish_many(leaves, len(goals), **_finish_kwargs(limits))
+    if _SEARCH:
+        return _complete(*_fast_search_candidates(goals, init), goals, limits)
+    if _POLISH:  # snapped plan: the leaves are candidates on the snapped robot; Newton corrects them
+        Q, _, flag = _fast_leaves(goals, init)
+        defer = flag.any(axis=1)
+        rows, leaf = np.nonzero(~defer[:, None] & ~np.isnan(Q).any(axis=2))
+        TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
+        none = np.zeros(len(TH), dtype=bool)
+        parts = list(_complete(TH, rows, none, none, goals, limits))
+    else:
+        free = tuple(init[:, _INDEPENDENT[pos]] for pos in _FREE)
+        with np.errstate(all="ignore"):  # degenerate instances may divide by ~0; they are deferred below
+            leaves = _fast_chain(_fk.ARRAY, _fk.goal_columns(goals, TARGET), free)
+        *parts, defer = _fk.finish_many(leaves, len(goals), **_finish_kwargs(limits))
     if defer.any():  # near a degenerate geometry: the reference runtime classifies these targets
         idx = np.nonzero(defer)[0]
         for whole, part in zip(parts, _reference_chunk(goals[idx], Td[idx], init[idx], limits)):
@@ -291,7 +345,7 @@ def _solve_chunk(goals, Td, init, limits):
 
 def _fast_one(T, free, limits):
     """Rows (inexact, error, q) of one target on the scalar fast path, or None to go the reference way."""
-    if not FAST_PATH or _fast_chain is None or len(free) != len(FREE_JOINTS):
+    if not FAST_PATH or _fast_chain is None or _SEARCH or _POLISH or len(free) != len(FREE_JOINTS):
         return None
     goal = _fk.goal_entries(T, TARGET)
     try:
