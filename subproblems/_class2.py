@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from subproblems.core import BatchResult, Solution
-from subproblems.screw import twist_exp, twist_exp_batch
+from subproblems.screw import twist_exp
 
 #: A solution is exact when its residual is at most this times the problem scale.
 EXACT_TOL = 1e-9
@@ -41,6 +41,23 @@ FREE_TOL = 1e-10
 FREE_POINT_TOL = 10 * EXACT_TOL
 #: Relative size under which an eliminant coefficient counts as zero.
 COEF_TOL = 1e-12
+#: Candidates whose residual is at most this times the problem scale are not polished: the closed
+#: forms and eigenvalue roots normally land there, and Gauss-Newton would not change them.
+POLISH_TOL = 1e-14
+#: Two exact rows closer than TANGENT_TOL are one (multiple) root when their polished midpoint
+#: satisfies the equation to this times the problem scale: see :func:`merge_tangent`.
+MERGE_TOL = 1e-12
+#: Candidates whose residual exceeds this times the problem scale are polished only when no candidate
+#: of the instance is exact (to find the best least-squares answer): from that far, a few
+#: Gauss-Newton steps do not reach a solution the construction missed.
+FAR_TOL = 1e-2
+#: Two exact rows closer than this (joint distance) whose midpoint is exact to MERGE_TOL are one
+#: (tangent) solution: see :func:`merge_tangent`.
+TANGENT_TOL = 1e-3
+#: An exact row whose point on a revolute joint is this close (relative) to the joint's axis, but not
+#: within FREE_POINT_TOL, is tested for a nearby exact row with the point on the axis: at a singular
+#: configuration the roots are located only to ~sqrt(eps), and a free joint can hide behind that.
+NEAR_FREE_TOL = 1e-4
 
 TWO_PI = 2.0 * math.pi
 
@@ -137,35 +154,69 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
 
     ``free`` marks a candidate built with a free joint set to its representative value; ``continuum``
     marks the whole instance.  Without any exact candidate the best least-squares one is returned.
+    Only candidates whose residual exceeds ``POLISH_TOL`` are polished; those farther than
+    ``FAR_TOL`` only when no candidate of the instance is exact (then the best least-squares
+    answer is wanted).  Two exact rows joined by a segment of exact joint values (a tangency: a double
+    root located only to about the square root of the tolerance) are one solution: see
+    :func:`merge_tangent`.
     """
+    from subproblems.core import max_solutions
+
     kinds = kinds_of(code)
     twists = np.asarray(twists, dtype=float)
     p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
     scale = problem_scale(twists, p, q)
-    scored = []
+    rows = []
     for th, free in candidates:
         th = np.asarray(th, dtype=float)
         if th.shape != (len(kinds),) or not np.all(np.isfinite(th)):
             continue
-        th = wrap_row(kinds, polish(twists, p, q, th, scale))
-        free = bool(free) or has_free_joint(twists, p, th, scale)
-        scored.append((residual(twists, p, q, th), th, free))
-    if not scored:  # nothing usable: the zero vector as a flagged least-squares answer
+        th = wrap_row(kinds, th)
+        rows.append([residual(twists, p, q, th), th, bool(free)])
+    if not rows:  # nothing usable: the zero vector as a flagged least-squares answer
         th = np.zeros(len(kinds))
         return [Solution(tuple(th), ls=True, continuum=continuum)]
+
+    def polish_row(row):
+        row[1] = wrap_row(kinds, polish(twists, p, q, row[1], scale))
+        row[0] = residual(twists, p, q, row[1])
+
+    for row in rows:
+        if POLISH_TOL * scale < row[0] <= FAR_TOL * scale:
+            polish_row(row)
+    if not any(row[0] <= EXACT_TOL * scale for row in rows):
+        for row in rows:
+            if row[0] > FAR_TOL * scale:
+                polish_row(row)
+    rows += _snapped_rows(kinds, twists, p, q, rows, scale)
+    scored = [(r, th, free or has_free_joint(twists, p, th, scale)) for r, th, free in rows]
     exact = [s for s in scored if s[0] <= EXACT_TOL * scale]
     if not exact:
         r, th, free = min(scored, key=lambda s: s[0])
         return [Solution(tuple(float(a) for a in th), ls=True, continuum=continuum or free)]
     exact.sort(key=lambda s: s[0])
-    kept: list[tuple[float, np.ndarray, bool]] = []
+    # kept: [residual, representative, free, anchor, sum of offsets from the anchor, members]; a
+    # cluster of tangent rows is represented by its centroid (the roots of a k-fold root straddle
+    # it), or by a member with a free joint
+    kept: list[list] = []
     for s in exact:
-        if all(joint_distance(kinds, s[1], k[1]) > DEDUP_TOL for k in kept):
-            kept.append(s)
-    # Near a double root two polished copies can both pass the residual test yet differ by more than
-    # DEDUP_TOL; never return more rows than the type can have: merge the closest pairs.
-    from subproblems.core import max_solutions
-
+        if any(joint_distance(kinds, s[1], k[1]) <= DEDUP_TOL for k in kept):
+            continue
+        for k in kept:
+            if merge_tangent(kinds, twists, p, q, k[1], s[1], scale) is None:
+                continue
+            if s[2] and not k[2]:
+                k[1], k[2] = s[1], True
+            elif not k[2]:
+                k[4], k[5] = k[4] + joint_offset(kinds, k[3], s[1]), k[5] + 1
+                cen = wrap_row(kinds, polish(twists, p, q, k[3] + k[4] / k[5], scale))
+                if residual(twists, p, q, cen) <= EXACT_TOL * scale:
+                    k[1] = cen
+            break
+        else:
+            kept.append([s[0], s[1], s[2], s[1], np.zeros(len(kinds)), 1])
+    kept = [(k[0], k[1], k[2]) for k in kept]
+    # Never return more rows than the type can have: merge the closest pairs.
     while len(kept) > max_solutions(code):
         i, j = min(
             ((i, j) for i in range(len(kept)) for j in range(i + 1, len(kept))),
@@ -174,6 +225,59 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         del kept[j]  # kept is sorted by residual: j has the larger one
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
+
+
+def _snapped_rows(kinds: str, twists, p, q, rows, scale: float) -> list:
+    """Scalar use of :func:`snap_free_rows` on the exact rows near a free joint: new rows, free."""
+    exact = [row[1] for row in rows if row[0] <= EXACT_TOL * scale]
+    if not exact:
+        return []
+    TH = np.array(exact)
+    M = len(TH)
+    TW = np.broadcast_to(twists, (M,) + twists.shape)
+    P, Qr, S = np.broadcast_to(p, (M, 3)), np.broadcast_to(q, (M, 3)), np.full(M, scale)
+    _, _, dist = point_chain_rows(kinds, TW, TH, P, jac=False)
+    dmin = dist.min(axis=1)
+    sel = np.flatnonzero((dmin > FREE_POINT_TOL * scale) & (dmin <= NEAR_FREE_TOL * scale))
+    if sel.size == 0:
+        return []
+    th, ok = snap_free_rows(kinds, TW[sel], P[sel], Qr[sel], TH[sel], dist[sel], S[sel])
+    out = []
+    for t in th[ok]:
+        t = wrap_row(kinds, t)
+        out.append([residual(twists, p, q, t), t, True])
+    return out
+
+
+def joint_offset(kinds: str, a, b) -> np.ndarray:
+    """``b - a`` with angle differences along the shorter arc."""
+    return np.array([math.remainder(y - x, TWO_PI) if k == "R" else y - x for k, x, y in zip(kinds, a, b)])
+
+
+def joint_midpoint(kinds: str, a, b) -> np.ndarray:
+    """The midpoint of two joint vectors (angles along the shorter arc)."""
+    return wrap_row(kinds, np.asarray(a, dtype=float) + joint_offset(kinds, a, b) / 2)
+
+
+def merge_tangent(kinds: str, twists, p, q, a, b, scale: float):
+    """One representative of two exact rows that are one (multiple) root, or None.
+
+    Near a tangency (a double root: two circles touching, a line touching a circle; or a root of
+    higher multiplicity) the computed roots straddle the true one by about ``eps^(1/k)`` relative,
+    so several exact rows stand for one solution.  Two rows closer than ``TANGENT_TOL`` are one when
+    their midpoint, polished, satisfies the equation to ``MERGE_TOL`` (1000 times tighter than
+    exactness) and polishing moved it by less than a tenth of their half-distance.  Two genuinely
+    distinct roots fail this: between them the residual does not vanish, and polishing either
+    stalls above ``MERGE_TOL`` or runs to one of them.  Returns the polished midpoint.
+    """
+    d = joint_distance(kinds, a, b)
+    if d > TANGENT_TOL:
+        return None
+    mid = joint_midpoint(kinds, a, b)
+    pm = wrap_row(kinds, polish(twists, p, q, mid, problem_scale(twists, p, q)))
+    if residual(twists, p, q, pm) <= MERGE_TOL * scale and joint_distance(kinds, pm, mid) <= 0.05 * d:
+        return pm
+    return None
 
 
 def rotation_angle(xi, a, b, scale: float) -> tuple[float, bool]:
@@ -275,47 +379,139 @@ def wrap_batch(a):
     return np.where(a <= -math.pi, math.pi, a)
 
 
-def chain_points_batch(tw, th, p):
-    """``x`` (N, C, 3) and Jacobian (N, C, 3, m) for twists (N, m, 6), angles (N, C, m), points (N, 3)."""
-    N, C, m = th.shape
-    R = np.broadcast_to(np.eye(3), (N, C, 3, 3)).copy()
-    t = np.zeros((N, C, 3))
+def _cross(a, b):
+    """``a x b`` over the last axis, written out (numpy's cross is slow on many small vectors)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def _dot(a, b):
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _turn(w, c, s, u):
+    """Rodrigues: the vectors ``u`` (M, 3) turned about unit axes ``w`` (M, 3) by angles with cos/sin c, s."""
+    return u * c[:, None] + _cross(w, u) * s[:, None] + w * ((1.0 - c) * _dot(w, u))[:, None]
+
+
+def point_chain_rows(kinds: str, tw, th, p, jac: bool = True):
+    """``x = prod exp(xi_i th_i) p`` per row, with no 4x4 matrices.
+
+    ``tw`` (M, m, 6), ``th`` (M, m), ``p`` (M, 3).  Returns ``x`` (M, 3), the Jacobian ``dx/dth``
+    (M, 3, m) (None unless ``jac``) and, per joint, the distance of the point it acts on from its
+    axis (M, m; ``inf`` for prismatic joints), which reveals free joints.
+    """
+    M, m = th.shape
+    c, s = np.cos(th), np.sin(th)
+    x = p
+    dist = np.full((M, m), np.inf)
+    local = [None] * m  # d/dth_j of exp(xi_j th_j) y, at the current y
+    for j in range(m - 1, -1, -1):
+        v = tw[:, j, :3]
+        if kinds[j] == "R":
+            w = tw[:, j, 3:]
+            r = _cross(w, v)
+            u = x - r
+            perp = u - w * _dot(w, u)[:, None]
+            dist[:, j] = np.sqrt(_dot(perp, perp))
+            x = r + _turn(w, c[:, j], s[:, j], u) + w * (_dot(w, v) * th[:, j])[:, None]
+            if jac:
+                local[j] = _cross(w, x - r) + w * _dot(w, v)[:, None]
+        else:
+            x = x + v * th[:, j, None]
+            local[j] = v
+    if not jac:
+        return x, None, dist
     cols = []
-    for i in range(m):
-        xi = np.broadcast_to(tw[:, None, i, :], (N, C, 6))
-        wp = _mv(R, xi[..., 3:])
-        vp = _mv(R, xi[..., :3]) + np.cross(t, wp)
-        cols.append((vp, wp))
-        g = twist_exp_batch(xi, th[..., i])
-        t = _mv(R, g[..., :3, 3]) + t
-        R = R @ g[..., :3, :3]
-    x = _mv(R, np.broadcast_to(p[:, None, :], (N, C, 3))) + t
-    J = np.stack([vp + np.cross(wp, x) for vp, wp in cols], axis=-1)
-    return x, J
+    for j in range(m):
+        d = local[j]
+        for k in range(j - 1, -1, -1):  # turned by the joints before it
+            if kinds[k] == "R":
+                d = _turn(tw[:, k, 3:], c[:, k], s[:, k], d)
+        cols.append(d)
+    return x, np.stack(cols, axis=-1), dist
 
 
-def polish_batch(tw, p, q, th, scale, iters: int = 6):
-    m = th.shape[-1]
-    x, J = chain_points_batch(tw, th, p)
-    f = x - q[:, None, :]
-    r = np.linalg.norm(f, axis=-1)
+def snap_free_rows(kinds: str, tw, p, q, th, dist, scale, iters: int = 8):
+    """Rows (M, m) moved so that the point of their nearest revolute joint lies on its axis.
+
+    Gauss-Newton on the equation together with the offset of that point from the axis (the joint's
+    own angle does not enter the offset and stays where it is).  Returns the moved rows and the mask
+    of those that are then exact with the point on the axis (within ``FREE_POINT_TOL``): the joint is
+    free there, the instance a continuum, and the moved row its representative.
+    """
+    M, m = th.shape
+    th = th.copy()
+    ok = np.zeros(M, dtype=bool)
+    jsel = np.argmin(dist, axis=1)
+    for j in range(m):
+        rows = np.flatnonzero(jsel == j)
+        if kinds[j] != "R" or rows.size == 0:
+            continue
+        T, P, Qr, S = tw[rows], p[rows], q[rows], scale[rows]
+        w = T[:, j, 3:]
+        r = _cross(w, T[:, j, :3])
+        t = th[rows]
+        for it in range(iters + 1):
+            x, J, _ = point_chain_rows(kinds, T, t, P)
+            Jg = np.zeros_like(J)
+            if j == m - 1:
+                xj = P
+            else:
+                xj, Jj, _ = point_chain_rows(kinds[j + 1 :], T[:, j + 1 :], t[:, j + 1 :], P)
+                Jg[:, :, j + 1 :] = Jj - w[:, :, None] * np.einsum("ki,kij->kj", w, Jj)[:, None, :]
+            u = xj - r
+            g = u - w * _dot(w, u)[:, None]
+            f = x - Qr
+            if it == iters:
+                break
+            A = np.concatenate([J, Jg], axis=1)
+            b = np.concatenate([f, g], axis=1)
+            AtA = np.swapaxes(A, -1, -2) @ A
+            mu = 1e-12 * (np.trace(AtA, axis1=-2, axis2=-1) + 1e-300)
+            with np.errstate(all="ignore"):
+                step = -np.linalg.solve(
+                    AtA + mu[:, None, None] * np.eye(m), np.einsum("kji,kj->ki", A, b)[..., None]
+                )[..., 0]
+            t = t + np.where(np.isfinite(step), step, 0.0)
+        good = (np.linalg.norm(f, axis=-1) <= EXACT_TOL * S) & (
+            np.linalg.norm(g, axis=-1) <= FREE_POINT_TOL * S
+        )
+        th[rows[good]] = t[good]
+        ok[rows[good]] = True
+    return th, ok
+
+
+def polish_rows(kinds: str, tw, p, q, th, r, scale, iters: int = 6):
+    """Gauss-Newton on rows (M, m) of ``prod exp(xi_i th_i) p - q`` from residuals ``r`` (M,).
+
+    A step is kept only if it lowers the residual; a row stops at the first step that does not (as
+    :func:`polish`) or once it is exact to roundoff.  Returns the polished ``th`` and residuals.
+    """
+    th, r = th.copy(), r.copy()
+    m = th.shape[1]
+    act = np.flatnonzero(r > 1e-15 * scale)
     for _ in range(iters):
-        if not np.any(r > 1e-15 * scale[:, None]):
-            break  # every candidate is already exact to roundoff: skip the remaining iterations
+        if act.size == 0:
+            break
+        T, P, Qa = tw[act], p[act], q[act]
+        x, J, _ = point_chain_rows(kinds, T, th[act], P)
+        f = x - Qa
         JtJ = np.swapaxes(J, -1, -2) @ J
         mu = 1e-14 * (np.trace(JtJ, axis1=-2, axis2=-1) + 1e-300)
-        A = JtJ + mu[..., None, None] * np.eye(m)
-        step = -np.linalg.solve(A, np.einsum("...ji,...j->...i", J, f)[..., None])[..., 0]
+        A = JtJ + mu[:, None, None] * np.eye(m)
+        with np.errstate(all="ignore"):
+            step = -np.linalg.solve(A, np.einsum("kji,kj->ki", J, f)[..., None])[..., 0]
         step = np.where(np.isfinite(step), step, 0.0)
-        th2 = th + step
-        x2, J2 = chain_points_batch(tw, th2, p)
-        f2 = x2 - q[:, None, :]
-        r2 = np.linalg.norm(f2, axis=-1)
-        better = (r2 < r) & (r > 1e-15 * scale[:, None])
-        th = np.where(better[..., None], th2, th)
-        J = np.where(better[..., None, None], J2, J)
-        f = np.where(better[..., None], f2, f)
-        r = np.where(better, r2, r)
+        th2 = th[act] + step
+        x2, _, _ = point_chain_rows(kinds, T, th2, P, jac=False)
+        r2 = np.sqrt(_dot(x2 - Qa, x2 - Qa))
+        better = r2 < r[act]
+        th[act[better]] = th2[better]
+        r[act[better]] = r2[better]
+        act = act[better]
+        act = act[r[act] > 1e-15 * scale[act]]
     return th, r
 
 
@@ -360,11 +556,14 @@ def trig_roots_batch(F):
     quartic = np.abs(a4) > COEF_TOL * m
     lead = np.where(quartic, a4, 1.0)
     N = F.shape[0]
-    comp = np.zeros((N, 4, 4), dtype=complex)
-    comp[:, 0, :] = -np.stack([a3, a2, a1, a0], axis=-1) / lead[:, None]
-    comp[:, 1, 0] = comp[:, 2, 1] = comp[:, 3, 2] = 1.0
-    comp = np.where(quartic[:, None, None] & np.isfinite(comp), comp, 0.0)
-    z4 = np.linalg.eigvals(comp)
+    z4 = np.ones((N, 4), dtype=complex)
+    idx = np.flatnonzero(quartic)  # companion eigenvalues only where the second harmonic is there
+    if idx.size:
+        comp = np.zeros((idx.size, 4, 4), dtype=complex)
+        comp[:, 0, :] = -np.stack([a3[idx], a2[idx], a1[idx], a0[idx]], axis=-1) / lead[idx, None]
+        comp[:, 1, 0] = comp[:, 2, 1] = comp[:, 3, 2] = 1.0
+        comp = np.where(np.isfinite(comp), comp, 0.0)
+        z4[idx] = np.linalg.eigvals(comp)
     quad = np.abs(a3) > COEF_TOL * m
     aa = np.where(quad, a3, 1.0)
     sq = np.sqrt(a2 * a2 - 4 * aa * a1)
@@ -372,6 +571,30 @@ def trig_roots_batch(F):
     z2 = np.where(quad[:, None], z2, 1.0)
     z = np.where(quartic[:, None], z4, np.concatenate([z2, z2], axis=-1))
     return np.angle(z)
+
+
+@np.errstate(all="ignore")
+def trig_roots_nan_batch(F, ref):
+    """:func:`trig_roots` for ``F`` (N, 5), as the scalar one decides: roots (N, 4), NaN-padded, and
+    the mask of identically vanishing instances (``None`` of the scalar function; no roots then)."""
+    f0 = F[:, 0]
+    h1, h2 = np.hypot(F[:, 1], F[:, 2]) / 2, np.hypot(F[:, 3], F[:, 4]) / 2
+    m = np.maximum.reduce([np.abs(f0), h1, h2])
+    none = (m <= COEF_TOL * ref) | (m == 0.0)
+    lin = h2 <= COEF_TOL * m
+    const = lin & (h1 <= COEF_TOL * m)
+    roots = trig_roots_batch(F)
+    roots = np.where(lin[:, None], np.concatenate([roots[:, :2], np.full((len(f0), 2), np.nan)], 1), roots)
+    return np.where((none | const)[:, None], np.nan, roots), none
+
+
+def lin_roots_nan_batch(f0, c1, s1, ref):
+    """Roots (..., 2) of ``f0 + c1 cos + s1 sin`` (NaN: none) and the identically-zero mask (...)."""
+    shape = np.shape(f0)
+    z = np.zeros(int(np.prod(shape)))
+    F = np.stack([np.ravel(f0), np.ravel(c1), np.ravel(s1), z, z], -1)
+    roots, none = trig_roots_nan_batch(F, np.broadcast_to(ref, shape).ravel())
+    return roots[:, :2].reshape(shape + (2,)), none.reshape(shape)
 
 
 @np.errstate(all="ignore")
@@ -395,71 +618,142 @@ def quadratic_roots_batch(a, b, c):
 
 @np.errstate(all="ignore")
 def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) -> BatchResult:
-    """Vectorised :func:`finalize`: candidates (N, C, m) -> a BatchResult with ``max_solutions`` slots."""
+    """Vectorised :func:`finalize`: candidates (N, C, m) -> a BatchResult with ``max_solutions`` slots.
+
+    Non-finite candidates are skipped (callers mark unused slots with NaN).  Candidates are flattened
+    to rows; only rows that fail the polish check (``POLISH_TOL``) are polished, the far ones
+    (``FAR_TOL``) only in instances without any exact row, exactly as the scalar path.
+    """
     from subproblems.core import max_solutions
 
     kinds = kinds_of(code)
     K = max_solutions(code)
     N, C, m = cand.shape
     cand_free = np.zeros((N, C), dtype=bool) if cand_free is None else np.broadcast_to(cand_free, (N, C))
-    if inst_cont is None:
-        inst_cont = np.zeros(N, dtype=bool)
+    inst_cont = np.zeros(N, dtype=bool) if inst_cont is None else np.asarray(inst_cont, dtype=bool)
     rev = np.array([k == "R" for k in kinds])
-    ok = np.all(np.isfinite(cand), axis=-1)
-    cand = np.where(ok[..., None], cand, 0.0)
     scale = problem_scale_batch(tw, p, q)
-    cand, _ = polish_batch(tw, p, q, cand, scale)
-    cand = np.where(rev, wrap_batch(cand), cand)
-    x, _ = chain_points_batch(tw, cand, p)
-    res = np.where(ok, np.linalg.norm(x - q[:, None, :], axis=-1), np.inf)
-    cand_free = cand_free | _free_joint_batch(tw, p, cand, scale)
+    tw = np.ascontiguousarray(tw)
+
+    # --- rows: every finite candidate ----------------------------------------------------------
+    ok = np.all(np.isfinite(cand), axis=-1)
+    ni, ci = np.nonzero(ok)
+    TW, P, Qr, S = tw[ni], p[ni], q[ni], scale[ni]
+    th = np.where(rev, wrap_batch(cand[ni, ci]), cand[ni, ci])
+    x, _, dist = point_chain_rows(kinds, TW, th, P, jac=False)
+    r = np.linalg.norm(x - Qr, axis=-1)
+
+    def polish_sel(sel):
+        if sel.size == 0:
+            return
+        t2, _ = polish_rows(kinds, TW[sel], P[sel], Qr[sel], th[sel], r[sel], S[sel])
+        t2 = np.where(rev, wrap_batch(t2), t2)
+        x2, _, d2 = point_chain_rows(kinds, TW[sel], t2, P[sel], jac=False)
+        th[sel], dist[sel] = t2, d2
+        r[sel] = np.linalg.norm(x2 - Qr[sel], axis=-1)
+
+    polish_sel(np.flatnonzero((r > POLISH_TOL * S) & (r <= FAR_TOL * S)))
+    has_exact = np.zeros(N, dtype=bool)
+    has_exact[ni[r <= EXACT_TOL * S]] = True
+    polish_sel(np.flatnonzero((r > FAR_TOL * S) & ~has_exact[ni]))
+    # exact rows next to a free joint: add the row with the joint's point on its axis (a continuum)
+    dmin = dist.min(axis=1)
+    sel = np.flatnonzero((r <= EXACT_TOL * S) & (dmin > FREE_POINT_TOL * S) & (dmin <= NEAR_FREE_TOL * S))
+    if sel.size:
+        t2, good = snap_free_rows(kinds, TW[sel], P[sel], Qr[sel], th[sel], dist[sel], S[sel])
+        sel, t2 = sel[good], np.where(rev, wrap_batch(t2[good]), t2[good])
+        x2, _, d2 = point_chain_rows(kinds, TW[sel], t2, P[sel], jac=False)
+        ni, ci = np.concatenate([ni, ni[sel]]), np.concatenate([ci, ci[sel] + C])
+        TW, P, Qr, S = (np.concatenate([a, a[sel]]) for a in (TW, P, Qr, S))
+        th, dist = np.concatenate([th, t2]), np.concatenate([dist, d2])
+        r = np.concatenate([r, np.linalg.norm(x2 - Qr[-len(sel) :], axis=-1)])
+        cand_free = np.concatenate([cand_free, np.zeros((N, C), dtype=bool)], axis=1)
+        cand_free[ni[-len(sel) :], ci[-len(sel) :]] = True
+        C = 2 * C
+    free_row = np.any(dist <= FREE_POINT_TOL * S[:, None], axis=-1)
+
+    Cand = np.zeros((N, C, m))
+    Cand[ni, ci] = th
+    res = np.full((N, C), np.inf)
+    res[ni, ci] = r
+    cfree = cand_free.copy()
+    cfree[ni, ci] |= free_row
     exact = res <= EXACT_TOL * scale[:, None]
-    # prefer low residuals when deduplicating
-    order = np.argsort(np.where(exact, res, np.inf), axis=1, kind="stable")
-    cand = np.take_along_axis(cand, order[..., None], axis=1)
-    res = np.take_along_axis(res, order, axis=1)
-    exact = np.take_along_axis(exact, order, axis=1)
-    cand_free = np.take_along_axis(cand_free, order, axis=1)
-    keep = exact.copy()
-    for j in range(1, C):
-        for i in range(j):
-            d = np.abs(cand[:, i] - cand[:, j])
-            d = np.where(
-                rev,
-                np.abs(np.remainder(d + math.pi, TWO_PI) - math.pi),
-                d / np.maximum(1.0, np.abs(cand[:, j])),
-            )
-            keep[:, j] &= ~(keep[:, i] & (d.max(axis=-1) <= DEDUP_TOL))
-    any_exact = keep.any(axis=1)
-    slot = np.argsort(~keep, axis=1, kind="stable")[:, :K]
+
+    # --- the best least-squares row of instances without an exact one ------------------------
     best = np.argmin(res, axis=1)
-    slot[:, 0] = np.where(any_exact, slot[:, 0], best)
-    Q = np.take_along_axis(cand, slot[..., None], axis=1)
-    valid = np.take_along_axis(keep, slot, axis=1)
+    any_exact = exact.any(axis=1)
+    ar = np.arange(N)
+    q_best, free_best = Cand[ar, best], cfree[ar, best]
+
+    # --- exact rows first (lowest residual first), then deduplicate the few columns that hold them
+    order = np.argsort(np.where(exact, res, np.inf), axis=1, kind="stable")
+    Ce = max(1, int(exact.sum(axis=1).max()))
+    order = order[:, :Ce]
+    Cand = np.take_along_axis(Cand, order[..., None], axis=1)
+    keep = np.take_along_axis(exact, order, axis=1)
+    cfree = np.take_along_axis(cfree, order, axis=1)
+
+    def jdist(a, b):
+        d = np.abs(a - b)
+        d = np.where(rev, np.abs(np.remainder(d + math.pi, TWO_PI) - math.pi), d / np.maximum(1.0, np.abs(b)))
+        return d.max(axis=-1)
+
+    def offset(a, b):
+        return np.where(rev, np.remainder(b - a + math.pi, TWO_PI) - math.pi, b - a)
+
+    def polished(n, th_):
+        th_ = np.where(rev, wrap_batch(th_), th_)
+        xm, _, _ = point_chain_rows(kinds, tw[n], th_, p[n], jac=False)
+        t2, r2 = polish_rows(kinds, tw[n], p[n], q[n], th_, np.linalg.norm(xm - q[n], axis=-1), scale[n])
+        return np.where(rev, wrap_batch(t2), t2), r2
+
+    # clusters of tangent rows (see the scalar path): anchor, sum of offsets, members
+    anchor, dsum, cnt = Cand.copy(), np.zeros_like(Cand), np.ones((N, Ce))
+    for j in range(1, Ce):
+        for i in range(j):
+            both = keep[:, i] & keep[:, j]
+            if not both.any():
+                continue
+            d = jdist(Cand[:, i], Cand[:, j])
+            keep[:, j] &= ~(both & (d <= DEDUP_TOL))
+            near = np.flatnonzero(both & keep[:, j] & (d <= TANGENT_TOL))
+            if near.size == 0:
+                continue
+            a, b = Cand[near, i], Cand[near, j]
+            mid = a + offset(a, b) / 2
+            pm, rm = polished(near, mid)
+            moved = jdist(pm, np.where(rev, wrap_batch(mid), mid))
+            hit = near[(rm <= MERGE_TOL * scale[near]) & (moved <= 0.05 * d[near])]
+            if hit.size == 0:
+                continue
+            fi, fj = cfree[hit, i], cfree[hit, j]
+            dsum[hit, i] += offset(anchor[hit, i], Cand[hit, j])
+            cnt[hit, i] += 1
+            cen, rc = polished(hit, anchor[hit, i] + dsum[hit, i] / cnt[hit, i, None])
+            cen_ok = rc <= EXACT_TOL * scale[hit]
+            rep = np.where(fj[:, None], Cand[hit, j], np.where(cen_ok[:, None], cen, Cand[hit, i]))
+            Cand[hit, i] = np.where(fi[:, None], Cand[hit, i], rep)
+            cfree[hit, i] = fi | fj
+            keep[hit, j] = False
+
+    Kc = min(K, Ce)
+    slot = np.argsort(~keep, axis=1, kind="stable")[:, :Kc]
+    Q = np.zeros((N, K, m))
+    valid = np.zeros((N, K), dtype=bool)
+    free = np.zeros((N, K), dtype=bool)
+    Q[:, :Kc] = np.take_along_axis(Cand, slot[..., None], axis=1)
+    valid[:, :Kc] = np.take_along_axis(keep, slot, axis=1)
+    free[:, :Kc] = np.take_along_axis(cfree, slot, axis=1)
+    Q[:, 0] = np.where(any_exact[:, None], Q[:, 0], q_best)
+    free[:, 0] = np.where(any_exact, free[:, 0], free_best)
     valid[:, 0] |= ~any_exact
     ls = np.zeros((N, K), dtype=bool)
     ls[:, 0] = ~any_exact
-    free = np.take_along_axis(cand_free, slot, axis=1) & valid
+    free &= valid
     cont = inst_cont | free.any(axis=1)
-    # order valid rows lexicographically like the scalar path (cosmetic; keeps outputs comparable)
     Q = np.where(valid[..., None], Q, 0.0)
     return BatchResult(code, Q, valid, ls, cont)
-
-
-def _free_joint_batch(tw, p, th, scale):
-    """Vectorised :func:`has_free_joint` over candidates (N, C, m)."""
-    N, C, m = th.shape
-    x = np.broadcast_to(p[:, None, :], (N, C, 3))
-    free = np.zeros((N, C), dtype=bool)
-    for j in range(m - 1, -1, -1):
-        xi = np.broadcast_to(tw[:, None, j, :], (N, C, 6))
-        w = xi[..., 3:]
-        u = x - np.cross(w, xi[..., :3])
-        d = np.linalg.norm(u - w * np.sum(w * u, -1, keepdims=True), axis=-1)
-        free |= np.any(w != 0, axis=-1) & (d <= FREE_POINT_TOL * scale[:, None])
-        g = twist_exp_batch(xi, th[..., j])
-        x = _mv(g[..., :3, :3], x) + g[..., :3, 3]
-    return free
 
 
 def inverted_batch(tw) -> np.ndarray:

@@ -35,7 +35,10 @@ Degenerate cases and what is returned:
 * ``th_3`` free (``M = 0``: ``p`` on axis 3, axes 2 and 3 coincident): ``th_3 = 0``, ``continuum``;
 * ``th_2`` free (the intermediate point on axis 2): ``th_2 = 0``, ``continuum``.
 
-No vectorised path yet: ``solve_batch`` loops over the scalar one (``vectorised=False``).
+Vectorised path (``rrr_batch``): the same elimination for all instances at once, with fixed slots:
+four for the quartic's roots, four for the rank-1 construction, four for a free ``th_3``, and a
+second group of eight for the representatives of a free ``th_1`` (used, as in the scalar path, only
+where the first group leaves no exact solution); then the common polishing and verification.
 
 >>> import numpy as np
 >>> from subproblems import solve
@@ -59,14 +62,21 @@ import numpy as np
 
 from subproblems._class2 import (
     COEF_TOL,
+    EXACT_TOL,
     circle_of,
+    circle_of_batch,
     finalize,
+    finalize_batch,
+    lin_roots_nan_batch,
     problem_scale,
+    problem_scale_batch,
     quadratic_form_to_fourier,
     rotation_angle,
+    rotation_angle_batch,
     trig_roots,
+    trig_roots_nan_batch,
 )
-from subproblems.core import Solution, register
+from subproblems.core import BatchResult, Solution, register
 
 RANK_TOL = 1e-9
 
@@ -74,6 +84,11 @@ RANK_TOL = 1e-9
 def _lin_roots(f0, c1, s1, ref):
     """Roots of ``f0 + c1 cos + s1 sin`` (None: identically zero)."""
     return trig_roots(f0, c1, s1, ref=ref)
+
+
+def _flat(f0, c1, s1, ref):
+    """``f0 + c1 cos + s1 sin`` is within the exactness tolerance of zero for every angle."""
+    return np.abs(f0) + np.hypot(c1, s1) <= EXACT_TOL * ref
 
 
 def pair_candidates(M, E0, Ec, Es, ref: float):
@@ -107,7 +122,10 @@ def pair_candidates(M, E0, Ec, Es, ref: float):
     if sv[1] <= 1e-6 * sv[0]:  # (near) rank 1: left null vector u2, row direction v1
         U, S, Vt = np.linalg.svd(M)
         u1, u2, v1 = U[:, 0], U[:, 1], Vt[0]
-        roots = _lin_roots(u2 @ E0, u2 @ Ec, u2 @ Es, ref)
+        # the condition on a alone; satisfied within the exactness tolerance by every a (e.g. axes
+        # 1 and 2 parallel up to a tilt of 1e-12), a is free: the roots of such a residue are noise
+        f0, c1, s1 = u2 @ E0, u2 @ Ec, u2 @ Es
+        roots = None if _flat(f0, c1, s1, ref) else _lin_roots(f0, c1, s1, ref)
         alts: list[float] = []
         if roots is None:
             free_a = True
@@ -172,13 +190,159 @@ def _rtr_system(x2, c0, cc, cs, e0, ec, es, scale):
     return M, B @ (c0 - e0), B @ cc, B @ cs
 
 
-@register("S2-RRR", 4)
+def _dot(a, b):
+    return np.sum(a * b, -1)
+
+
+def _rrr_system_batch(x2, c0, cc, cs, e0, ec, es, scale):
+    w2 = x2[:, 3:]
+    r2 = np.cross(w2, x2[:, :3])
+    k, h = e0 - r2, c0 - r2
+    sc = scale
+    M = np.stack(
+        [
+            np.stack([_dot(w2, ec), _dot(w2, es)], -1),
+            np.stack([2 * _dot(k, ec) / sc, 2 * _dot(k, es) / sc], -1),
+        ],
+        -2,
+    )
+    E0 = np.stack([_dot(w2, c0 - e0), (_dot(h, h) + _dot(cc, cc) - _dot(k, k) - _dot(ec, ec)) / sc], -1)
+    Ec = np.stack([_dot(w2, cc), 2 * _dot(h, cc) / sc], -1)
+    Es = np.stack([_dot(w2, cs), 2 * _dot(h, cs) / sc], -1)
+    return M, E0, Ec, Es
+
+
+def _rtr_system_batch(x2, c0, cc, cs, e0, ec, es, scale):
+    v = x2[:, :3]
+    ref = np.where(np.abs(v[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    a = np.cross(v, ref)
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    B = np.stack([a, np.cross(v, a)], -2)  # (N, 2, 3)
+    M = np.stack([np.einsum("nij,nj->ni", B, ec), np.einsum("nij,nj->ni", B, es)], -1)
+    E0, Ec, Es = (np.einsum("nij,nj->ni", B, u) for u in (c0 - e0, cc, cs))
+    return M, E0, Ec, Es
+
+
+@np.errstate(all="ignore")
+def pair_candidates_batch(M, E0, Ec, Es, ref):
+    """Vectorised :func:`pair_candidates`: pairs ``(a, b)`` of the first group (N, 12, 2) and of the
+    second (free ``a`` representatives, N, 8, 2), NaN where unused; ``free_a``, ``free_b`` (N,)."""
+    N = len(M)
+    nm = np.abs(M).max(axis=(-1, -2))
+    U, S, Vt = np.linalg.svd(M)
+    bfree = nm <= COEF_TOL * ref
+    regular = ~bfree & (S[:, 1] > RANK_TOL * S[:, 0])
+    rank1 = ~bfree & (S[:, 1] <= 1e-6 * S[:, 0])
+    nan = np.nan
+    g0 = np.full((N, 12, 2), nan)
+    g1 = np.full((N, 8, 2), nan)
+
+    # regular M: Cramer's rule and the unit-norm condition, a quartic in exp(i a)
+    det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
+    adj = np.stack([np.stack([M[:, 1, 1], -M[:, 0, 1]], -1), np.stack([-M[:, 1, 0], M[:, 0, 0]], -1)], -2)
+    G0, Gc, Gs = (np.einsum("nij,nj->ni", adj, E) for E in (E0, Ec, Es))
+    coef = (_dot(Gc, Gc), 2 * _dot(Gc, Gs), _dot(Gs, Gs), 2 * _dot(G0, Gc), 2 * _dot(G0, Gs))
+    coef = coef + (_dot(G0, G0) - det * det,)
+    F = np.stack(quadratic_form_to_fourier(*coef), -1)
+    ra, none_q = trig_roots_nan_batch(F, ref * nm * nm)
+    ra = np.where(none_q[:, None], np.array([0.0, nan, nan, nan]), ra)
+    G = (G0[:, None] + Gc[:, None] * np.cos(ra)[..., None] + Gs[:, None] * np.sin(ra)[..., None]) / det[
+        :, None, None
+    ]
+    rb = np.arctan2(G[..., 1], G[..., 0])
+    g0[:, 0:4] = np.where(regular[:, None, None], np.stack([ra, rb], -1), nan)
+    free_a = regular & none_q
+
+    # (near) rank 1: left null vector u2 gives the equation in a, the row direction v1 the one in b
+    u1, u2, v1 = U[:, :, 0], U[:, :, 1], Vt[:, 0, :]
+    f0, c1, s1 = _dot(u2, E0), _dot(u2, Ec), _dot(u2, Es)
+    a1, none_a = lin_roots_nan_batch(f0, c1, s1, ref)
+    none_a |= _flat(f0, c1, s1, ref)
+    a1 = np.where(none_a[:, None], np.array([0.0, nan]), a1)
+    e0, ec, es = _dot(u1, E0), _dot(u1, Ec), _dot(u1, Es)
+    alts, _ = lin_roots_nan_batch(e0, ec, es, ref)
+    alts = np.concatenate(
+        [alts, np.arctan2(es, ec)[:, None], np.arctan2(-es, -ec)[:, None]], axis=1
+    )  # (N, 4)
+
+    def with_b(a_s):
+        rhs = e0[:, None] + ec[:, None] * np.cos(a_s) + es[:, None] * np.sin(a_s)
+        k = a_s.shape[1]
+        sv = np.broadcast_to((S[:, 0] * v1[:, 0])[:, None], (N, k))
+        sw = np.broadcast_to((S[:, 0] * v1[:, 1])[:, None], (N, k))
+        bs, none_b = lin_roots_nan_batch(-rhs, sv, sw, np.broadcast_to(ref[:, None], (N, k)))
+        bs = np.where(none_b[..., None], np.array([0.0, nan]), bs)  # (N, k, 2)
+        pairs = np.stack([np.broadcast_to(a_s[..., None], bs.shape), bs], -1)
+        return pairs.reshape(N, 2 * k, 2)
+
+    g0[:, 4:8] = np.where(rank1[:, None, None], with_b(a1), nan)
+    g1[:] = np.where((rank1 & none_a)[:, None, None], with_b(alts), nan)
+    free_a |= rank1 & none_a
+
+    # M = 0: b free, b = 0, then E(a) = M (1, 0) ~ 0: two linear equations in a
+    for row in range(2):
+        rr, nn_ = lin_roots_nan_batch(E0[:, row] - M[:, row, 0], Ec[:, row], Es[:, row], ref)
+        rr = np.where(nn_[:, None], np.array([0.0, nan]), rr)
+        pr = np.stack([rr, np.zeros_like(rr)], -1)
+        g0[:, 8 + 2 * row : 10 + 2 * row] = np.where(bfree[:, None, None], pr, nan)
+    return g0, g1, free_a, bfree
+
+
+def _triples_batch(code, x2, c0, cc, cs, e0, ec, es, pairs, scale):
+    a, b = pairs[..., 0], pairs[..., 1]
+    y = c0[:, None] + cc[:, None] * np.cos(a)[..., None] - cs[:, None] * np.sin(a)[..., None]
+    z = e0[:, None] + ec[:, None] * np.cos(b)[..., None] + es[:, None] * np.sin(b)[..., None]
+    if code == "S2-RRR":
+        th2, free = rotation_angle_batch(x2[:, None], z, y, scale[:, None])
+    else:
+        th2, free = _dot(x2[:, None, :3], y - z), np.zeros(a.shape, dtype=bool)
+    return np.stack([a, th2, b], -1), free
+
+
+def _solve_batch(code, tw, p, q, build) -> BatchResult:
+    scale = problem_scale_batch(tw, p, q)
+    x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
+    c0, cc, cs = circle_of_batch(x1, q)  # y = c0 + cc cos th1 - cs sin th1
+    e0, ec, es = circle_of_batch(x3, p)  # z = e0 + ec cos th3 + es sin th3
+    M, E0, Ec, Es = build(x2, c0, cc, -cs, e0, ec, es, scale)
+    g0, g1, free1, free3 = pair_candidates_batch(M, E0, Ec, Es, scale)
+    cont = free1 | free3
+    cand, free = _triples_batch(code, x2, c0, cc, cs, e0, ec, es, g0, scale)
+    r = finalize_batch(code, tw, p, q, cand, free, cont)
+    # second group (representatives of a free th_1) where the first leaves no exact solution
+    redo = np.flatnonzero(r.ls.any(axis=1) & np.isfinite(g1).all(-1).any(-1))
+    if redo.size == 0:
+        return r
+
+    def sub(a):
+        return a[redo]
+
+    cand1, free1_ = _triples_batch(
+        code, sub(x2), sub(c0), sub(cc), sub(cs), sub(e0), sub(ec), sub(es), sub(g1), sub(scale)
+    )
+    r1 = finalize_batch(code, sub(tw), sub(p), sub(q), cand1, free1_, sub(cont))
+    Q, valid, ls, cc_ = r.q.copy(), r.valid.copy(), r.ls.copy(), r.continuum.copy()
+    Q[redo], valid[redo], ls[redo], cc_[redo] = r1.q, r1.valid, r1.ls, r1.continuum
+    return BatchResult(code, Q, valid, ls, cc_)
+
+
+def rrr_batch(tw, p, q) -> BatchResult:
+    """Vectorised S2-RRR (module docstring)."""
+    return _solve_batch("S2-RRR", tw, p, q, _rrr_system_batch)
+
+
+def rtr_batch(tw, p, q) -> BatchResult:
+    """Vectorised S2-RTR (module docstring)."""
+    return _solve_batch("S2-RTR", tw, p, q, _rtr_system_batch)
+
+
+@register("S2-RRR", 4, batch=rrr_batch)
 def solve_s2_rrr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 th_3) p = q`` (module docstring)."""
     return _solve("S2-RRR", twists, p, q, _rrr_system)
 
 
-@register("S2-RTR", 4)
+@register("S2-RTR", 4, batch=rtr_batch)
 def solve_s2_rtr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 t) exp(xi_3 th_3) p = q`` (module docstring)."""
     return _solve("S2-RTR", twists, p, q, _rtr_system)

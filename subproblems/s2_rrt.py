@@ -79,6 +79,9 @@ from subproblems._class2 import (
 from subproblems.core import BatchResult, Solution, register
 from subproblems.s2_rr import PARALLEL_TOL, rr_candidates, rr_theta1_candidates_batch
 
+#: Below this |w_2 . v| the roots of g (the axial condition) join the eliminant's roots as candidates.
+K1_TOL = 1e-8
+
 
 def _eliminant(x1, x2, x3, p, q):
     """Coefficients of the eliminant in th_1 and the pieces needed to back-substitute (see doc)."""
@@ -141,6 +144,11 @@ def rrt_candidates(twists, p, q, scale):
             _candidates_for([0.0], x2, x3, p, q, aux, scale),
             _candidates_for([math.atan2(ds, dc)], x2, x3, p, q, aux, scale),
         ], True
+    k1, g0, gc, gs = aux[3], aux[6], aux[7], aux[8]
+    if abs(k1) <= K1_TOL:
+        # v (nearly) perpendicular to axis 2: the eliminant is (nearly) -g^2, every root double and
+        # located only to sqrt(eps); the roots of g itself are the accurate candidates
+        roots = list(roots) + list(trig_roots(g0, gc, gs, ref=scale) or [])
     return [_candidates_for(roots, x2, x3, p, q, aux, scale)], False
 
 
@@ -189,9 +197,12 @@ def rrt_batch(tw, p, q) -> BatchResult:
     F = k1 * k1 * (d0 - P0) - 2 * k1 * P1 * g0 - g0 * g0
     four = np.stack(quadratic_form_to_fourier(A, B, C, D, E, F), -1)
     free1 = np.abs(four).max(-1) <= COEF_TOL * scale * scale
+    z = np.zeros_like(g0)
+    groots = trig_roots_batch(np.stack([g0, gc, gs, z, z], -1))[:, :2]
+    groots = np.where((np.abs(k1) <= K1_TOL)[:, None], groots, np.nan)  # see rrt_candidates
     th1 = np.concatenate(
-        [trig_roots_batch(four), np.zeros((len(F), 1)), np.arctan2(ds, dc)[:, None]], axis=1
-    )  # (N, 6)
+        [trig_roots_batch(four), np.zeros((len(F), 1)), np.arctan2(ds, dc)[:, None], groots], axis=1
+    )  # (N, 8)
     c, s = np.cos(th1), np.sin(th1)
     y = c0[:, None] + cc[:, None] * c[..., None] - cs[:, None] * s[..., None]
     ts = quadratic_roots_batch(
@@ -213,7 +224,7 @@ def rrt_batch(tw, p, q) -> BatchResult:
     cand = np.stack([TH1, th2, T], -1)
     # representatives of a free th_1 (slots 4, 5 of th1) count only when the eliminant vanishes
     rep = np.zeros(th1.shape[1], dtype=bool)
-    rep[4:] = True
+    rep[4:6] = True
     is_rep = np.repeat(rep, 3)[None, :]
     fin = np.isfinite(cand).all(-1) & (~is_rep | free1[:, None])
     # Intersecting axes 1, 2: the construction of the scalar path (law of cosines for t, then S2-RR).

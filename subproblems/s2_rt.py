@@ -72,20 +72,28 @@ def tr_candidates(twists, p, q, scale: float) -> list:
     return out
 
 
-def _tr_batch(tw, p, q) -> BatchResult:
-    x1, x2 = tw[:, 0], tw[:, 1]
+def tr_candidates_batch(x1, x2, p, q, scale):
+    """Vectorised :func:`tr_candidates`: candidates (N, 3, 2) and free flags (N, 3).
+
+    The plane-piercing ``t`` (NaN when ``v`` is perpendicular to the axis) and the two sphere roots.
+    """
     v, w = x1[:, :3], x2[:, 3:]
     r = np.cross(w, x2[:, :3])
-    scale = problem_scale_batch(tw, p, q)
     wv = np.sum(w * v, -1)
     ok = np.abs(wv) > COEF_TOL
-    t_plane = np.where(ok, np.sum(w * (q - p), -1) / np.where(ok, wv, 1.0), 0.0)
+    t_plane = np.where(ok, np.sum(w * (q - p), -1) / np.where(ok, wv, 1.0), np.nan)
     qr, pr = q - r, p - r
     t_sphere = quadratic_roots_batch(np.ones_like(wv), -2 * np.sum(v * qr, -1), np.sum(qr * qr - pr * pr, -1))
     t = np.concatenate([t_plane[:, None], t_sphere], axis=1)
-    x = q[:, None] - t[..., None] * v[:, None]
+    x = q[:, None] - np.nan_to_num(t)[..., None] * v[:, None]
     th, free = rotation_angle_batch(x2[:, None], p[:, None], x, scale[:, None])
-    return finalize_batch("S2-TR", tw, p, q, np.stack([t, th], -1), free)
+    return np.stack([t, th], -1), np.broadcast_to(free, th.shape)
+
+
+def _tr_batch(tw, p, q) -> BatchResult:
+    scale = problem_scale_batch(tw, p, q)
+    cand, free = tr_candidates_batch(tw[:, 0], tw[:, 1], p, q, scale)
+    return finalize_batch("S2-TR", tw, p, q, cand, free)
 
 
 @register("S2-TR", 2, batch=_tr_batch)

@@ -20,7 +20,9 @@ Degenerate cases and what is returned:
 * parallel translations (``v_1 = +-v_2``): only ``t_1 +- t_2`` matters: ``t_2 = 0`` and S2-TR for
   ``(t_1, th)``, flagged ``continuum``.
 
-No vectorised path yet: ``solve_batch`` loops over the scalar one (``vectorised=False``).
+Vectorised path: the same construction for all instances at once (the two roots of the plane
+condition, or the S2-TR candidates of the parallel case, in fixed slots), then the common polishing
+and verification of ``finalize_batch``.
 
 >>> import numpy as np
 >>> from subproblems import solve
@@ -37,18 +39,26 @@ from __future__ import annotations
 import numpy as np
 
 from subproblems._class2 import (
+    COEF_TOL,
     EXACT_TOL,
     circle_of,
+    circle_of_batch,
     finalize,
+    finalize_batch,
     inverted,
+    inverted_batch,
     problem_scale,
+    problem_scale_batch,
     revert,
+    revert_batch,
     rotation_angle,
+    rotation_angle_batch,
     trig_roots,
+    trig_roots_batch,
 )
-from subproblems.core import Solution, register
+from subproblems.core import BatchResult, Solution, register
 from subproblems.s2_rr import PARALLEL_TOL
-from subproblems.s2_rt import tr_candidates
+from subproblems.s2_rt import tr_candidates, tr_candidates_batch
 
 
 def ttr_candidates(twists, p, q, scale):
@@ -68,6 +78,8 @@ def ttr_candidates(twists, p, q, scale):
     flat = abs(f0) + float(np.hypot(c1, s1)) <= EXACT_TOL * scale
     roots = None if flat else trig_roots(f0, c1, s1, ref=scale)
     cont = roots is None
+    if roots == []:  # p on the axis, off the plane: unreachable; th = 0, least-squares translations
+        roots = [0.0]
     V = np.column_stack([v1, v2])
     out = []
     for th in [0.0] if cont else roots:
@@ -78,14 +90,53 @@ def ttr_candidates(twists, p, q, scale):
     return out, cont
 
 
-@register("S2-TTR", 2)
+@np.errstate(all="ignore")
+def ttr_batch(tw, p, q) -> BatchResult:
+    """Vectorised S2-TTR: the construction of :func:`ttr_candidates` in three slots per instance."""
+    x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
+    v1, v2 = x1[:, :3], x2[:, :3]
+    scale = problem_scale_batch(tw, p, q)
+    n = np.cross(v1, v2)
+    nn = np.linalg.norm(n, axis=-1)
+    par = nn <= PARALLEL_TOL
+    n = n / np.where(par, 1.0, nn)[:, None]
+    c0, cc, cs = circle_of_batch(x3, p)
+    f0, c1, s1 = np.sum(n * (c0 - q), -1), np.sum(n * cc, -1), np.sum(n * cs, -1)
+    h = np.hypot(c1, s1)
+    flat = np.abs(f0) + h <= EXACT_TOL * scale
+    mx = np.maximum(np.abs(f0), h / 2)
+    none = (mx <= COEF_TOL * scale) | (mx == 0.0)  # trig_roots: identically zero
+    const = ~none & (h / 2 <= COEF_TOL * mx)  # a non-zero constant: no root, th = 0 (scalar path)
+    cont = par | flat | none
+    z = np.zeros_like(f0)
+    roots = trig_roots_batch(np.stack([f0, c1, s1, z, z], -1))[:, :2]
+    zero_only = cont | const
+    th = np.where(zero_only[:, None], np.array([0.0, np.nan]), roots)  # (N, 2)
+    pt = c0[:, None] + cc[:, None] * np.cos(th)[..., None] + cs[:, None] * np.sin(th)[..., None]
+    d = q[:, None] - pt
+    b1, b2 = np.sum(v1[:, None] * d, -1), np.sum(v2[:, None] * d, -1)
+    c12 = np.sum(v1 * v2, -1)[:, None]
+    det = np.where(par, 1.0, nn * nn)[:, None]
+    t1, t2 = (b1 - c12 * b2) / det, (b2 - c12 * b1) / det
+    _, free = rotation_angle_batch(x3, p, q, scale)
+    cand = np.stack([t1, t2, th], -1)
+    cand = np.concatenate([cand, np.full((len(f0), 1, 3), np.nan)], axis=1)  # (N, 3, 3)
+    # parallel translations: S2-TR for (t_1, th) with t_2 = 0
+    tr, tr_free = tr_candidates_batch(x1, x3, p, q, scale)
+    tr3 = np.stack([tr[..., 0], np.zeros_like(tr[..., 0]), tr[..., 1]], -1)
+    cand = np.where(par[:, None, None], tr3, cand)
+    cfree = np.where(par[:, None], tr_free, free[:, None])
+    return finalize_batch("S2-TTR", tw, p, q, cand, cfree, cont)
+
+
+@register("S2-TTR", 2, batch=ttr_batch)
 def solve_s2_ttr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 t_1) exp(xi_2 t_2) exp(xi_3 th) p = q`` (module docstring)."""
     cands, cont = ttr_candidates(twists, p, q, problem_scale(twists, p, q))
     return finalize("S2-TTR", twists, p, q, cands, continuum=cont)
 
 
-@register("S2-RTT", 2)
+@register("S2-RTT", 2, batch=lambda tw, p, q: revert_batch(ttr_batch(inverted_batch(tw), q, p), "S2-RTT"))
 def solve_s2_rtt(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th) exp(xi_2 t_2) exp(xi_3 t_3) p = q``, by inversion to S2-TTR."""
     return revert(solve_s2_ttr(inverted(twists), q, p))

@@ -38,7 +38,7 @@ CODES = [
     "S2-TRT",
     "S2-TTT",
 ]
-VECTORISED = {"S2-R", "S2-T", "S2-RR", "S2-TT", "S2-TTT", "S2-RT", "S2-TR", "S2-TRR", "S2-RRT"}
+VECTORISED = set(CODES)  # every class II type has a vectorised path
 TOL = 1e-9
 _REGISTERED = set(codes())
 
