@@ -662,6 +662,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     if sel.size:
         t2, good = snap_free_rows(kinds, TW[sel], P[sel], Qr[sel], th[sel], dist[sel], S[sel])
         sel, t2 = sel[good], np.where(rev, wrap_batch(t2[good]), t2[good])
+    if sel.size:
         x2, _, d2 = point_chain_rows(kinds, TW[sel], t2, P[sel], jac=False)
         ni, ci = np.concatenate([ni, ni[sel]]), np.concatenate([ci, ci[sel] + C])
         TW, P, Qr, S = (np.concatenate([a, a[sel]]) for a in (TW, P, Qr, S))

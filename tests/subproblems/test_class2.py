@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from subproblems import codes, max_solutions, solve, solve_batch
 from subproblems._class2 import chain_point_jac
 from subproblems.screw import prismatic_twist, revolute_twist, twist_exp
-from tests.strategies import contains_solution, joint_values, twist_lists
+from tests.strategies import RELATIONS, contains_solution, joint_values, twist_lists
 
 CODES = [
     "S2-R",
@@ -288,3 +288,126 @@ def test_s2_trr_rhino_example_step():
     r = solve("S2-TRR", tw, p=p, q=q)
     assert not r.ls.any() and not r.continuum and len(r.q) == 2
     assert contains_solution(r.q, th, "TRR")
+
+
+_DEGENERATE = tuple(r for r in RELATIONS if r != "general")
+
+
+@pytest.mark.parametrize("code", params([c for c in CODES if len(c) >= 5]))
+@budget(0.5)
+@given(data=st.data())
+def test_scalar_and_vectorised_paths_agree_degenerate(code, data):
+    """Like the agreement test, on degenerate geometry only (every consecutive pair in a relation),
+    with p at the origin or on an axis and q reachable, equal to p, or at the origin."""
+    kinds = code[3:]
+    tws, ps, qs = [], [], []
+    for _ in range(3):
+        twists, _ = data.draw(twist_lists(kinds, relations=_DEGENERATE))
+        th = data.draw(joint_values(kinds))
+        p = data.draw(points(twists))
+        q = [fk_point(twists, th, p), p.copy(), np.zeros(3)][data.draw(st.integers(0, 2))]
+        tws.append(twists)
+        ps.append(p)
+        qs.append(q)
+    tws, ps, qs = np.array(tws), np.array(ps), np.array(qs)
+    b = solve_batch(code, tws, p=ps, q=qs)
+    assert b.vectorised and np.all(np.isfinite(b.q)) and b.valid.any(axis=1).all()
+    for i in range(3):
+        r = solve(code, tws[i], p=ps[i], q=qs[i])
+        Qb, lsb = b.q[i][b.valid[i]], b.ls[i][b.valid[i]]
+        note(
+            f"instance {i}: scalar {r.q} ls={r.ls} cont={r.continuum}; "
+            f"batch {Qb} ls={lsb} cont={b.continuum[i]}"
+        )
+        scale = scale_of(tws[i], ps[i], qs[i])
+        for row, f in zip(Qb, lsb):
+            if not f:
+                assert np.linalg.norm(fk_point(tws[i], row, ps[i]) - qs[i]) <= TOL * scale
+        assert bool(r.ls.all()) == bool(lsb.all())
+        if r.ls.all() or r.continuum or b.continuum[i]:
+            continue
+        same = _same_root_check(code, tws[i], ps[i], qs[i], kinds, scale)
+        for row in _exact_set(r.q, r.ls):
+            assert any(same(row, other) for other in _exact_set(Qb, lsb)), f"batch misses {row}"
+        for row in _exact_set(Qb, lsb):
+            assert any(same(row, other) for other in _exact_set(r.q, r.ls)), f"scalar misses {row}"
+
+
+def _both_paths(code, tw, p, q):
+    tw, p, q = np.asarray(tw, dtype=float), np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+    b = solve_batch(code, tw[None], p=p[None], q=q[None])
+    return solve(code, tw, p=p, q=q), b.q[0][b.valid[0]], b.ls[0][b.valid[0]], bool(b.continuum[0])
+
+
+def test_s2_rr_near_tangent_distinct_roots_both_kept():
+    """Parallel axes whose circles are nearly internally tangent: two distinct roots 8e-4 apart (the
+    midpoint misses by ~7e-10, under the exactness tolerance) are not merged into one."""
+    tw = [[-0.0, -0.0, 0.0078125, 0.0, 1.0, 0.0], [-0.0, -0.0, -0.0, 0.0, 1.0, 0.0]]
+    th = np.array([0.0, 0.00041163031113287333])
+    p = np.array([1.0, 0.0, 0.0])
+    q = fk_point(np.array(tw), th, p)
+    r, Qb, lsb, _ = _both_paths("S2-RR", tw, p, q)
+    assert len(r.q) == 2 and len(Qb) == 2 and not r.ls.any() and not lsb.any()
+    assert contains_solution(r.q, th, "RR") and contains_solution(Qb, th, "RR")
+
+
+def test_s2_rrt_fourfold_root_is_one_row():
+    """Circle touching a cylinder from outside: one solution of multiplicity 4 in th_1, whose roots
+    the eigenvalues scatter by ~eps^(1/4) ~ 2e-4; they come back as one row near the true one."""
+    tw = [
+        [-0.0, -1.0, -0.0, 0.0, 0.0, 1.0],
+        [-0.0, -0.0, -0.0, 0.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    ]
+    th = np.array([0.0, math.pi / 2, 0.0])
+    p = np.array([1.0, 0.0, 0.0])
+    q = fk_point(np.array(tw), th, p)
+    r, Qb, lsb, _ = _both_paths("S2-RRT", tw, p, q)
+    assert len(r.q) == 1 and len(Qb) == 1 and not r.ls.any() and not lsb.any()
+    assert contains_solution(r.q, th, "RRT", 1e-6) and contains_solution(Qb, th, "RRT", 1e-6)
+
+
+def test_s2_rrt_free_joint_hidden_by_near_tangency_is_a_continuum():
+    """Axes 1 and 2 skew by 1e-5, p on axis 2: th_2 is free at t = 0 (and two isolated roots sit
+    2e-5 away); the root finder lands ~1e-8 off the axis; the rows are snapped onto it: continuum."""
+    tw = [
+        [-2.0, -0.0, 1e-05, 0.0, 1.0, 0.0],
+        [-0.0, -0.0, -0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    ]
+    p = np.zeros(3)
+    q = fk_point(np.array(tw), np.array([math.pi / 2, math.pi / 2, 0.0]), p)
+    r, Qb, lsb, cont = _both_paths("S2-RRT", tw, p, q)
+    assert r.continuum and cont and not r.ls.any() and not lsb.any()
+    assert any(abs(row[0] - math.pi / 2) < 1e-9 and abs(row[2]) < 1e-9 for row in r.q)
+
+
+def test_s2_rrr_axes_parallel_to_roundoff_give_a_free_th1():
+    """Axes 1 and 2 coincident up to a 2e-12 tilt: th_1 + th_2 is what counts (continuum), not
+    'unreachable' because the height condition misses by 2e-12 for every th_1."""
+    tw = [
+        [-0.0, -0.0, -0.0, 0.0, 2e-12, 1.0],
+        [-0.0, -0.0, -0.0, 0.0, 2e-12, 1.0],
+        [-0.0, -1.0, -0.0, 0.0, 0.0, 1.0],
+    ]
+    tw = np.array(tw)
+    tw[:2, 3:] /= np.linalg.norm(tw[0, 3:])
+    p = np.zeros(3)
+    q = fk_point(tw, np.array([0.0, 0.0, math.pi / 2]), p)
+    r, Qb, lsb, cont = _both_paths("S2-RRR", tw, p, q)
+    assert r.continuum and cont and not r.ls.any() and not lsb.any()
+
+
+def test_s2_rrt_translation_perpendicular_to_axis_2_near_meeting_axes():
+    """v perpendicular to axis 2 makes the eliminant a perfect square (every root double); the
+    roots of the axial condition itself are used instead: the instance is solved exactly."""
+    tw = [
+        [-0.0, -0.0, -0.0, 0.0, 1.0, 0.0],
+        [-0.0, -1e-05, -0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    ]
+    p = np.array([0.0, 0.0, 1.0])
+    q = fk_point(np.array(tw), np.array([0.0, 1.0, 0.0]), p)
+    r, Qb, lsb, _ = _both_paths("S2-RRT", tw, p, q)
+    assert not r.ls.any() and not lsb.any()
+    check_exact_rows("S2-RRT", np.array(tw), p, q, r)
