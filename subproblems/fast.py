@@ -8,11 +8,17 @@ over N instances, vectorised with no Python loop over instances.  One source for
 them in agreement by construction.
 
 Each kernel returns a fixed number of *slots*, one per candidate, each a tuple of joint values followed
-by a ``defer`` flag.  A candidate is not verified here: an unreachable instance gives its clamped
-(nearest) candidate, and the caller measures every candidate by forward kinematics.  ``defer`` is set
-where the geometry of this instance is close to a degenerate case (a point on an axis, a gimbal lock,
-parallel circles): the candidate there may be one representative of a continuum, so the caller sends
-the instance to the reference path (:mod:`subproblems.plan_runtime`), which classifies it properly.
+by an integer ``flag`` (bits, combined with ``|`` along a chain).  A candidate is not verified here: an
+unreachable instance gives its clamped (nearest) candidate, and the caller measures every candidate by
+forward kinematics.  The bits:
+
+* :data:`TANGENT_ROOT` (1): two roots (nearly) coincide; roundoff locates them to about sqrt(eps), so
+  the caller polishes near misses with Newton steps and merges the duplicates.
+* :data:`FAMILY` (2): a gimbal lock in an orientation step; the slot holds the representative with the
+  last angle 0 of a one-parameter family of solutions (a self-motion), flagged ``continuum`` when exact.
+* :data:`DEFER` (4): any other geometry close to a degenerate case (a point on an axis, coincident
+  axes, parallel slides): the caller sends the instance to the reference path
+  (:mod:`subproblems.plan_runtime`), which classifies it properly.
 
 Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 
@@ -37,11 +43,13 @@ from types import SimpleNamespace
 
 import numpy as np
 
+TANGENT_ROOT, FAMILY, DEFER = 1, 2, 4
 NEAR = 1e-7  # relative size below which an instance is treated as degenerate and deferred
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
 TANGENT = 1e-10
 NEAR2 = NEAR * NEAR
+SPLIT_ROOT = 1e-6  # joint distance within which two copies of a tangent root are one solution
 TINY = 1e-300
 
 SCALAR = SimpleNamespace(
@@ -54,6 +62,7 @@ SCALAR = SimpleNamespace(
     pos=lambda x: x if x > 0.0 else 0.0,
     big=lambda x: x if x > TINY else TINY,
     maxabs=lambda *xs: max(map(abs, xs)),
+    where=lambda c, a, b: a if c else b,
     max2=max,
     name="scalar",
 )
@@ -69,6 +78,7 @@ ARRAY = SimpleNamespace(
     big=lambda x: np.maximum(x, TINY),
     maxabs=lambda *xs: functools.reduce(np.maximum, map(np.abs, xs)),
     max2=np.maximum,
+    where=np.where,
     name="array",
 )
 
@@ -140,7 +150,7 @@ def angle_about(m, w, u, v):
     sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0)
     th = m.atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2)
     lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + TINY)
-    return th, (a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)
+    return th, ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) * DEFER
 
 
 def trig_roots(m, a, b, c, size):
@@ -153,8 +163,8 @@ def trig_roots(m, a, b, c, size):
     phi = m.atan2(b, a)
     x = c / m.big(rho)
     delta = m.acos(m.clip1(x))
-    defer = (rho <= NEAR * size) | (abs(x * x - 1.0) <= TANGENT)
-    return (phi + delta, defer), (phi - delta, defer)
+    flag = (rho <= NEAR * size) * DEFER | (abs(x * x - 1.0) <= TANGENT) * TANGENT_ROOT
+    return (phi + delta, flag), (phi - delta, flag)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -173,10 +183,12 @@ def plane_r(m, w, r, p, h, d):
 
 
 def plane_t(m, v, p, h, d):
-    """H-T: ``h . (p + v th) = d``; defer when ``h`` is (nearly) across the slide."""
+    """H-T: ``h . (p + v th) = d``.  With ``h`` (nearly) across the slide every ``th`` gives the same
+    value: the representative ``th = 0``, flagged :data:`FAMILY`."""
     hv = dot(h, v)
-    defer = (hv * hv) <= NEAR * NEAR * dot(h, h)
-    return ((d - dot(h, p)) / (hv + (hv >= 0.0) * TINY - (hv < 0.0) * TINY), defer),
+    across = (hv * hv) <= NEAR2 * dot(h, h)
+    th = (d - dot(h, p)) / m.where(across, 1.0, hv)
+    return (m.where(across, 0.0 * th, th), across * FAMILY),
 
 
 def dist_r(m, w, r, p, q, d):
@@ -197,7 +209,7 @@ def dist_t(m, v, p, q, d):
     ve = dot(v, e)
     disc = ve * ve - dot(e, e) + d * d
     root = m.sqrt(m.pos(disc))
-    tangent = abs(disc) <= TANGENT * (ve * ve + d * d)
+    tangent = (abs(disc) <= TANGENT * (ve * ve + d * d)) * TANGENT_ROOT
     return (-ve + root, tangent), (-ve - root, tangent)
 
 
@@ -208,7 +220,7 @@ def slide3(m, v1, v2, v3, b):
     det = dot(v1, c23)
     scale = m.sqrt(dot(v1, v1) * dot(v2, v2) * dot(v3, v3)) + TINY
     inv = 1.0 / (det + (det >= 0.0) * TINY - (det < 0.0) * TINY)
-    return (dot(b, c23) * inv, dot(b, c31) * inv, dot(b, c12) * inv, abs(det) <= NEAR * scale),
+    return (dot(b, c23) * inv, dot(b, c31) * inv, dot(b, c12) * inv, (abs(det) <= NEAR * scale) * DEFER),
 
 
 def turn_slide2(m, w, r, v2, v3, R, t):
@@ -224,7 +236,7 @@ def turn_slide2(m, w, r, v2, v3, R, t):
     det = a * e - b * b
     inv = 1.0 / m.big(det)
     y2, y3 = dot(v2, x), dot(v3, x)
-    return ((t1, (e * y2 - b * y3) * inv, (a * y3 - b * y2) * inv, f1 | (det <= NEAR * a * e)),)
+    return ((t1, (e * y2 - b * y3) * inv, (a * y3 - b * y2) * inv, f1 | (det <= NEAR * a * e) * DEFER),)
 
 
 def point_r(m, w, r, p, q):
@@ -252,7 +264,7 @@ def point_rr_meet(m, w1, r1, w2, r2, p, q):
     uu = dot(u, u)
     g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * k) / m.big(nn)
     gamma = m.sqrt(m.pos(g2))
-    degenerate = (nn <= NEAR) | (abs(g2) * nn <= TANGENT * uu)
+    degenerate = (nn <= NEAR) * DEFER | (abs(g2) * nn <= TANGENT * uu) * TANGENT_ROOT
     out = []
     for g in (gamma, -gamma):
         z = (
@@ -291,7 +303,8 @@ def point_rr_parallel(m, w1, r1, w2, r2, p, q):
     y2 = rho2 / m.big(ee) - x * x
     y = m.sqrt(m.pos(y2))
     f0, f1, f2 = w1_ * e2 - w2_ * e1, w2_ * e0 - w0 * e2, w0 * e1 - w1_ * e0  # w x e
-    degenerate = (ee <= NEAR2 * (rho1 + rho2 + TINY)) | (abs(y2) * ee <= TANGENT * rho2)
+    coincident = (ee <= NEAR2 * (rho1 + rho2 + TINY)) * DEFER
+    degenerate = coincident | (abs(y2) * ee <= TANGENT * rho2) * TANGENT_ROOT
     out = []
     for s in (y, -y):
         z = (x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2)  # middle point from axis 2, across
@@ -305,7 +318,7 @@ def rot_r(m, w, R):
     """O-R: ``exp([w] th) = R``: ``cos th = (tr R - w.Rw) / 2``, ``sin th`` from the skew part along w."""
     c = 0.5 * (R[0] + R[4] + R[8] - dot(w, mat_vec(R, w)))
     s = 0.5 * (w[0] * (R[7] - R[5]) + w[1] * (R[2] - R[6]) + w[2] * (R[3] - R[1]))
-    return (m.atan2(s, c), c != c),
+    return (m.atan2(s, c), (c != c) * DEFER),
 
 
 def rot_rr(m, w1, w2, R):
@@ -320,7 +333,7 @@ def rot_rrr(m, w1, w2, w3, R):
 
     ``w1 . R w3 = w1 . exp([w2] t2) w3`` gives t2 (two roots); then t1 turns ``exp([w2] t2) w3`` onto
     ``R w3`` and t3 turns ``R^T w1`` onto ``exp(-[w2] t2) w1``.  Gimbal lock (``exp([w2] t2) w3``
-    along ``w1``) defers.
+    along ``w1``) gives the representative t3 = 0, flagged :data:`FAMILY`.
     """
     Rw3 = mat_vec(R, w3)
     Rtw1 = mat_t_vec(R, w1)
@@ -330,6 +343,8 @@ def rot_rrr(m, w1, w2, w3, R):
     a = dot(w1, w3) - k12 * k23
     b = dot(w1, w23)
     c = dot(w1, Rw3) - k12 * k23
+    # at a gimbal lock t2 is the tangent root phi (or phi + pi): use it exactly, not via acos(~1)
+    t2_lock = m.atan2(b, a) + (c < 0.0) * math.pi
     out = []
     for t2, f2 in trig_roots(m, a, b, c, 1.0):
         c2, s2 = m.cos(t2), m.sin(t2)
@@ -346,7 +361,15 @@ def rot_rrr(m, w1, w2, w3, R):
         )
         t1, f1 = angle_about(m, w1, z, Rw3)
         t3, f3 = angle_about(m, w3, Rtw1, y)
-        out.append((t1, t2, t3, f1 | f2 | f3))
+        # Gimbal lock (exp([w2] t2) w3 along w1): only t1 +- t3 is fixed.  Representative t3 = 0,
+        # with t1 turning w2 onto R exp(-[w2] t2) w2 = R w2.
+        lock = (f1 | f3) != 0
+        t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, w2))
+        t1 = m.where(lock, t1_rep, t1)
+        t2 = m.where(lock, t2_lock, t2)
+        t3 = m.where(lock, 0.0 * t3, t3)
+        f13 = lock * (FAMILY | f_rep)
+        out.append((t1, t2, t3, f2 | f13))
     return tuple(out)
 
 
@@ -401,19 +424,22 @@ def goal_entries(T, target: str):
 def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
     """Solutions of one target from the leaves of a fast chain, or None to take the reference path.
 
-    Returns rows ``(inexact, error, q)`` sorted exact first, then by error; duplicates (equal modulo
-    2 pi) and, with ``limits``, rows outside the limits are left out.
+    Returns rows ``(inexact, error, q, continuum)`` sorted exact first, then by error; duplicates
+    (equal modulo 2 pi) and, with ``limits``, rows outside the limits are left out.  None when a leaf
+    needs Newton steps (a tangent root, a near miss) or the reference path (:data:`DEFER`).
     """
     exact_tol, near = tol * scale, NEAR_MISS * scale
-    same = 1e-9 * (scale if scale > 1.0 else 1.0)
+    same = 1e-9 * (scale if scale > 1.0 else 1.0)  # exact duplicates
     two_pi = 2 * math.pi
     revolute = [k == "R" for k in kinds]
     bounds = list(zip(revolute, lower, upper))
     rows = []
     for leaf in leaves:
-        err = leaf[-2]
-        if leaf[-1] or exact_tol < err < near or err != err:
+        err, flag = leaf[-2], leaf[-1]
+        if flag & DEFER or exact_tol < err < near or err != err:
             return None
+        if flag & TANGENT_ROOT:
+            same = SPLIT_ROOT  # two copies of one double root: merge them below
         q = list(leaf[:-2])
         for j, rev in enumerate(revolute):
             if rev:
@@ -429,9 +455,11 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
                     continue
                 break
             else:
-                rows.append((err > exact_tol, err, q))
+                rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
         else:
-            rows.append((err > exact_tol, err, q))
+            rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
+    if any(r[3] for r in rows) and not any(r[3] and not r[0] for r in rows):
+        return None  # a self-motion whose representatives all miss: the reference path completes them
     rows.sort(key=_row_order)
     kept = []
     for row in rows:
@@ -464,11 +492,11 @@ def goal_columns(goals, target: str):
 
 
 def leaf_arrays(leaves, N, dof):
-    """The leaves of a fast chain run on arrays as ``Q (N, L, dof)``, ``error (N, L)``, ``defer (N, L)``."""
+    """The leaves of a fast chain run on arrays as ``Q (N, L, dof)``, ``error (N, L)``, ``flag (N, L)``."""
     L = len(leaves)
     Q = np.empty((N, L, dof))
     err = np.empty((N, L))
-    flag = np.zeros((N, L), dtype=bool)
+    flag = np.zeros((N, L), dtype=np.int64)
     for k, leaf in enumerate(leaves):
         for j in range(dof):
             Q[:, k, j] = leaf[j]
@@ -483,19 +511,32 @@ def _same_angle(d, revolute: bool, tol: float):
     return (a <= tol) | (np.abs(a - 2 * math.pi) <= tol) if revolute else a <= tol
 
 
-def finish_many(leaves, N, *, kinds, lower, upper, limits, scale, tol, slots):
-    """Solutions of N targets from the leaves of a fast chain, vectorised.
+ROUTE_DONE, ROUTE_NEWTON, ROUTE_REFERENCE, ROUTE_FAMILY = 0, 1, 2, 3
 
-    Returns ``Q (N, slots, dof), valid, ls, residual, continuum`` and ``defer (N,)``: the targets to
-    solve on the reference path instead (their rows here are empty).
+
+def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots):
+    """Solutions of N targets from the leaf arrays of a fast chain (:func:`leaf_arrays`), vectorised.
+
+    Returns ``(Q (N, slots, dof), valid, ls, residual, continuum)`` and ``route (N,)``: targets done
+    here (:data:`ROUTE_DONE`), targets whose candidates need Newton steps before the final check (a
+    near miss: :data:`ROUTE_NEWTON`; a self-motion whose representatives all miss:
+    :data:`ROUTE_FAMILY`) and targets for the reference path (:data:`ROUTE_REFERENCE`); the rows of
+    all but the first are left empty here.
     """
-    dof, L = len(kinds), len(leaves)
-    Q, err, flag = leaf_arrays(leaves, N, dof)
+    N, L, dof = Q.shape
+    Q = Q.copy()
     exact_tol = tol * scale
     inexact = err > exact_tol
-    defer = (flag | (inexact & (err < NEAR_MISS * scale)) | np.isnan(err)).any(axis=1)
-    defer |= np.isnan(Q).any(axis=(1, 2))
-    keep = np.repeat(~defer[:, None], L, axis=1)
+    near = inexact & (err < NEAR_MISS * scale)
+    family = (flag & FAMILY) != 0
+    bad = ((flag & DEFER) != 0) | np.isnan(err) | np.isnan(Q).any(axis=2) | (family & near)
+    reference = bad.any(axis=1)
+    route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
+    route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON
+    # a self-motion whose representatives all miss: Newton steps must pull one onto the family
+    route[(route != ROUTE_REFERENCE) & family.any(axis=1) & ~(family & ~inexact).any(axis=1)] = ROUTE_FAMILY
+    split = ((flag & TANGENT_ROOT) != 0).any(axis=1)  # merge the two copies of a double root
+    keep = np.repeat((route == ROUTE_DONE)[:, None], L, axis=1)
     for j, k in enumerate(kinds):
         col = Q[:, :, j]
         if k == "R":
@@ -513,12 +554,13 @@ def finish_many(leaves, N, *, kinds, lower, upper, limits, scale, tol, slots):
     key = np.where(keep, inexact * 1e300 + np.nan_to_num(err), np.inf)
     order = np.argsort(key, axis=1, kind="stable")
     Q = np.take_along_axis(Q, order[..., None], axis=1)
-    err, keep, inexact = (np.take_along_axis(x, order, axis=1) for x in (err, keep, inexact))
+    err, keep, inexact, family = (np.take_along_axis(x, order, axis=1) for x in (err, keep, inexact, family))
     # duplicates: equal (modulo 2 pi) to an earlier kept row of the same target
     first, second = np.triu_indices(L, 1)
     same = keep[:, first].copy()
+    dup_tol = np.where(split, SPLIT_ROOT, 1e-9 * max(1.0, scale))[:, None]
     for j, k in enumerate(kinds):
-        same &= _same_angle(Q[:, first, j] - Q[:, second, j], k == "R", 1e-9 * max(1.0, scale))
+        same &= _same_angle(Q[:, first, j] - Q[:, second, j], k == "R", dup_tol)
     dup = np.zeros((N, L), dtype=bool)
     for k in range(len(second)):  # at most L (L - 1) / 2 pairs, L the chain's leaves
         dup[:, second[k]] |= same[:, k]
@@ -534,4 +576,29 @@ def finish_many(leaves, N, *, kinds, lower, upper, limits, scale, tol, slots):
     valid[n_idx, r_idx] = True
     LS[n_idx, r_idx] = inexact[n_idx, c_idx]
     RES[n_idx, r_idx] = err[n_idx, c_idx]
-    return Qo, valid, LS, RES, np.zeros((N, slots), dtype=bool), defer
+    CONT = np.zeros((N, slots), dtype=bool)
+    CONT[n_idx, r_idx] = family[n_idx, c_idx]
+    return (Qo, valid, LS, RES, CONT), route
+
+
+
+def merge_split_roots(parts, kinds, tol: float = SPLIT_ROOT):
+    """Merge solutions closer than ``tol`` (angles modulo 2 pi) within each target's packed slots.
+
+    Roundoff splits a double root into two copies about sqrt(eps) apart that both pass the pose check;
+    a few Newton steps converge only linearly there, so the copies stay apart by more than the exact
+    duplicate tolerance.  The later copy (larger error: slots are sorted) is dropped, then the slots are
+    packed again.
+    """
+    Q, valid, LS, RES, CONT = (np.array(x) for x in parts)
+    N, S, dof = Q.shape
+    for j in range(1, S):
+        same = valid[:, :j] & valid[:, j:j + 1]
+        for k, kind in enumerate(kinds):
+            same &= _same_angle(Q[:, :j, k] - Q[:, j:j + 1, k], kind == "R", tol)
+        valid[:, j] &= ~same.any(axis=1)
+    order = np.argsort(~valid, axis=1, kind="stable")
+    out = [np.take_along_axis(Q, order[..., None], axis=1)]
+    out += [np.take_along_axis(x, order, axis=1) for x in (valid, LS, RES, CONT)]
+    out[3] = np.where(out[1], out[3], np.inf)
+    return tuple(out)

@@ -326,16 +326,28 @@ def _solve_chunk(goals, Td, init, limits):
         return _complete(*_fast_search_candidates(goals, init), goals, limits)
     if _POLISH:  # snapped plan: the leaves are candidates on the snapped robot; Newton corrects them
         Q, _, flag = _fast_leaves(goals, init)
-        defer = flag.any(axis=1)
+        defer = (flag & _fk.DEFER).any(axis=1)
         rows, leaf = np.nonzero(~defer[:, None] & ~np.isnan(Q).any(axis=2))
         TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
     else:
-        free = tuple(init[:, _INDEPENDENT[pos]] for pos in _FREE)
-        with np.errstate(all="ignore"):  # degenerate instances may divide by ~0; they are deferred below
-            leaves = _fast_chain(_fk.ARRAY, _fk.goal_columns(goals, TARGET), free)
-        *parts, defer = _fk.finish_many(leaves, len(goals), **_finish_kwargs(limits))
+        Q, err, flag = _fast_leaves(goals, init)
+        parts, route = _fk.finish_many(Q, err, flag, **_finish_kwargs(limits))
+        # A self-motion whose representatives all miss: the reference runtime tries the alternative
+        # chain and pulls its representatives onto the family (measured cheaper than Newton on all
+        # of the fast path's representatives, most of which belong to unreachable branches).
+        route[route == _fk.ROUTE_FAMILY] = _fk.ROUTE_REFERENCE
+        newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
+        if len(newton):  # near misses: Newton steps, then the full check
+            rows, leaf = np.nonzero(~np.isnan(Q[newton]).any(axis=2))
+            TH = Q[newton[rows], leaf] @ _A.T + _B
+            cont = (flag[newton[rows], leaf] & _fk.FAMILY) != 0
+            done = _complete(TH, rows, np.zeros(len(TH), dtype=bool), cont, goals[newton], limits)
+            done = _fk.merge_split_roots(done, JOINT_TYPES)
+            for whole, part in zip(parts, done):
+                whole[newton] = part
+        defer = route == _fk.ROUTE_REFERENCE
     if defer.any():  # near a degenerate geometry: the reference runtime classifies these targets
         idx = np.nonzero(defer)[0]
         for whole, part in zip(parts, _reference_chunk(goals[idx], Td[idx], init[idx], limits)):
@@ -389,7 +401,7 @@ def solve_info(T, *free, limits=True):
     if rows is not None:
         q = np.array([r[2] for r in rows], dtype=float).reshape(len(rows), len(JOINT_NAMES))
         ls = np.array([r[0] for r in rows], dtype=bool)
-        return q, np.array([r[1] for r in rows]), ls, np.zeros(len(rows), dtype=bool)
+        return q, np.array([r[1] for r in rows]), ls, np.array([r[3] for r in rows], dtype=bool)
     Q, valid, ls, res, cont = solve_batch_info(np.asarray(T, dtype=float)[None], *free, limits=limits)
     v = valid[0]
     return Q[0][v], res[0][v], ls[0][v], cont[0][v]
