@@ -515,6 +515,7 @@ def polish_rows(kinds: str, tw, p, q, th, r, scale, iters: int = 6):
     return th, r
 
 
+@np.errstate(all="ignore")  # a huge candidate (a near-vanishing leading coefficient) gives inf: skipped
 def rotation_angle_batch(xi, a, b, scale):
     """Vectorised :func:`rotation_angle`: broadcasting over leading axes; returns (theta, free)."""
     w = xi[..., 3:]
