@@ -74,8 +74,8 @@ ARRAY = SimpleNamespace(
     atan2=np.arctan2,
     acos=np.arccos,
     clip1=lambda x: np.clip(x, -1.0, 1.0),
-    pos=lambda x: np.maximum(x, 0.0),
-    big=lambda x: np.maximum(x, TINY),
+    pos=lambda x: np.fmax(x, 0.0),  # fmax: NaN -> 0.0, as the scalar comparison gives
+    big=lambda x: np.fmax(x, TINY),
     maxabs=lambda *xs: functools.reduce(np.maximum, map(np.abs, xs)),
     max2=np.maximum,
     where=np.where,
@@ -133,12 +133,15 @@ def rotate(m, w, th, x):
     )
 
 
-def angle_about(m, w, u, v):
+def angle_about(m, w, u, v, size2=0.0):
     """The angle that turns ``u`` toward ``v`` about ``w`` (their components across ``w``): S1-R.
 
-    Returns ``(th, defer)``; ``defer`` when either vector is (nearly) along ``w``, where every angle
-    is equally good.  (Written out component by component: this is the innermost call of every
-    chain, and helper calls cost more than the arithmetic on floats.)
+    Returns ``(th, flag)``; :data:`DEFER` when either vector is (nearly) along ``w``, where every angle
+    is equally good; "nearly" is relative to the vectors, to ``size2``, the squared size of the
+    geometry they come from (a point on an axis up to roundoff has rounding-sized vectors), and to
+    one unit of length (so a geometry of rounding-sized vectors is degenerate too).  Written
+    out component by component: this is the innermost call of every chain, and helper calls cost more
+    than the arithmetic on floats.
     """
     w0, w1, w2 = w
     u0, u1, u2 = u
@@ -149,7 +152,7 @@ def angle_about(m, w, u, v):
     b0, b1, b2 = v0 - vw * w0, v1 - vw * w1, v2 - vw * w2
     sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0)
     th = m.atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2)
-    lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + TINY)
+    lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + size2 + 1.0)
     return th, ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) * DEFER
 
 
@@ -179,7 +182,7 @@ def plane_r(m, w, r, p, h, d):
     a = dot(h, up)
     b = dot(h, cross(w, u))
     c = d - dot(h, r) - uw * dot(h, w)
-    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * dot(u, u)) + TINY)
+    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY)
 
 
 def plane_t(m, v, p, h, d):
@@ -200,7 +203,7 @@ def dist_r(m, w, r, p, q, d):
     a = dot(z, up)
     b = dot(z, cross(w, u))
     c = 0.5 * (dot(u, u) + dot(z, z) - d * d) - uw * dot(z, w)
-    return trig_roots(m, a, b, c, m.sqrt(dot(z, z) * dot(u, u)) + TINY)
+    return trig_roots(m, a, b, c, dot(u, u) + dot(z, z) + dot(r, r) + d * d + 1.0)
 
 
 def dist_t(m, v, p, q, d):
@@ -209,7 +212,7 @@ def dist_t(m, v, p, q, d):
     ve = dot(v, e)
     disc = ve * ve - dot(e, e) + d * d
     root = m.sqrt(m.pos(disc))
-    tangent = (abs(disc) <= TANGENT * (ve * ve + d * d)) * TANGENT_ROOT
+    tangent = (abs(disc) <= TANGENT * (ve * ve + d * d + dot(p, p) + dot(q, q) + 1.0)) * TANGENT_ROOT
     return (-ve + root, tangent), (-ve - root, tangent)
 
 
@@ -241,7 +244,7 @@ def turn_slide2(m, w, r, v2, v3, R, t):
 
 def point_r(m, w, r, p, q):
     """S2-R: ``exp(w th)(p) = q``."""
-    return angle_about(m, w, sub(p, r), sub(q, r)),
+    return angle_about(m, w, sub(p, r), sub(q, r), dot(p, p) + dot(q, q) + dot(r, r)),
 
 
 def point_rr_meet(m, w1, r1, w2, r2, p, q):
@@ -254,17 +257,20 @@ def point_rr_meet(m, w1, r1, w2, r2, p, q):
     k = dot(w1, w2)
     n = cross(w1, w2)
     nn = dot(n, n)
+    parallel = nn <= NEAR
+    den = m.where(parallel, 1.0, nn)  # parallel axes defer; keep their arithmetic finite
     # the meeting point: r1 + s w1 with s = ((r2 - r1) x w2) . n / |n|^2
-    s = dot(cross(sub(r2, r1), w2), n) / m.big(nn)
+    s = dot(cross(sub(r2, r1), w2), n) / den
     c = axpy(s, w1, r1)
     u, v = sub(p, c), sub(q, c)
+    size2 = dot(p, p) + dot(q, q) + dot(r1, r1) + dot(r2, r2)  # squared size of the geometry
     a1, a2 = dot(w1, v), dot(w2, u)
-    alpha = (a1 - k * a2) / m.big(nn)
-    beta = (a2 - k * a1) / m.big(nn)
+    alpha = (a1 - k * a2) / den
+    beta = (a2 - k * a1) / den
     uu = dot(u, u)
-    g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * k) / m.big(nn)
+    g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * k) / den
     gamma = m.sqrt(m.pos(g2))
-    degenerate = (nn <= NEAR) * DEFER | (abs(g2) * nn <= TANGENT * uu) * TANGENT_ROOT
+    degenerate = parallel * DEFER | (abs(g2) * nn <= TANGENT * uu) * TANGENT_ROOT
     out = []
     for g in (gamma, -gamma):
         z = (
@@ -272,8 +278,8 @@ def point_rr_meet(m, w1, r1, w2, r2, p, q):
             alpha * w1[1] + beta * w2[1] + g * n[1],
             alpha * w1[2] + beta * w2[2] + g * n[2],
         )
-        t2, f2 = angle_about(m, w2, u, z)
-        t1, f1 = angle_about(m, w1, z, v)
+        t2, f2 = angle_about(m, w2, u, z, size2)
+        t1, f1 = angle_about(m, w1, z, v, size2)
         out.append((t1, t2, degenerate | f1 | f2))
     return tuple(out)
 
@@ -303,13 +309,14 @@ def point_rr_parallel(m, w1, r1, w2, r2, p, q):
     y2 = rho2 / m.big(ee) - x * x
     y = m.sqrt(m.pos(y2))
     f0, f1, f2 = w1_ * e2 - w2_ * e1, w2_ * e0 - w0 * e2, w0 * e1 - w1_ * e0  # w x e
-    coincident = (ee <= NEAR2 * (rho1 + rho2 + TINY)) * DEFER
+    size2 = dot(p, p) + dot(q, q) + dot(r1, r1) + dot(r2, r2)  # squared size of the geometry
+    coincident = (ee <= NEAR2 * (rho1 + rho2 + size2 + 1.0)) * DEFER
     degenerate = coincident | (abs(y2) * ee <= TANGENT * rho2) * TANGENT_ROOT
     out = []
     for s in (y, -y):
         z = (x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2)  # middle point from axis 2, across
-        t2, g2 = angle_about(m, w2, (a0, a1, a2), z)
-        t1, g1 = angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2))
+        t2, g2 = angle_about(m, w2, (a0, a1, a2), z, size2)
+        t1, g1 = angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2), size2)
         out.append((t1, t2, degenerate | g1 | g2))
     return tuple(out)
 

@@ -34,10 +34,10 @@ but more than ``EXACT``, and the checks below apply where it does not):
 4. ``test_general_position_bulk``: 400 random general-position instances per kernel on the ARRAY backend
    (fixed seed): at most 1 % deferred, and check 1 holds for the rest (a kernel that always defers
    would pass the other tests vacuously).
-5. Known kernel bugs, pinned by strict xfails (``test_bug1_*``, ``test_bug2_*``) and skipped, with a
-   note, by the property tests (``skip_known_bug``, ``parallel_meet_overflows``): BUG 1, a point on an
-   axis up to roundoff is not deferred (:func:`near_degenerate_point`); BUG 2, ``point_rr_meet`` with
-   exactly parallel axes gives NaN on ARRAY.
+5. Regressions of two kernel bugs this file found (both fixed): a point on an axis up to roundoff was
+   judged against its own rounding-sized vectors and not deferred (now measured against the size of
+   the geometry; :func:`near_degenerate_point` describes the family); ``point_rr_meet`` with exactly
+   parallel axes gave NaN on ARRAY (``pos``/``big`` now map NaN like the scalar comparisons).
 
 Not covered: ``slide3`` and ``turn_slide2`` (added to ``fast.py`` after this file was specified).
 
@@ -638,17 +638,15 @@ def _off_axis(x, w, r) -> float:
 
 
 def near_degenerate_point(spec: Spec, inst) -> bool:
-    """BUG 1 family: a point degenerate at the geometry's scale that the kernel judges on its own scale.
+    """A point degenerate at the geometry's scale (the family of a fixed kernel bug).
 
     * ``p`` or ``q`` within ``fast.NEAR * scale`` of an axis point (``r``, ``r1``, ``r2``, the meeting
       point of ``point_rr_meet``);
     * ``point_rr_parallel``: ``p`` on axis 2 or ``q`` on axis 1 (at any height), to ``fast.NEAR * scale``.
 
-    The kernels measure "a point on an axis" relative to the vectors involved (``angle_about``:
-    ``|u|^2 + |v|^2``; ``trig_roots`` via ``plane_r``/``dist_r``: ``|h| |p - r|``, ``|q - r| |p - r|``;
-    ``point_rr_parallel`` passes ``angle_about`` only the components across the axes, and its coincidence
-    test uses ``rho1 + rho2``), so when those vectors are rounding-sized nothing looks degenerate: the
-    kernel returns arbitrary angles as non-deferred exact solutions of a continuum.
+    The kernels once measured "a point on an axis" relative to the vectors involved only, so with
+    rounding-sized vectors nothing looked degenerate and a continuum came back as arbitrary exact
+    angles; they now also measure it against the size of the geometry (|p|, |q|, axis points).
     """
     limit = fast.NEAR * scale_of(inst)
     pts = [inst[k] for k in ("p", "q") if k in inst]
@@ -661,20 +659,6 @@ def near_degenerate_point(spec: Spec, inst) -> bool:
         w = inst["w1"]
         return _off_axis(inst["p"], w, inst["r2"]) <= limit or _off_axis(inst["q"], w, inst["r1"]) <= limit
     return False
-
-
-def parallel_meet_overflows(spec: Spec, inst) -> bool:
-    """BUG 2: ``point_rr_meet`` with exactly parallel axes divides by ``m.big(0) = 1e-300``, the squares
-    overflow, ``inf - inf``: NaN on ARRAY, while SCALAR's ``pos(nan)`` returns 0 (slots deferred)."""
-    return spec.name == "point_rr_meet" and float(np.linalg.norm(np.cross(inst["w1"], inst["w2"]))) < 1e-100
-
-
-def skip_known_bug(spec: Spec, inst, slots) -> bool:
-    """True (and a note) when the instance is in the BUG 1 family and the kernel did not defer it."""
-    if any(defer for _, defer in slots) or not near_degenerate_point(spec, inst):
-        return False
-    note("BUG 1 (a point on an axis up to roundoff, not deferred): skipped, see test_bug1")
-    return True
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -717,8 +701,6 @@ def test_round_trip(spec, data):
     _describe(spec, inst, th)
     slots = call_scalar(spec, inst)
     note(f"slots: {slots!r}")
-    if skip_known_bug(spec, inst, slots):
-        return
     check_round_trip(spec, inst, th, slots)
 
 
@@ -762,8 +744,6 @@ def test_agreement(spec, data):
     _describe(spec, inst, th)
     slots = call_scalar(spec, inst)
     note(f"slots: {slots!r}")
-    if skip_known_bug(spec, inst, slots):
-        return
     check_agreement(spec, inst, slots)
 
 
@@ -779,12 +759,6 @@ def check_backends(spec: Spec, insts) -> None:
     with np.errstate(all="ignore"):
         array = call_array(spec, insts)
     for n, one in enumerate(scalar):
-        if parallel_meet_overflows(spec, insts[n]):
-            note(
-                f"instance {n}: BUG 2 (parallel axes in point_rr_meet, NaN on ARRAY): skipped, see test_bug2"
-            )
-            assert all(defer and bool(D[n]) for (_, defer), (_, D) in zip(one, array))
-            continue
         for k, ((q, defer), (Q, D)) in enumerate(zip(one, array)):
             assert not any(math.isnan(x) for x in q), (n, k, q)
             assert not np.isnan(Q[:, n]).any(), (n, k, Q[:, n])
@@ -907,12 +881,11 @@ def test_general_position_bulk(spec):
 
 
 # ---------------------------------------------------------------------------------------------------
-# 5. the known kernel bugs, pinned: strict xfail, so a fixed kernel turns them into failures (then drop
-#    the mark and the matching skip: ``skip_known_bug`` for BUG 1, ``parallel_meet_overflows`` for BUG 2)
+# 5. regressions: a point on an axis up to roundoff (a continuum) defers; parallel axes give no NaN
 
 
-def _bug1_instances():
-    """One instance per kernel of the BUG 1 family: a point on an axis up to roundoff (a continuum)."""
+def _on_axis_instances():
+    """One instance per kernel of a point on an axis up to roundoff (a continuum)."""
     w = _unit([1.0, 2.0, 3.0])
     r = np.array([0.3, -0.7, 0.2])
     at_r = r + 1e-16 * _across(w, np.array([1.0, 0.0, 0.0]))  # the axis point, up to roundoff
@@ -936,36 +909,26 @@ def _bug1_instances():
     }
 
 
-BUG1 = sorted(_bug1_instances())
+ON_AXIS = sorted(_on_axis_instances())
 
 
-@pytest.mark.parametrize("name", BUG1)
-def test_bug1_instances_are_continua(name):
-    """The BUG 1 instances are continua of exact solutions (the reference says so) in the family."""
-    spec, inst = BY_NAME[name], _bug1_instances()[name]
+@pytest.mark.parametrize("name", ON_AXIS)
+def test_on_axis_instances_are_continua(name):
+    """These instances are continua of exact solutions (the reference says so)."""
+    spec, inst = BY_NAME[name], _on_axis_instances()[name]
     assert near_degenerate_point(spec, inst)
     ref = spec.reference(inst)
     assert ref.continuum and not ref.ls.all(), ref
 
 
-@pytest.mark.parametrize("name", BUG1)
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG 1: a point on an axis up to roundoff is judged against its own rounding-sized vectors, "
-    "not the geometry size: the continuum is not deferred",
-)
-def test_bug1_kernel_defers(name):
-    spec, inst = BY_NAME[name], _bug1_instances()[name]
+@pytest.mark.parametrize("name", ON_AXIS)
+def test_point_on_an_axis_up_to_roundoff_defers(name):
+    spec, inst = BY_NAME[name], _on_axis_instances()[name]
     slots = call_scalar(spec, inst)
     assert all(defer for _, defer in slots), slots
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG 2: point_rr_meet with parallel axes divides by m.big(0) = 1e-300; the squares overflow "
-    "to inf - inf = NaN on ARRAY while SCALAR's pos(nan) gives 0",
-)
-def test_bug2_parallel_meet_no_nan():
+def test_parallel_axes_in_point_rr_meet_give_no_nan():
     ex, z = np.eye(3)[0], np.zeros(3)
     inst = {"w1": ex, "r1": z, "w2": ex, "r2": z, "p": z, "q": ex}
     scalar = call_scalar(BY_NAME["point_rr_meet"], inst)
