@@ -350,8 +350,10 @@ def rot_rrr(m, w1, w2, w3, R):
     a = dot(w1, w3) - k12 * k23
     b = dot(w1, w23)
     c = dot(w1, Rw3) - k12 * k23
-    # at a gimbal lock t2 is the tangent root phi (or phi + pi): use it exactly, not via acos(~1)
+    # at a gimbal lock t2 is the tangent root phi (or phi + pi): use it exactly, not via acos(~1);
+    # the representative t3 = 0 then has t1 turning w2 onto R exp(-[w2] t2) w2 = R w2
     t2_lock = m.atan2(b, a) + (c < 0.0) * math.pi
+    t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, w2))
     out = []
     for t2, f2 in trig_roots(m, a, b, c, 1.0):
         c2, s2 = m.cos(t2), m.sin(t2)
@@ -368,10 +370,8 @@ def rot_rrr(m, w1, w2, w3, R):
         )
         t1, f1 = angle_about(m, w1, z, Rw3)
         t3, f3 = angle_about(m, w3, Rtw1, y)
-        # Gimbal lock (exp([w2] t2) w3 along w1): only t1 +- t3 is fixed.  Representative t3 = 0,
-        # with t1 turning w2 onto R exp(-[w2] t2) w2 = R w2.
+        # Gimbal lock (exp([w2] t2) w3 along w1): only t1 +- t3 is fixed; the representative above.
         lock = (f1 | f3) != 0
-        t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, w2))
         t1 = m.where(lock, t1_rep, t1)
         t2 = m.where(lock, t2_lock, t2)
         t3 = m.where(lock, 0.0 * t3, t3)
