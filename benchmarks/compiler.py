@@ -375,20 +375,23 @@ def _time_batch(module, Tb, Qb, cols, opts):
 def _deferred_batch(module, Ts, free_values) -> float:
     """Fraction of the batch targets the fast path hands to the reference runtime.
 
-    The module's own first stage, untimed: ``_fast_chain`` on the array backend and
+    The module's own first stage, untimed: its fast chain on the array backend (``_fast_leaves``) and
     ``subproblems.fast.finish_many`` with the module's settings (limits on, as ``solve_batch``), whose
-    trailing mask marks the deferred targets.  One call over all the poses (``solve_batch`` cuts them
-    in chunks of 4096; the mask is per target, so the count is the same).
+    route marks the targets sent to the reference runtime (``ROUTE_REFERENCE``, and ``ROUTE_FAMILY``,
+    which the module sends there too).  One call over all the poses (``solve_batch`` cuts them in
+    chunks of 4096; the route is per target, so the count is the same).  NaN for search and snapped
+    plans, whose batches always take Newton steps on the fast chain's candidates.
     """
     from subproblems import fast as _fk
 
+    if module._SEARCH or module._POLISH:
+        return float("nan")
     goals, _ = module._targets(Ts)
     init = module._init(len(goals), free_values)
-    free = tuple(init[:, module._INDEPENDENT[pos]] for pos in module._FREE)
-    with np.errstate(all="ignore"):
-        leaves = module._fast_chain(_fk.ARRAY, _fk.goal_columns(goals, module.TARGET), free)
-    defer = _fk.finish_many(leaves, len(goals), **module._finish_kwargs(True))[-1]
-    return float(np.mean(defer)) if len(defer) else float("nan")
+    Q, err, flag = module._fast_leaves(goals, init)
+    _, route = _fk.finish_many(Q, err, flag, **module._finish_kwargs(True))
+    sent = (route == _fk.ROUTE_REFERENCE) | (route == _fk.ROUTE_FAMILY)
+    return float(np.mean(sent)) if len(sent) else float("nan")
 
 
 def _deferred_one(module, T, free_values) -> bool:
