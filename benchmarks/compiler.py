@@ -878,9 +878,10 @@ def render_markdown(rows, profile, meta, opts) -> str:
     out.append(
         "- Deferred fractions are counted untimed, by running the module's own first stage: for the batch "
         "poses `_fast_chain` on the array backend (`subproblems.fast.ARRAY`) then "
-        "`subproblems.fast.finish_many` with the module's settings, whose trailing `defer` mask marks "
-        "the targets `solve_batch` hands to the reference runtime; for the single poses, whether the "
-        "scalar fast path (`_fast_one`) gives up on the target. A deferred pose costs the fast attempt "
+        "`subproblems.fast.finish_many` with the module's settings, whose route marks the targets "
+        "`solve_batch` hands to the reference runtime; for the single poses, whether the scalar fast "
+        "path (`_fast_one`) gives up on the target (it also gives up on near misses, which the batch "
+        "path settles with Newton steps). A deferred pose costs the fast attempt "
         "plus a reference solve, so the fast path's median hides it but its batch throughput does not. "
         "The sampled joint values include special angles (each revolute value with probability 0.25), "
         "so a few percent of the poses sit on degenerate geometry (a wrist at 0, aligned axes)."
