@@ -412,18 +412,25 @@ def goal_entries(T, target: str):
         else:
             if len(a) != (3 if target == "orientation" else 4) or any(len(r) != len(a) for r in a):
                 return None
-            t = (0.0, 0.0, 0.0)
-            if target != "orientation":
-                t = (float(a[0][3]), float(a[1][3]), float(a[2][3]))
-            g = tuple(float(a[i][j]) for i in range(3) for j in range(3)) + t
+            r0, r1, r2 = a[0], a[1], a[2]
+            t = (0.0, 0.0, 0.0) if target == "orientation" else (r0[3], r1[3], r2[3])
+            g = tuple(map(float, (r0[0], r0[1], r0[2], r1[0], r1[1], r1[2], r2[0], r2[1], r2[2], *t)))
     except (TypeError, ValueError):
         return None
-    if not all(math.isfinite(x) for x in g):
+    if not all(map(math.isfinite, g)):
         return None
-    if target != "position":
-        c0, c1, c2 = (g[0], g[3], g[6]), (g[1], g[4], g[7]), (g[2], g[5], g[8])
-        gram = (dot(c0, c0) - 1, dot(c1, c1) - 1, dot(c2, c2) - 1, dot(c0, c1), dot(c0, c2), dot(c1, c2))
-        if max(abs(x) for x in gram) > 1e-6 or abs(dot(cross(c0, c1), c2) - 1) > 1e-6:
+    if target != "position":  # orthonormal columns, right-handed
+        x0, y0, z0, x1, y1, z1, x2, y2, z2 = g[:9]  # columns x, y, z
+        det = (x1 * y2 - x2 * y1) * z0 + (x2 * y0 - x0 * y2) * z1 + (x0 * y1 - x1 * y0) * z2
+        if (
+            abs(x0 * x0 + x1 * x1 + x2 * x2 - 1.0) > 1e-6
+            or abs(y0 * y0 + y1 * y1 + y2 * y2 - 1.0) > 1e-6
+            or abs(z0 * z0 + z1 * z1 + z2 * z2 - 1.0) > 1e-6
+            or abs(x0 * y0 + x1 * y1 + x2 * y2) > 1e-6
+            or abs(x0 * z0 + x1 * z1 + x2 * z2) > 1e-6
+            or abs(y0 * z0 + y1 * z1 + y2 * z2) > 1e-6
+            or abs(det - 1.0) > 1e-6
+        ):
             return None
     return g
 

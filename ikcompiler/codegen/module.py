@@ -314,9 +314,13 @@ def _fast_search_candidates(goals, init, instances=32768):
     return TH, owner, none, none
 
 
+_FINISH = {limits: {"kinds": JOINT_TYPES, "lower": tuple(LOWER.tolist()), "upper": tuple(UPPER.tolist()),
+                    "limits": limits, "scale": SCALE, "tol": TOLERANCE, "slots": MAX_SOLUTIONS}
+           for limits in (False, True)}
+
+
 def _finish_kwargs(limits):
-    return {"kinds": JOINT_TYPES, "lower": LOWER, "upper": UPPER, "limits": limits, "scale": SCALE,
-            "tol": TOLERANCE, "slots": MAX_SOLUTIONS}
+    return _FINISH[bool(limits)]
 
 
 def _solve_chunk(goals, Td, init, limits):
