@@ -45,7 +45,8 @@ def _cmd_compile(args) -> int:
     )
     print(
         f"wrote {out}: {module.JOINT_TYPES} solver, method {module.METHOD}, "
-        f"up to {module.MAX_SOLUTIONS} solutions"
+        f"up to {module.MAX_SOLUTIONS} solutions, "
+        + ("fast path" if module.FAST_PATH else "reference runtime only (a step has no fast kernel)")
     )
     if module.METHOD != "closed-form":
         print(
