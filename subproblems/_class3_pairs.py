@@ -25,9 +25,22 @@ Then every root gives ``x`` by back-substitution (Cramer, or the better-conditio
 its residual is at most ``EXACT_TOL`` times the problem scale (so eigenvalue noise, near-double roots
 and spurious roots never come back as solutions); duplicates (1e-7) are removed.
 
+Special geometry (points at the origin, on an axis or at an intersection of the axes, equal pairs):
+
+* an eliminant of lower degree (roots at infinity, e.g. parallel axes) is deflated, never nudged
+  (a nudged leading coefficient scatters every double root);
+* an equation that does not depend on ``x`` (``q_k`` on the first axis) makes ``F`` a square with
+  double roots and ``D = 0`` there; ``D`` is judged against both rows together so that the other
+  equation alone then gives both values of ``x``;
+* every tensor entry at roundoff level (``M_FLOOR`` of the problem's size) means both equations hold
+  for every ``(x, y)``: a continuum, whatever the roundoff in ``F``;
+* of close exact candidates the best-converged one is kept.
+
 When ``F`` vanishes identically (the equations share a curve: a continuum) or no candidate is exact
 (unreachable), Levenberg-Marquardt runs from a fixed grid of starts, ``(0, 0)`` first; the first start
-that reaches an exact point gives the **representative** (``continuum``), otherwise the smallest
+that reaches an exact point gives the **representative** (``continuum``); the starts include the
+points where one value is a grid start and one equation is solved exactly for the other (on a
+continuum in which one value is free those already satisfy both).  Otherwise the smallest
 residual is returned flagged ``ls``.  A joint the equations do not constrain keeps its start value
 ``0`` (LM steps are minimum-norm).
 
@@ -44,6 +57,7 @@ from subproblems.core import BatchResult, Solution
 
 DEDUP_TOL = 1e-7
 ZERO_TOL = 1e-10  # |F| / reference below which the eliminant is identically zero
+M_FLOOR = 1e-13  # tensor entries below this times the problem's size are roundoff
 FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
 LM_ITERS = 40
 NEWTON_ITERS = 24
@@ -232,10 +246,21 @@ def _eliminant(M, ke):
 
 
 def _poly_roots(F):
-    """All roots (N, 8) of degree-8 polynomials (low to high); tiny leading coefficients are nudged."""
+    """All roots (N, 8) of degree-8 polynomials (low to high).
+
+    A polynomial of lower degree (leading coefficients below 1e-14 of the largest: roots at infinity,
+    e.g. S3-RR with parallel axes) is multiplied by ``z^L`` instead: its roots plus ``L`` roots at 0,
+    which are never on the unit circle and, as prismatic values, are verified like every candidate.
+    (Nudging the leading coefficient to a tiny value instead gives a companion matrix with entries
+    ~1e14 whose eigenvalues lose the double roots entirely.)
+    """
     n = F.shape[0]
     big = np.abs(F).max(axis=1)
     Fn = F / np.where(big == 0, 1.0, big)[:, None]
+    small = np.abs(Fn) < 1e-14
+    lz = np.minimum(np.cumprod(small[:, ::-1], axis=1).sum(axis=1), 8)  # leading (near-)zeros
+    src = np.arange(9)[None, :] - lz[:, None]
+    Fn = np.where(src >= 0, np.take_along_axis(Fn, np.maximum(src, 0), axis=1), 0.0)
     lead = Fn[:, 8]
     lead = np.where(np.abs(lead) < 1e-14, 1e-14, lead)
     Cm = np.zeros((n, 8, 8), dtype=Fn.dtype)
@@ -262,7 +287,10 @@ def _candidates(Mr, ke, ku, u):
         D = al[..., 0] * be[..., 1] - al[..., 1] * be[..., 0]
         Nc = g[..., 0] * be[..., 1] - g[..., 1] * be[..., 0]
         Ns = al[..., 0] * g[..., 1] - al[..., 1] * g[..., 0]
-        ref = (np.abs(al[..., 0]) + np.abs(be[..., 0])) * (np.abs(al[..., 1]) + np.abs(be[..., 1])) + TINY
+        # D is judged against both rows together: when one equation does not depend on x at this
+        # root (its row vanishes, e.g. q_k on the first axis), D ~ 0 and the other equation alone
+        # gives x (two roots); a product of the row sizes would vanish with the row and hide that
+        ref = (np.abs(al[..., 0]) + np.abs(be[..., 0]) + np.abs(al[..., 1]) + np.abs(be[..., 1])) ** 2 + TINY
         nondeg = np.abs(D) > 1e-8 * ref
         sg = np.where(D < 0, -1.0, 1.0)
         x0 = np.arctan2(Ns * sg, Nc * sg)
@@ -279,7 +307,7 @@ def _candidates(Mr, ke, ku, u):
         return X, V
     A, B, C = rv[..., 2], rv[..., 1], rv[..., 0]
     den = A[..., 1] * B[..., 0] - A[..., 0] * B[..., 1]
-    ref = (np.abs(A[..., 0]) + np.abs(B[..., 0])) * (np.abs(A[..., 1]) + np.abs(B[..., 1])) + TINY
+    ref = (np.abs(A[..., 0]) + np.abs(B[..., 0]) + np.abs(A[..., 1]) + np.abs(B[..., 1])) ** 2 + TINY
     nondeg = np.abs(den) > 1e-8 * ref
     x0 = (A[..., 0] * C[..., 1] - A[..., 1] * C[..., 0]) / np.where(nondeg, den, 1.0)
     k = (np.abs(A[..., 1]) + np.abs(B[..., 1]) > np.abs(A[..., 0]) + np.abs(B[..., 0])).astype(int)[..., None]
@@ -297,13 +325,38 @@ def _candidates(Mr, ke, ku, u):
     return X, V
 
 
+def _single_roots(kind, c, scale):
+    """Both roots (..., 2, 2 -> flattened by the caller) of one equation in one value.
+
+    ``c`` (n, S, 2, 3): coefficients of ``(1, cos, sin)`` (revolute) or ``(1, t, t^2)`` (prismatic) for S
+    fixed values of the other joint and the two equations.  No real root: the clamped / real-part
+    value (a start point only).  Prismatic values are kept within 100 times the problem scale.
+    """
+    if kind == "R":
+        A, B, C = c[..., 1], c[..., 2], -c[..., 0]
+        r = np.hypot(A, B)
+        phi = np.arctan2(B, A)
+        delta = np.arccos(np.clip(C / np.where(r == 0, 1.0, r), -1.0, 1.0))
+        return np.stack([phi - delta, phi + delta], axis=-1)
+    a, b, cc = c[..., 2], c[..., 1], c[..., 0]
+    lin = np.abs(a) <= 1e-12 * (np.abs(b) + np.abs(cc) + TINY)
+    sq = np.sqrt(np.maximum(b * b - 4 * a * cc, 0.0))
+    safe_a = np.where(lin, 1.0, a)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # clipped below
+        r1 = np.where(lin, -cc / np.where(b == 0, 1.0, b), (-b - sq) / (2 * safe_a))
+        r2 = np.where(lin, r1, (-b + sq) / (2 * safe_a))
+    r1, r2 = np.nan_to_num(r1), np.nan_to_num(r2)
+    lim = 100.0 * scale[:, None, None, None]
+    return np.clip(np.stack([r1, r2], axis=-1), -lim, lim)
+
+
 def _basis_deriv(kind, u):
     if kind == "R":
         return np.stack([np.zeros_like(u), -np.sin(u), np.cos(u)], axis=-1)
     return np.stack([np.zeros_like(u), np.ones_like(u), 2.0 * u], axis=-1)
 
 
-def _snap_free(M, kx, ky, X, Y, iters: int = 12):
+def _snap_free(M, kx, ky, X, Y, scale, iters: int = 12):
     """Continuum points: where every coefficient of one value's basis vanishes, that value is free.
 
     From each candidate, Gauss-Newton on the six coefficients ``sum_j M[k, i, j] psi_j(y)`` (all ``k, i``)
@@ -320,7 +373,7 @@ def _snap_free(M, kx, ky, X, Y, iters: int = 12):
             g = contract(_basis_deriv(kind, u))
             gg = np.sum(g * g, axis=-1)
             step = np.sum(g * c, axis=-1) / np.where(gg == 0, 1.0, gg)
-            u = np.where(gg == 0, u, u - step)
+            u = np.where(gg == 0, u, u - _cap(kind, step, scale))
             u = np.where(np.isfinite(u), u, 0.0)
         c = contract(_basis_values(kind, u))
         moved = u - u0
@@ -339,6 +392,11 @@ def _snap_free(M, kx, ky, X, Y, iters: int = 12):
     return X, Y, xfree, yfree
 
 
+def _cap(kind, step, scale):
+    lim = np.pi if kind == "R" else 100.0 * scale.reshape((-1,) + (1,) * (step.ndim - 1))
+    return np.clip(step, -lim, lim)
+
+
 def _lm(pb: Pair, x, y, iters: int, damping0: float):
     """Levenberg-Marquardt (or Gauss-Newton with tiny damping) on (N, C) starts; returns x, y, cost."""
     r, J = pb.residual(x, y)
@@ -354,6 +412,9 @@ def _lm(pb: Pair, x, y, iters: int, damping0: float):
         det = np.where(det == 0, TINY, det)
         dx = -(c * Jtr[..., 0] - b * Jtr[..., 1]) / det
         dy = -(a * Jtr[..., 1] - b * Jtr[..., 0]) / det
+        # a step never longer than half a turn / 100 problem scales (a flat spot, J ~ 0, would
+        # otherwise jump to overflow; such a step is rejected anyway)
+        dx, dy = _cap(pb.kinds[0], dx, pb.scale), _cap(pb.kinds[1], dy, pb.scale)
         nx, ny = x + dx, y + dy
         r2, J2 = pb.residual(nx, ny)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -388,8 +449,14 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     basis = _BASIS_R if ku == "R" else _BASIS_T
     rowpoly = np.einsum("nkij,jc->nkic", Mr.astype(basis.dtype), basis)  # (N, 2, 3, 3 coeffs)
     F = _eliminant(rowpoly, ke)
-    ref = np.abs(M).max(axis=(1, 2, 3)) ** 4 + TINY
+    mmax = np.abs(M).max(axis=(1, 2, 3))
+    ref = mmax**4 + TINY
     identically_zero = np.abs(F).max(axis=1) <= ZERO_TOL * ref
+    # M's entries carry roundoff of a few ulps of the problem's size (scale^2 for squared distances,
+    # scale for plane offsets): when every entry is at that level, both equations hold for every
+    # (x, y) (e.g. p_k or q_k at an intersection point of the axes), whatever F's roundoff says
+    unit = pb.scale**2 if pb.family == "S3" else pb.scale
+    identically_zero |= mmax <= M_FLOOR * unit
     # coincident revolute axes / parallel prismatic directions: only the sum of the values matters
     if kx == ky:
         w1 = pb.tw[:, 0, 3:] if kx == "R" else pb.tw[:, 0, :3]
@@ -424,7 +491,7 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
     # a value the equations do not constrain at the other one (a continuum through this point)
-    X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y)
+    X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
     r, _ = pb.residual(X, Y)
     res = np.abs(r).max(axis=-1)
@@ -443,8 +510,10 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
         dy = dy / np.maximum(1.0, np.abs(Y))[:, None, :]
     close = np.maximum(np.abs(dx), np.abs(dy)) <= DEDUP_TOL
     C = X.shape[1]
+    # of a group of close exact candidates the one with the smallest residual stays (ties: the earlier)
     earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
-    dup = np.any(close & earlier & exact[:, None, :], axis=2)
+    better = (res[:, None, :] < res[:, :, None]) | ((res[:, None, :] == res[:, :, None]) & earlier)
+    dup = np.any(close & better & exact[:, None, :], axis=2)
     keep = exact & ~dup
     # fallback: continuum or nothing exact
     cont = identically_zero | np.any(keep & (xfree | yfree), axis=1)
@@ -456,9 +525,15 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
         sx, sy = _starts(kx, sub.scale), _starts(ky, sub.scale)
         SX = np.repeat(sx, sy.shape[1], axis=1)
         SY = np.tile(sy, (1, sx.shape[1]))
-        # also start from the eliminant's candidates (near misses of unreachable instances)
-        SX = np.concatenate([SX, X[idx]], axis=1)
-        SY = np.concatenate([SY, Y[idx]], axis=1)
+        # also start from the eliminant's candidates (near misses of unreachable instances) and from
+        # the points where one value is a grid start and one equation holds exactly (solved for the
+        # other value): on a continuum where one value is free these already satisfy both equations
+        # where LM from the grid alone can stall between the two equations' roots
+        Ms = M[idx]
+        ex_y = _single_roots(ky, np.einsum("nsi,nkij->nskj", _basis_values(kx, sx), Ms), sub.scale)
+        ex_x = _single_roots(kx, np.einsum("nsj,nkij->nski", _basis_values(ky, sy), Ms), sub.scale)
+        SX = np.concatenate([SX, X[idx], np.repeat(sx, 4, axis=1), ex_x.reshape(len(idx), -1)], axis=1)
+        SY = np.concatenate([SY, Y[idx], ex_y.reshape(len(idx), -1), np.repeat(sy, 4, axis=1)], axis=1)
         FX, FY, fcost = _lm(sub, SX, SY, LM_ITERS, 1e-3)
         FX, FY = _wrap(kx, FX), _wrap(ky, FY)
         fr, _ = sub.residual(FX, FY)

@@ -169,16 +169,7 @@ def _general_points(draw):
     return np.array([draw(_vec), draw(_vec)])
 
 
-_NEAR_FLAT_GAP = pytest.mark.xfail(
-    strict=False,
-    reason="known gap (CHANGELOG): with p at the origin and th = (0, 0) the S3-RT eliminant has a root "
-    "of multiplicity ~4; the solver returns exact rows up to 1e-3 away and does not flag the near-continuum",
-)
-
-
-@pytest.mark.parametrize(
-    "code", [pytest.param(c, marks=_NEAR_FLAT_GAP) if c == "S3-RT" else c for c in PAIRS]
-)
+@pytest.mark.parametrize("code", PAIRS)
 @budget()
 @given(data=st.data())
 def test_pair_roundtrip(code, data):
@@ -192,12 +183,6 @@ def test_pair_roundtrip(code, data):
     assert len(r.q) <= max_solutions(code)
 
 
-@pytest.mark.xfail(
-    reason="known gap: points at the origin / on axes / equal pairs combined with special angles give "
-    "eliminant roots of multiplicity 3-4 that eigenvalues scatter by ~eps^(1/4); some such roots are "
-    "still missed (e.g. S3-RR, S3-RT with p_1 = q_1 = 0)",
-    strict=False,
-)
 @pytest.mark.parametrize("code", PAIRS)
 @settings(max_examples=max(5, EXAMPLES // 2), phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(data=st.data())
