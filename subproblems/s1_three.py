@@ -13,9 +13,18 @@ candidates.  Every candidate is checked against the whole equation.
 Per type, maximum number of solutions and degenerate cases:
 
 * **S1-RRR** (max 2).  Three axes through one point: the two Euler-type solutions of ``O-RRR`` both
-  hold (2 solutions).  Skew axes in general position: the rotation gives 2 candidates and the
-  translation keeps, generically, only one of them (the second sheet of the rotation has a different
-  translation).  ``w_1 || w_2`` or ``w_2 || w_3``: only the pair's signed sum follows from the rotation,
+  hold (2 solutions).  Skew axes in general position: **1 solution** for a target built by forward
+  kinematics.  Derivation: every solution must solve the orientation part ``O-RRR``, which has exactly
+  two solutions ``a`` and ``b`` for a generic ``R``.  With ``r_i`` any point on axis ``i`` and
+  ``R_1 = exp([w_1] t_1)``, ``R_12 = R_1 exp([w_2] t_2)``, the translation of the product is
+  ``p(t) = r_1 + R_1 (r_2 - r_1) + R_12 (r_3 - r_2) - R r_3``, so the two sheets differ by
+  ``p(a) - p(b) = (R_1^a - R_1^b)(r_2 - r_1) + (R_12^a - R_12^b)(r_3 - r_2)``.  Concurrent axes
+  (``r_1 = r_2 = r_3``) make it vanish identically: both sheets hold.  Otherwise it is a non-zero
+  analytic function of ``a`` and it vanishes only on a set of measure zero (3 equations on the
+  3-torus of ``a``): ``T = g(a)`` is then missed by sheet ``b``, and exactly one solution exists.
+  (Measured: 2000 random skew instances, the second sheet misses the target by at least 7e-4.)  The
+  "two solutions" of the general-position count are the two of ``O-RRR`` (or of concurrent axes).
+  ``w_1 || w_2`` or ``w_2 || w_3``: only the pair's signed sum follows from the rotation,
   the translation fixes the split (Paden-Kahan 1); coincident pair: continuum, first of the pair = 0.
   Gimbal lock (axes 1 and 3 line up in space, ``R w_3 = +-w_1``): the same, ``th_1 = 0`` when the lined-up
   axes coincide.  Three parallel axes: planar 3R, two solutions (elbow up/down) from the two-link

@@ -292,3 +292,26 @@ def test_degenerate_inputs_never_nan_or_raise():
     tw = np.array([prismatic_twist([1, 0, 0])] * 3)
     r = solve("S1-TTT", tw, T=np.eye(4))
     assert np.all(np.isfinite(r.q)) and r.continuum
+
+
+def test_s1_rrr_skew_second_orientation_sheet_misses_the_translation():
+    # s1_three docstring: the two O-RRR sheets a, b differ in translation by
+    # (R1^a - R1^b)(r2 - r1) + (R12^a - R12^b)(r3 - r2); zero for concurrent axes, not for skew ones
+    from subproblems.rotation import orientation_rrr
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        r = rng.normal(size=(3, 3))
+        tw = np.array([revolute_twist(rng.normal(size=3), ri) for ri in r])
+        th = rng.uniform(-math.pi, math.pi, 3)
+        T = fk(tw, th)
+        sheets = orientation_rrr(*[xi[3:] for xi in tw], T)
+        assert len(sheets) == 2
+        a, b = (np.array(s.q) for s in sheets)
+        R1 = [rotation_exp(tw[0, 3:], x[0]) for x in (a, b)]
+        R12 = [R1[i] @ rotation_exp(tw[1, 3:], x[1]) for i, x in enumerate((a, b))]
+        dp = (R1[0] - R1[1]) @ (r[1] - r[0]) + (R12[0] - R12[1]) @ (r[2] - r[1])
+        assert np.allclose(fk(tw, a)[:3, 3] - fk(tw, b)[:3, 3], dp, atol=1e-9)
+        assert np.linalg.norm(dp) > 1e-6
+        sol = solve("S1-RRR", tw, T=T)
+        assert len(sol.q) == 1 and contains_solution(sol.q, th, "RRR", TOL)
