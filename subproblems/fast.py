@@ -19,6 +19,8 @@ forward kinematics.  The bits:
 * :data:`DEFER` (4): any other geometry close to a degenerate case (a point on an axis, coincident
   axes, parallel slides): the caller sends the instance to the reference path
   (:mod:`subproblems.plan_runtime`), which classifies it properly.
+* :data:`EMPTY` (8): no candidate in this slot (only from :func:`reference`, whose solvers fill a
+  variable number of slots); the caller drops the leaf.
 
 Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 
@@ -43,7 +45,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-TANGENT_ROOT, FAMILY, DEFER = 1, 2, 4
+TANGENT_ROOT, FAMILY, DEFER, EMPTY = 1, 2, 4, 8
 NEAR = 1e-7  # relative size below which an instance is treated as degenerate and deferred
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
@@ -380,6 +382,58 @@ def rot_rrr(m, w1, w2, w3, R):
     return tuple(out)
 
 
+def _screw_rows(twists, n=None):
+    """6-tuples of floats or arrays as an (m, 6) array, or (n, m, 6) when ``n`` is given."""
+    if n is None:
+        return np.array([[float(x) for x in t] for t in twists])
+    return np.stack([np.stack([np.broadcast_to(np.asarray(x, float), (n,)) for x in t], axis=-1)
+                     for t in twists], axis=1)
+
+
+def _input(name, value, n=None):
+    if name == "T":  # 12 entries: rotation row-major, translation
+        rows = [value[0:3] + (value[9],), value[3:6] + (value[10],), value[6:9] + (value[11],)]
+        if n is None:
+            return np.array([[float(x) for x in r] for r in rows] + [[0.0, 0.0, 0.0, 1.0]])
+        out = np.zeros((n, 4, 4))
+        out[:, 3, 3] = 1.0
+        for i, r in enumerate(rows):
+            for j, x in enumerate(r):
+                out[:, i, j] = x
+        return out
+    if name == "d":
+        return float(value) if n is None else np.broadcast_to(np.asarray(value, float), (n,))
+    if n is None:
+        return np.array([float(x) for x in value])
+    return np.stack([np.broadcast_to(np.asarray(x, float), (n,)) for x in value], axis=-1)
+
+
+def reference(m, code, twists, inputs):
+    """Any registered subproblem through its reference solver, in the kernels' slot convention.
+
+    For steps with no plain-arithmetic kernel (S2-RRR, S2-RR with skew axes, the other class I and
+    class III types): ``twists`` are 6-tuples ``(v, w)`` of floats or arrays, ``inputs`` maps the
+    solver's keywords (``T`` as 12 entries, ``p``, ``q``, ``h`` as 3-tuples, ``d``) to values.  A
+    continuum defers; unfilled slots are flagged :data:`EMPTY`; least-squares rows are returned like
+    exact ones (the caller's pose check tells them apart).
+    """
+    from subproblems.core import solve, solve_batch
+
+    if m.name == "scalar":
+        r = solve(code, twists=_screw_rows(twists), **{k: _input(k, v) for k, v in inputs.items()})
+        flag = DEFER if r.continuum else 0
+        return tuple(tuple(float(x) for x in row) + (flag,) for row in r.q)
+    values = [x for t in twists for x in t]
+    values += [x for v in inputs.values() for x in (v if isinstance(v, (tuple, list)) else (v,))]
+    n = max(np.size(x) for x in values)
+    res = solve_batch(code, _screw_rows(twists, n), **{k: _input(k, v, n) for k, v in inputs.items()})
+    cont = res.continuum * DEFER
+    return tuple(
+        tuple(res.q[:, k, j] for j in range(res.q.shape[2])) + (np.where(res.valid[:, k], 0, EMPTY) | cont,)
+        for k in range(res.q.shape[1])
+    )
+
+
 # ---------------------------------------------------------------------------------------------------
 # the end of a generated fast path: measure, wrap, limit, deduplicate, pack
 
@@ -450,6 +504,8 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
     rows = []
     for leaf in leaves:
         err, flag = leaf[-2], leaf[-1]
+        if flag & EMPTY:
+            continue
         if flag & DEFER or exact_tol < err < near or err != err:
             return None
         if flag & TANGENT_ROOT:
@@ -542,15 +598,17 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
     exact_tol = tol * scale
     inexact = err > exact_tol
     near = inexact & (err < NEAR_MISS * scale)
-    family = (flag & FAMILY) != 0
-    bad = ((flag & DEFER) != 0) | np.isnan(err) | np.isnan(Q).any(axis=2) | (family & near)
+    empty = (flag & EMPTY) != 0
+    near &= ~empty
+    family = ((flag & FAMILY) != 0) & ~empty
+    bad = (((flag & DEFER) != 0) | np.isnan(err) | np.isnan(Q).any(axis=2) | (family & near)) & ~empty
     reference = bad.any(axis=1)
     route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
     route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON
     # a self-motion whose representatives all miss: Newton steps must pull one onto the family
     route[(route != ROUTE_REFERENCE) & family.any(axis=1) & ~(family & ~inexact).any(axis=1)] = ROUTE_FAMILY
     split = ((flag & TANGENT_ROOT) != 0).any(axis=1)  # merge the two copies of a double root
-    keep = np.repeat((route == ROUTE_DONE)[:, None], L, axis=1)
+    keep = (route == ROUTE_DONE)[:, None] & ~empty
     for j, k in enumerate(kinds):
         col = Q[:, :, j]
         if k == "R":

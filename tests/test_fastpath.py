@@ -131,3 +131,38 @@ def test_search_on_the_fast_chain_recovers_as_the_reference(name):
         recovered[fast] = hits
     module.FAST_PATH = True
     assert recovered[True] >= recovered[False] - 2 and recovered[True] >= 0.95 * len(Q), recovered
+
+
+GENERAL_STEPS = {  # arms whose closed form has a step with no plain-arithmetic kernel (found by fuzzing)
+    "S2-RRR": ("RRRRRR", [(0.1, -math.pi / 2, 0.1), (0.1, -math.pi / 2, 0.25), (0.25, math.pi / 3, 0.0),
+                          (0.0, math.pi / 2, 0.4), (0.0, math.pi / 3, 0.0), (0.1, 0.0, 0.25)]),
+    "S2-TRR": ("TRRRRR", [(0.0, math.pi / 2, 0.25), (0.25, -math.pi / 2, 0.4), (0.0, math.pi / 3, 0.4),
+                          (0.0, math.pi / 2, 0.4), (0.0, math.pi / 3, 0.0), (0.0, 0.0, 0.0)]),
+}
+
+
+@pytest.mark.parametrize("code", sorted(GENERAL_STEPS))
+def test_general_solver_inside_the_fast_chain(code):
+    """A step without a kernel runs its reference solver inside the fast chain (``fast.reference``):
+    the same solutions as the reference runtime, single and batch, and every one exact."""
+    from tests.test_compiler_generality import _dh_chain
+
+    kinds, rows = GENERAL_STEPS[code]
+    chain = _dh_chain(rows, kinds)
+    module = compile_robot(chain)
+    assert module.FAST_PATH and code in module.PLAN and "_fk.reference(" in module.__source__
+    Q = sample_configurations(chain, 25, seed=3, special=0.2)
+    Ts = np.array([module.fk(q) for q in Q])
+    S, V, L, _, C = module.solve_batch_info(Ts)
+    module.FAST_PATH = False
+    Sr, Vr, Lr, _, Cr = module.solve_batch_info(Ts)
+    module.FAST_PATH = True
+    for k, T in enumerate(Ts):
+        fast, ref = S[k][V[k] & ~L[k]], Sr[k][Vr[k] & ~Lr[k]]
+        for row in fast:
+            assert np.abs(module.fk(row) - T).max() <= 1e-8 * max(1.0, module.SCALE), (code, k, row)
+        if C[k].any() or Cr[k].any():
+            continue
+        assert _set_distance(fast, ref) <= SPLIT and _set_distance(ref, fast) <= SPLIT, (code, k, fast, ref)
+        single = module.solve(T)
+        assert _set_distance(single, fast) <= SPLIT and _set_distance(fast, single) <= SPLIT, (code, k)

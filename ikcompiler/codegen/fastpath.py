@@ -235,6 +235,25 @@ class _Emitter:
         w, r = self.axis(j)
         return self.c.scaled(sign, self.c.mat_vec(G, w, False)), self.c.mat_vec(G, r, True)
 
+    def screw(self, tw, kind):
+        """The 6 entries ``(v, w)`` of a carried axis: ``(v, 0)`` for a slide, ``(r x w, w)`` for a turn."""
+        if kind == "T":
+            return list(tw[0]) + [0.0, 0.0, 0.0]
+        w, r = tw
+        v = []
+        for j, k in ((1, 2), (2, 0), (0, 1)):  # (r x w)_i = r_j w_k - r_k w_j
+            plus, minus = self.c.product(r[j], w[k]), self.c.product(r[k], w[j])
+            terms = ([plus] if plus else []) + ([(-minus[0], minus[1])] if minus else [])
+            v.append(self.c.lin(terms, "v"))
+        return v + list(w)
+
+    def reference_call(self, code, tws, inputs):
+        """A step with no plain-arithmetic kernel: its subproblem's reference solver (``_fk.reference``)."""
+        kinds = code.split("-")[1]
+        screws = ", ".join(_render(self.screw(t, k)) for t, k in zip(tws, kinds))
+        fields = ", ".join(f"{k!r}: {_render(v)}" for k, v in inputs.items())
+        return f"_fk.reference(m, {code!r}, ({screws},), {{{fields}}})"
+
     # -- steps -------------------------------------------------------------------------------------
     def step(self, step, Td):
         kind = step["kind"]
@@ -265,8 +284,8 @@ class _Emitter:
             elif code == "S1-RTT":
                 call = _call("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
             else:
-                raise Unsupported(code)
-            outs = [f"a{c.count}_{i}" for i in range(3)]
+                call = self.reference_call(code, tws, {"T": Tp})
+            outs = [f"a{c.count}_{i}" for i in range(len(step["solve"]))]
             self._loop(outs, call)
             for j, name in zip(step["solve"], outs):
                 self.q[j] = name
@@ -298,14 +317,15 @@ class _Emitter:
             elif code == "S2-RR":
                 (w1, r1), (w2, r2) = args
                 fn = "point_rr_parallel" if step.get("_axes") == "parallel" else "point_rr_meet"
-                if step.get("_axes") not in ("parallel", "meet"):
-                    raise Unsupported("S2-RR with skew axes")
-                call = _call(fn, w1, r1, w2, r2, point, Tpp)
+                if step.get("_axes") in ("parallel", "meet"):
+                    call = _call(fn, w1, r1, w2, r2, point, Tpp)
+                else:  # skew axes: the general solver
+                    call = self.reference_call(code, args, {"p": point, "q": Tpp})
             elif code == "S2-TTT":
                 b = [c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
                 call = _call("slide3", args[0][0], args[1][0], args[2][0], b)
             else:
-                raise Unsupported(code)
+                call = self.reference_call(code, args, {"p": point, "q": Tpp})
         elif kind == "S3":
             centre = c.mat_vec(self.prefix(G_u[step["lead"][0]]), step["c0"], True)
             diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
@@ -315,7 +335,7 @@ class _Emitter:
             elif code == "S3-T":
                 call = _call("dist_t", args[0][0], point, centre, d)
             else:
-                raise Unsupported(code)
+                call = self.reference_call(code, args, {"p": point, "q": centre, "d": d})
         else:  # HL, HT: rule 6 with the axis h of a parallel group
             lead = step["lead"][0]
             h = self.twist(lead, G_u[lead], 1.0)[0] if self.kinds[lead] == "R" else None
@@ -332,7 +352,9 @@ class _Emitter:
             elif letters == "T":
                 call = _call("plane_t", tw[0], p_in, h, d)
             else:
-                raise Unsupported(code)
+                if kind == "HT":
+                    args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
+                call = self.reference_call(code, args, {"p": p_in, "h": h, "d": d})
         outs = [f"a{c.count}_{i}" for i in range(len(solve))]
         self._loop(outs, call)
         for j, name in zip(solve, outs):
@@ -451,6 +473,11 @@ def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | 
     except Unsupported:
         return None
     body = "\n".join(_without_dead_code(c.lines))
+    if plan.search and "_fk.reference(" in body:
+        # A search runs the chain on every grid value; a general solver inside it would run on every
+        # parent slot, valid or not (measured up to 4x slower than the reference runtime, which runs
+        # it on the valid rows only), so such a search keeps the reference runtime.
+        return None
     doc = (
         '    """Every candidate of the chain above as straight-line arithmetic on backend ``m``: a list of\n'
         '    (joint values..., pose error, defer) over the solution slots of each step."""\n'

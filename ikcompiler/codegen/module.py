@@ -288,6 +288,9 @@ def _fast_leaves(goals, init, searched=()):
     return _fk.leaf_arrays(leaves, len(goals), len(JOINT_NAMES))
 
 
+_SEED_ERROR = 1.0  # search seeds missing by more than this (relative to the robot size) are dropped
+
+
 def _fast_search_candidates(goals, init, instances=32768):
     """Search fallback on the fast chain: every grid value of the searched joints through the closed
     form; the local minima of each branch's error along the grid are polished by Newton steps."""
@@ -299,12 +302,16 @@ def _fast_search_candidates(goals, init, instances=32768):
     for start in range(0, len(goals), step):
         n = min(step, len(goals) - start)
         rep = np.repeat(np.arange(start, start + n), P)
-        Q, err, _ = _fast_leaves(goals[rep], init[rep], [np.tile(mesh[:, k], n) for k in range(len(_SEARCH))])
-        E = np.where(np.isnan(err), np.inf, err).reshape((n,) + (_GRID,) * len(_SEARCH) + (err.shape[1],))
-        is_min = np.isfinite(E)
+        searched = [np.tile(mesh[:, k], n) for k in range(len(_SEARCH))]
+        Q, err, flag = _fast_leaves(goals[rep], init[rep], searched)
+        E = np.where(np.isnan(err) | ((flag & _fk.EMPTY) != 0), np.inf, err)
+        E = E.reshape((n,) + (_GRID,) * len(_SEARCH) + (err.shape[1],))
+        # Local minima along the grid (circular); on a plateau of equal values (a clamped, unreachable
+        # branch is flat) only its first cell, and only seeds within _SEED_ERROR of the target.
+        is_min = np.isfinite(E) & (E <= _SEED_ERROR * SCALE)
         for ax in range(1, 1 + len(_SEARCH)):
-            for shift in (1, -1):
-                is_min &= E <= np.roll(E, shift, axis=ax)
+            is_min &= E < np.roll(E, 1, axis=ax)
+            is_min &= E <= np.roll(E, -1, axis=ax)
         rows, leaf = np.nonzero(is_min.reshape(n * P, -1))
         THs.append(Q[rows, leaf] @ _A.T + _B)
         owners.append(rep[rows])
@@ -331,7 +338,7 @@ def _solve_chunk(goals, Td, init, limits):
     if _POLISH:  # snapped plan: the leaves are candidates on the snapped robot; Newton corrects them
         Q, _, flag = _fast_leaves(goals, init)
         defer = (flag & _fk.DEFER).any(axis=1)
-        rows, leaf = np.nonzero(~defer[:, None] & ~np.isnan(Q).any(axis=2))
+        rows, leaf = np.nonzero(~defer[:, None] & ~np.isnan(Q).any(axis=2) & ((flag & _fk.EMPTY) == 0))
         TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
@@ -344,7 +351,7 @@ def _solve_chunk(goals, Td, init, limits):
         route[route == _fk.ROUTE_FAMILY] = _fk.ROUTE_REFERENCE
         newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
         if len(newton):  # near misses: Newton steps, then the full check
-            rows, leaf = np.nonzero(~np.isnan(Q[newton]).any(axis=2))
+            rows, leaf = np.nonzero(~np.isnan(Q[newton]).any(axis=2) & ((flag[newton] & _fk.EMPTY) == 0))
             TH = Q[newton[rows], leaf] @ _A.T + _B
             cont = (flag[newton[rows], leaf] & _fk.FAMILY) != 0
             done = _complete(TH, rows, np.zeros(len(TH), dtype=bool), cont, goals[newton], limits)
