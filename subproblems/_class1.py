@@ -179,18 +179,23 @@ def _family_candidates(twists, kinds, q0, nfull, T, scale):
 
     co = trig_coefficients([f(t) for t in _TAU5])  # (5, 3)
     rep = int(np.argmax(nfull != 0))
-    if np.abs(co).max() <= EXACT_TOL * scale:
-        q, _ = prismatic_lstsq(twists, kinds, q0, pT)
-        return [(q, True, (rep,))]
     taus: list[float] = []
     big = np.abs(co).max()
     for j in range(3):
         if np.abs(co[:, j]).max() > 1e-9 * big:
             r = trig_roots(co[:, j])
             taus += r or []
-    if not taus:
-        taus = [0.0]
     out = []
+    if big <= EXACT_TOL * scale:
+        # a continuum to the tolerance: the representative; when the translation still varies a
+        # little along the family (axes nearly coincident, ~1e-9 apart), its roots are candidates
+        # too, and where the representative itself misses by more than the tolerance they win
+        q, _ = prismatic_lstsq(twists, kinds, q0, pT)
+        out.append((q, True, (rep,)))
+        if big <= 1e-15 * scale:
+            return out
+    elif not taus:
+        taus = [0.0]
     for tau in taus:
         q, _ = prismatic_lstsq(twists, kinds, q0 + tau * nfull, pT)
         out.append((q, False, ()))

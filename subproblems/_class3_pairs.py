@@ -256,7 +256,8 @@ def _poly_roots(F):
     """
     n = F.shape[0]
     big = np.abs(F).max(axis=1)
-    Fn = F / np.where(big == 0, 1.0, big)[:, None]
+    tiny = big < 1e-250  # (sub)normal-range coefficients: complex division would overflow; zero instead
+    Fn = np.where(tiny[:, None], 0.0, F) / np.where(tiny, 1.0, big)[:, None]
     small = np.abs(Fn) < 1e-14
     lz = np.minimum(np.cumprod(small[:, ::-1], axis=1).sum(axis=1), 8)  # leading (near-)zeros
     src = np.arange(9)[None, :] - lz[:, None]

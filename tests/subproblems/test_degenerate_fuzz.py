@@ -17,7 +17,8 @@ Each instance must satisfy the solver contract of DESIGN.md section 4:
   distance, floored at 1).
 
 Budget: the active hypothesis profile's ``max_examples`` per code, ``BATCH`` instances per example
-(``ci``: 40 x 5 = 200 instances per code).  Class II solvers that fail are marked ``xfail`` here (their
+(``ci``: 40 x 5 = 200 instances per code; about half that for the
+two-equation types, which cost ~10x more).  Class II solvers that fail are marked ``xfail`` here (their
 owner fixes them); see ``KNOWN_FAILURES``.
 """
 
@@ -43,7 +44,10 @@ SPECIAL_ANGLES = (0.0, math.pi / 2, -math.pi / 2, math.pi)
 
 #: Codes whose solver fails this fuzz test, with the reason (non-strict xfail; the class II solvers
 #: are owned by another change and reported rather than fixed here).
-KNOWN_FAILURES: dict[str, str] = {}
+KNOWN_FAILURES: dict[str, str] = {
+    "S2-TTR": "class II, reported to its owner: prismatic directions parallel to ~1e-9 give batch rows "
+    "of ~3e8 flagged exact that miss the target by ~3e-8 on a unit-size problem",
+}
 
 
 def kinds_of(code: str) -> str:
@@ -311,10 +315,17 @@ def _params():
     return out
 
 
+def _examples(code: str) -> int:
+    # the two-equation types (S3-XY, H-XY) cost ~10x the others: half the examples
+    return max(5, EXAMPLES // 2) if code[:2] in ("S3", "H-") and len(kinds_of(code)) == 2 else EXAMPLES
+
+
 @pytest.mark.parametrize("code", _params())
 @settings(max_examples=EXAMPLES, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(data=st.data())
 def test_never_raises_never_nan_exact_rows_hold(code, data):
+    if data.draw(st.integers(0, EXAMPLES - 1), label="budget") >= _examples(code):
+        return  # this code's share of the profile's examples is used up
     insts = [data.draw(instance(code), label=f"instance {i}") for i in range(BATCH)]
     for i, (tw, inputs, info) in enumerate(insts):
         note(f"instance {i}: relations/th/mode={info}")
