@@ -623,7 +623,7 @@ def _describe(spec, inst, th=None):
 
 
 # ---------------------------------------------------------------------------------------------------
-# known kernel bugs (reported to the lead; each pinned by a strict xfail at the end of this file)
+# the family of a fixed kernel bug (a point on an axis up to roundoff); regressions at the end of this file
 
 
 def _meeting_point(inst) -> np.ndarray:
