@@ -152,11 +152,12 @@ def trig_roots(co, tol: float = 1e-12) -> list[float] | None:
     f0, c1, s1, c2, s2 = (float(x) for x in co)
     a = np.array([(c2 - 1j * s2) / 2, (c1 - 1j * s1) / 2, f0, (c1 + 1j * s1) / 2, (c2 + 1j * s2) / 2])
     m = float(np.abs(a).max())
-    if m == 0.0:
+    if m <= 1e-150:  # zero, or subnormal roundoff (np.roots would overflow): vanishes identically
         return None
-    if abs(a[0]) <= tol * m:
-        if abs(a[1]) <= tol * m:
-            return None if abs(f0) <= tol * m else []
+    a = a / m  # scaled, so the companion matrix stays finite
+    if abs(a[0]) <= tol:
+        if abs(a[1]) <= tol:
+            return None if abs(a[2]) <= tol else []
         a = a[1:4]
     return [float(np.angle(z)) for z in np.roots(a) if abs(z) > 0.0]
 
