@@ -26,29 +26,16 @@ How each is solved and what is returned in degenerate cases:
   ``w`` every angle is equally good: ``t = 0`` flagged ``ls`` and ``continuum``.
 * ``O-RR``: ``t1`` rotates ``w2`` onto ``R w2`` about ``w1``, then ``t2`` is ``O-R`` on ``exp(-[w1]t1) R``.
   Parallel axes (``w2 = s w1``): only ``t1 + s t2`` is determined; ``t1 = 0`` is returned, ``continuum``.
-* ``O-RRR``: the intermediate vector ``z = exp([w2]t2) w3 = exp(-[w1]t1) R w3`` keeps its component
-  along ``w2``, so ``w2^T exp(-[w1]t1) R w3 = w2^T w3`` gives ``t1`` (two roots), ``t2`` turns ``w3``
-  onto ``z`` about ``w2``, ``t3`` is ``O-R`` on the rest.  (Solving ``t1`` first, not ``t2`` from
-  ``w1^T exp([w2]t2) w3 = w1^T R w3``: near a gimbal lock, ``R w3`` within ``e`` of ``+-w1``, the
-  ``t2`` equation has a double root and ``t1`` is lost entirely, while the ``t1`` equation's
-  coefficients are all of size ``e`` with relative accuracy ``eps / e`` -- as accurate as the problem's
-  own conditioning.  The ``t2``-first form is the fallback when ``R w3`` is on the axis ``w1``.)
-  Candidates are polished by Gauss-Newton (up to 12 steps; slow, linear convergence near a
-  singularity).  Degenerate cases, all ``continuum``:
+* ``O-RRR``: ``w1^T exp([w2]t2) w3 = w1^T R w3`` gives ``t2`` (two roots), ``t1`` rotates ``exp([w2]t2) w3``
+  onto ``R w3`` about ``w1``, ``t3`` is ``O-R`` on the rest.  Degenerate cases, all ``continuum``:
   ``w1 || w2``: ``t1 = 0`` (``w1 || w2 || w3``: ``t1 = t2 = 0``); ``w2 || w3``: ``t2 = 0``; gimbal lock
   (``exp([w2]t2) w3 = +-w1``, i.e. ``R w3 = +-w1``, e.g. ``t2 = 0`` of ZYZ Euler angles): ``t1 = 0``.
-  Axes parallel to within ``PAR_TOL`` (1e-9) or a lock within ``GIMBAL_TOL`` count as the degenerate
-  case when its representative is exact (the set of solutions within ``EXACT_TOL`` is then an arc
-  around it); otherwise the isolated solutions are returned, accurate to about ``eps / s`` (``s`` the
-  angle between the lined-up axes).  Unreachable ``R`` (possible unless the axes allow every
-  rotation): the root of the clamped equation, flagged ``ls``.
+  Unreachable ``R`` (possible unless the axes allow every rotation): the root of the clamped equation,
+  flagged ``ls``.
 * ``direction_r``: Paden-Kahan problem 1 about an axis through the origin; ``u`` on the axis: ``t = 0``,
   ``continuum``; ``ls`` when the components along ``w`` or the lengths differ.
 * ``direction_rr``: the intermediate vector ``z = exp([w2]t2) u = exp(-[w1]t1) v`` has ``w2.z = w2.u``,
-  ``w1.z = w1.v``, ``|z| = |u|``: two candidates.  Nearly parallel axes (``|w1 x w2| < 1e-6``), ``v``
-  nearly on axis 1 or ``u`` nearly on axis 2 (within 1e-6): these formulas lose the angles, so
-  Gauss-Newton also starts from eight points of the degenerate family; at most the two best exact
-  points are kept.  ``w1 || w2``: ``t1 = 0``, ``continuum``; ``u || w2``:
+  ``w1.z = w1.v``, ``|z| = |u|``: two candidates.  ``w1 || w2``: ``t1 = 0``, ``continuum``; ``u || w2``:
   ``t2 = 0``; ``v || w1``: ``t1 = 0`` (both ``continuum``); no real ``z``: the nearest one, ``ls``.
 
 Every function returns a list of :class:`~subproblems.core.Solution` (plain floats, angles wrapped to
@@ -170,7 +157,7 @@ def _product(ws, th) -> np.ndarray:
     return E
 
 
-def _polish(ws, R, th, fixed=(), iters: int = 12) -> np.ndarray:
+def _polish(ws, R, th, fixed=(), iters: int = 4) -> np.ndarray:
     """Gauss-Newton on ``prod exp([w_i] t_i) = R`` over the joints not in ``fixed`` (accept if better)."""
     th = np.array(th, dtype=float)
     free = [i for i in range(len(ws)) if i not in fixed]
@@ -217,9 +204,6 @@ def _finish(ws, R, cands, allow_continuum=True) -> list[Solution]:
             max(abs(math.remainder(a - b, _TWO_PI)) for a, b in zip(s[1], k[1])) > DEDUP_TOL for k in kept
         ):
             kept.append(s)
-    # never more than theory allows (2): near a tangency several polished starts stall at different
-    # points that all meet the tolerance; the best ones are kept
-    kept = kept[:2]
     kept.sort(key=lambda s: s[1])
     return [Solution(th, continuum=cont) for _, th, cont in kept]
 
@@ -290,27 +274,7 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
         if exact(cand):
             sigma = 1.0 if w1 @ Rw3 > 0 else -1.0
             return [(cand, np.array([1.0, 0.0, -sigma]), 1)]
-    # general, t1 first: z = exp([w2]t2) w3 = exp(-[w1]t1) R w3 keeps its component along w2, so
-    # w2^T exp(-[w1]t1) u = w2^T w3 (u = R w3): A cos t1 + B sin t1 = C.  Near a gimbal lock (u close
-    # to +-w1) A, B, C are all small but keep their relative accuracy, so t1 is as accurate as the
-    # problem allows (the t2-first equation below has a double root there and loses t1 entirely).
-    u_par = w1 * float(w1 @ Rw3)
-    b = Rw3 - u_par
-    if np.linalg.norm(b) > FREE_TOL and np.linalg.norm(np.cross(w1, w2)) > PAR_TOL:
-        e = np.cross(w1, b)
-        A, B = float(w2 @ b), -float(w2 @ e)
-        C = float(w2 @ w3) - float(w2 @ u_par)
-        r = math.hypot(A, B)
-        phi = math.atan2(B, A)
-        dlt = math.acos(max(-1.0, min(1.0, C / r)))
-        out = []
-        for t1 in (phi + dlt, phi - dlt):
-            z = rotation_exp(w1, -t1) @ Rw3
-            t2, _ = _angle_about(w2, w3, z)
-            t3, _ = _angle_r(w3, (rotation_exp(w1, t1) @ rotation_exp(w2, t2)).T @ R)
-            out.append((np.array([t1, t2, t3]), None, 0))
-        return out
-    # general, t2 first: w1^T exp([w2]t2) w3 = w1^T R w3, i.e. alpha + beta cos t2 + gamma sin t2 = delta
+    # general: w1^T exp([w2]t2) w3 = w1^T R w3, i.e. alpha + beta cos t2 + gamma sin t2 = delta
     w3par = w2 * float(w2 @ w3)
     alpha = float(w1 @ w3par)
     beta = float(w1 @ (w3 - w3par))
@@ -318,7 +282,7 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
     delta = float(w1 @ Rw3)
     rho = math.hypot(beta, gamma)
     psi = math.atan2(gamma, beta)
-    c = (delta - alpha) / rho if rho > 0.0 else 0.0  # rho = 0: every t2 does the same (least squares)
+    c = (delta - alpha) / rho
     out = []
     for sgn in (1.0, -1.0):
         t2 = psi + sgn * math.acos(max(-1.0, min(1.0, c)))
@@ -436,33 +400,16 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
     else:
         k = float(w1 @ w2)
         a1, a2 = float(w1 @ v), float(w2 @ u)
+        al = (a1 - k * a2) / (1.0 - k * k)
+        be = (a2 - k * a1) / (1.0 - k * k)
         c = np.cross(w1, w2)
-        cc = float(c @ c)  # = 1 - k^2, without the cancellation of 1 - k^2 for nearly parallel axes
-        al = (a1 - k * a2) / cc
-        be = (a2 - k * a1) / cc
-        g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / cc
+        g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / float(c @ c)
         g = math.sqrt(max(0.0, g2))
-        starts = []
         for sg in (g, -g) if g > 0 else (0.0,):
             z = al * w1 + be * w2 + sg * c
             t2, _ = _angle_about(w2, u, z, scale)
             t1, _ = _angle_about(w1, z, v, scale)
-            starts.append((t1, t2))
-        if cc < 1e-12 or np.linalg.norm(np.cross(w1, v)) < 1e-6 * scale:
-            # nearly parallel axes, or v nearly on axis 1: the formulas above lose the angles
-            # (~eps / |w1 x w2|^2, or t1 entirely); the solutions lie near the family of the
-            # degenerate case (t1 = tau, t2 turning u towards exp(-[w1]tau) v): Gauss-Newton from
-            # eight points of it finds them
-            for tau in np.arange(8) * (math.pi / 4):
-                t2, _ = _angle_about(w2, u, rotation_exp(w1, -tau) @ v, scale)
-                starts.append((float(tau), t2))
-        if np.linalg.norm(np.cross(w2, u)) < 1e-6 * scale:
-            # u nearly on axis 2: the same with the roles of the joints swapped
-            for tau in np.arange(8) * (math.pi / 4):
-                t1, _ = _angle_about(w1, rotation_exp(w2, tau) @ u, v, scale)
-                starts.append((t1, float(tau)))
-        for t1, t2 in starts:
-            t1, t2 = _polish_direction(w1, w2, u, v, t1, t2, scale, iters=30)
+            t1, t2 = _polish_direction(w1, w2, u, v, t1, t2, scale)
             cands.append((t1, t2, False))
     scored = []
     for t1, t2, cont in cands:
@@ -478,9 +425,6 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
             max(abs(math.remainder(a - b, _TWO_PI)) for a, b in zip(s[1], k_[1])) > DEDUP_TOL for k_ in kept
         ):
             kept.append(s)
-    # never more than theory allows (2): near a tangency several polished starts stall at different
-    # points that all meet the tolerance; the best ones are kept
-    kept = kept[:2]
     kept.sort(key=lambda s: s[1])
     return [Solution(th, continuum=cont) for _, th, cont in kept]
 
@@ -554,15 +498,13 @@ def product_batch(W, TH) -> np.ndarray:
     return E
 
 
-def _polish_b(W, R, TH, fixed, iters: int = 12) -> np.ndarray:
+def _polish_b(W, R, TH, fixed, iters: int = 4) -> np.ndarray:
     """Batched Gauss-Newton on the orientation (``fixed``: (..., k) joints kept); steps kept if better."""
     k = TH.shape[-1]
     if k == 0:
         return TH
     err = rotation_error_batch(product_batch(W, TH), R)
     for _ in range(iters):
-        if not np.any(err > 1e-15):
-            break
         E = product_batch(W, TH)
         M = _tr(E) @ R
         e = 0.5 * np.stack(
@@ -577,8 +519,6 @@ def _polish_b(W, R, TH, fixed, iters: int = 12) -> np.ndarray:
         TH2 = TH + step
         err2 = rotation_error_batch(product_batch(W, TH2), R)
         better = (err2 < err) & (err > 1e-15)
-        if not better.any():
-            break
         TH = np.where(better[..., None], TH2, TH)
         err = np.where(better, err2, err)
     return TH
@@ -619,21 +559,6 @@ def rotation_families_batch(W, R):
     a = _mv(E2, w3[:, None])
     t1, _ = _angle_about_b(W1, a, Rw3[:, None])
     E12 = rexp_batch(W1, t1) @ E2
-    # t1 first where it is defined (u = R w3 off the axis w1; see rotation_families)
-    u_par = w1 * _dot(w1, Rw3)[:, None]
-    bb = Rw3 - u_par
-    first1 = (np.linalg.norm(bb, axis=-1) > FREE_TOL) & (np.linalg.norm(np.cross(w1, w2), axis=-1) > PAR_TOL)
-    A1 = _dot(w2, bb)
-    B1 = -_dot(w2, np.cross(w1, bb))
-    C1 = _dot(w2, w3) - _dot(w2, u_par)
-    r1 = np.hypot(A1, B1)
-    d1 = np.arccos(np.clip(C1 / np.where(r1 > 0, r1, 1.0), -1.0, 1.0))
-    t1b = np.arctan2(B1, A1)[:, None] + np.array([1.0, -1.0]) * d1[:, None]
-    zb = _mv(rexp_batch(W1, -t1b), Rw3[:, None])
-    t2b, _ = _angle_about_b(W2, np.broadcast_to(w3[:, None], zb.shape), zb)
-    t1 = np.where(first1[:, None], t1b, t1)
-    t2 = np.where(first1[:, None], t2b, t2)
-    E12 = rexp_batch(W1, t1) @ rexp_batch(W2, t2)
     t3, _ = _angle_r_b(np.repeat(w3[:, None], 2, 1), _tr(E12) @ R[:, None])
     TH = np.stack([t1, t2, t3], -1)
     cvalid = np.ones((N, 2), bool)
