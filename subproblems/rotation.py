@@ -282,7 +282,7 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
     delta = float(w1 @ Rw3)
     rho = math.hypot(beta, gamma)
     psi = math.atan2(gamma, beta)
-    c = (delta - alpha) / rho
+    c = (delta - alpha) / rho if rho > 0.0 else 0.0  # rho = 0: every t2 does the same (least squares)
     out = []
     for sgn in (1.0, -1.0):
         t2 = psi + sgn * math.acos(max(-1.0, min(1.0, c)))
@@ -400,10 +400,11 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
     else:
         k = float(w1 @ w2)
         a1, a2 = float(w1 @ v), float(w2 @ u)
-        al = (a1 - k * a2) / (1.0 - k * k)
-        be = (a2 - k * a1) / (1.0 - k * k)
         c = np.cross(w1, w2)
-        g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / float(c @ c)
+        cc = float(c @ c)  # = 1 - k^2 without its cancellation for nearly parallel axes (> PAR_TOL^2 here)
+        al = (a1 - k * a2) / cc
+        be = (a2 - k * a1) / cc
+        g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / cc
         g = math.sqrt(max(0.0, g2))
         for sg in (g, -g) if g > 0 else (0.0,):
             z = al * w1 + be * w2 + sg * c
