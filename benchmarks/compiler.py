@@ -377,10 +377,10 @@ def _deferred_batch(module, Ts, free_values) -> float:
 
     The module's own first stage, untimed: its fast chain on the array backend (``_fast_leaves``) and
     ``subproblems.fast.finish_many`` with the module's settings (limits on, as ``solve_batch``), whose
-    route marks the targets sent to the reference runtime (``ROUTE_REFERENCE``, and ``ROUTE_FAMILY``,
-    which the module sends there too).  One call over all the poses (``solve_batch`` cuts them in
-    chunks of 4096; the route is per target, so the count is the same).  NaN for search and snapped
-    plans, whose batches always take Newton steps on the fast chain's candidates.
+    route marks the targets sent to the reference runtime (``ROUTE_REFERENCE``).  One call over all
+    the poses (``solve_batch`` cuts them in chunks of 4096; the route is per target, so the count is
+    the same).  NaN for search and snapped plans, whose batches always take Newton steps on the fast
+    chain's candidates.
     """
     from subproblems import fast as _fk
 
@@ -390,7 +390,7 @@ def _deferred_batch(module, Ts, free_values) -> float:
     init = module._init(len(goals), free_values)
     Q, err, flag = module._fast_leaves(goals, init)
     _, route = _fk.finish_many(Q, err, flag, **module._finish_kwargs(True))
-    sent = (route == _fk.ROUTE_REFERENCE) | (route == _fk.ROUTE_FAMILY)
+    sent = route == _fk.ROUTE_REFERENCE
     return float(np.mean(sent)) if len(sent) else float("nan")
 
 

@@ -440,17 +440,6 @@ def reference(m, code, twists, inputs):
 NEAR_MISS = 1e-4  # candidates missing by less than this (relative) need Newton steps: reference path
 
 
-def _wrap(x: float) -> float:
-    w = (x + math.pi) % (2 * math.pi) - math.pi
-    return math.pi if w == -math.pi else w
-
-
-def _inside(v: float, lo: float, hi: float, revolute: bool, eps: float = 1e-7) -> bool:
-    if lo - eps <= v <= hi + eps:
-        return True
-    return revolute and (lo - eps <= v + 2 * math.pi <= hi + eps or lo - eps <= v - 2 * math.pi <= hi + eps)
-
-
 def goal_entries(T, target: str):
     """The 12 entries (rotation row-major, translation) of one clean target as floats, else None.
 
@@ -575,13 +564,18 @@ def leaf_arrays(leaves, N, dof):
     return Q, err, flag
 
 
+def usable(Q, flag):
+    """Leaves that are candidates at all: finite joint values, a filled slot.  (N, L) mask."""
+    return ~np.isnan(Q).any(axis=-1) & ((flag & EMPTY) == 0)
+
+
 def _same_angle(d, revolute: bool, tol: float):
     """|d| within tol, modulo 2 pi for a revolute joint (both values already wrapped to (-pi, pi])."""
     a = np.abs(d)
     return (a <= tol) | (np.abs(a - 2 * math.pi) <= tol) if revolute else a <= tol
 
 
-ROUTE_DONE, ROUTE_NEWTON, ROUTE_REFERENCE, ROUTE_FAMILY = 0, 1, 2, 3
+ROUTE_DONE, ROUTE_NEWTON, ROUTE_REFERENCE = 0, 1, 2
 
 
 def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots):
@@ -589,9 +583,11 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
 
     Returns ``(Q (N, slots, dof), valid, ls, residual, continuum)`` and ``route (N,)``: targets done
     here (:data:`ROUTE_DONE`), targets whose candidates need Newton steps before the final check (a
-    near miss: :data:`ROUTE_NEWTON`; a self-motion whose representatives all miss:
-    :data:`ROUTE_FAMILY`) and targets for the reference path (:data:`ROUTE_REFERENCE`); the rows of
-    all but the first are left empty here.
+    near miss: :data:`ROUTE_NEWTON`) and targets for the reference path (:data:`ROUTE_REFERENCE`:
+    degenerate geometry, or a self-motion whose representatives all miss, where the reference runtime
+    tries its alternative chain and pulls a representative onto the family; measured cheaper than
+    Newton steps on all the fast path's representatives, most of which belong to unreachable
+    branches); the rows of the last two are left empty here.
     """
     N, L, dof = Q.shape
     Q = Q.copy()
@@ -605,8 +601,7 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
     reference = bad.any(axis=1)
     route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
     route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON
-    # a self-motion whose representatives all miss: Newton steps must pull one onto the family
-    route[(route != ROUTE_REFERENCE) & family.any(axis=1) & ~(family & ~inexact).any(axis=1)] = ROUTE_FAMILY
+    route[family.any(axis=1) & ~(family & ~inexact).any(axis=1)] = ROUTE_REFERENCE
     split = ((flag & TANGENT_ROOT) != 0).any(axis=1)  # merge the two copies of a double root
     keep = (route == ROUTE_DONE)[:, None] & ~empty
     for j, k in enumerate(kinds):

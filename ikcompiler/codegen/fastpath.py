@@ -412,7 +412,7 @@ def _sumsq(xs) -> str:
     return " + ".join(f"{_render(x)}*{_render(x)}" for x in xs) or "0.0"
 
 
-def classify_pairs(steps, twists, kinds, home, scale, samples: int = 6, seed: int = 5):
+def classify_pairs(steps, twists, kinds, scale, samples: int = 6, seed: int = 5):
     """Mark each S2-RR step with the relation of its two (transformed) axes: ``meet``, ``parallel``
     or ``skew``, measured over random configurations (the relation the planner relies on persists)."""
     rng = np.random.default_rng(seed)
@@ -450,7 +450,7 @@ def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | 
         return None
     twists = np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float)
     couplings = [(chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings]
-    steps = classify_pairs(plan.steps, twists, chain.joint_types, chain.home, scale)
+    steps = classify_pairs(plan.steps, twists, chain.joint_types, scale)
     known = list(free_joints) + list(plan.search)
     em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, known, scale,
                   plan.target)

@@ -338,20 +338,16 @@ def _solve_chunk(goals, Td, init, limits):
     if _POLISH:  # snapped plan: the leaves are candidates on the snapped robot; Newton corrects them
         Q, _, flag = _fast_leaves(goals, init)
         defer = (flag & _fk.DEFER).any(axis=1)
-        rows, leaf = np.nonzero(~defer[:, None] & ~np.isnan(Q).any(axis=2) & ((flag & _fk.EMPTY) == 0))
+        rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
         TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
     else:
         Q, err, flag = _fast_leaves(goals, init)
         parts, route = _fk.finish_many(Q, err, flag, **_finish_kwargs(limits))
-        # A self-motion whose representatives all miss: the reference runtime tries the alternative
-        # chain and pulls its representatives onto the family (measured cheaper than Newton on all
-        # of the fast path's representatives, most of which belong to unreachable branches).
-        route[route == _fk.ROUTE_FAMILY] = _fk.ROUTE_REFERENCE
         newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
         if len(newton):  # near misses: Newton steps, then the full check
-            rows, leaf = np.nonzero(~np.isnan(Q[newton]).any(axis=2) & ((flag[newton] & _fk.EMPTY) == 0))
+            rows, leaf = np.nonzero(_fk.usable(Q[newton], flag[newton]))
             TH = Q[newton[rows], leaf] @ _A.T + _B
             cont = (flag[newton[rows], leaf] & _fk.FAMILY) != 0
             done = _complete(TH, rows, np.zeros(len(TH), dtype=bool), cont, goals[newton], limits)
