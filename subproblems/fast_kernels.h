@@ -1,0 +1,375 @@
+/* The plain-arithmetic kernels of subproblems/fast.py in C: the native backend of generated chains.
+ *
+ * A line-by-line port of fast.py's kernels with the SCALAR backend's semantics, in the same order of
+ * operations, so that C and fast.SCALAR agree to rounding (compiled with -ffp-contract=off and
+ * without -ffast-math; libm's sin, cos, atan2, acos are the functions Python's math module calls).
+ * tests/subproblems/test_native_kernels.py checks the agreement kernel by kernel.
+ *
+ * Conventions (the code generator relies on them):
+ *  - every function is static (inline) and prefixed ikc_; a generated chain includes this header and
+ *    exports only its own entry points;
+ *  - a kernel takes the Python kernel's arguments in order, without the backend m: 3-vectors and the
+ *    row-major rotation R (9 entries) as const double *, scalars as double; then its outputs:
+ *    double *q, slots x outs values slot-major (slot k, output j at q[k * outs + j]), and int *f,
+ *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide3 1x3,
+ *    turn_slide2 1x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
+ *    rot_rrr 2x3;
+ *  - SCALAR semantics: clip1 keeps NaN, pos(x) = x > 0 ? x : 0 (NaN -> 0), big(x) = x > TINY ? x : TINY;
+ *    a comparison with NaN is false, as in Python.
+ */
+#ifndef IKC_FAST_KERNELS_H
+#define IKC_FAST_KERNELS_H
+
+#include <math.h>
+#include <stddef.h>
+
+#define IKC_TANGENT_ROOT 1
+#define IKC_FAMILY 2
+#define IKC_DEFER 4
+#define IKC_EMPTY 8
+
+#define IKC_NEAR 1e-7
+#define IKC_TANGENT 1e-10
+#define IKC_NEAR2 (IKC_NEAR * IKC_NEAR)
+#define IKC_SPLIT_ROOT 1e-6
+#define IKC_TINY 1e-300
+#define IKC_PI 3.141592653589793115997963468544185161590576171875 /* math.pi, exactly */
+
+/* ------------------------------------------------------------------------------------------------
+ * SCALAR backend functions and 3-vector arithmetic */
+
+static inline double ikc_clip1(double x) { return x < -1.0 ? -1.0 : (x > 1.0 ? 1.0 : x); }
+static inline double ikc_pos(double x) { return x > 0.0 ? x : 0.0; }
+static inline double ikc_big(double x) { return x > IKC_TINY ? x : IKC_TINY; }
+
+static inline double ikc_dot(const double *a, const double *b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline void ikc_cross(const double *a, const double *b, double *out) {
+    double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
+static inline void ikc_sub(const double *a, const double *b, double *out) {
+    out[0] = a[0] - b[0];
+    out[1] = a[1] - b[1];
+    out[2] = a[2] - b[2];
+}
+
+/* s a + b */
+static inline void ikc_axpy(double s, const double *a, const double *b, double *out) {
+    out[0] = s * a[0] + b[0];
+    out[1] = s * a[1] + b[1];
+    out[2] = s * a[2] + b[2];
+}
+
+static inline void ikc_mat_vec(const double *R, const double *x, double *out) {
+    double a = R[0] * x[0] + R[1] * x[1] + R[2] * x[2];
+    double b = R[3] * x[0] + R[4] * x[1] + R[5] * x[2];
+    double c = R[6] * x[0] + R[7] * x[1] + R[8] * x[2];
+    out[0] = a;
+    out[1] = b;
+    out[2] = c;
+}
+
+static inline void ikc_mat_t_vec(const double *R, const double *x, double *out) {
+    double a = R[0] * x[0] + R[3] * x[1] + R[6] * x[2];
+    double b = R[1] * x[0] + R[4] * x[1] + R[7] * x[2];
+    double c = R[2] * x[0] + R[5] * x[1] + R[8] * x[2];
+    out[0] = a;
+    out[1] = b;
+    out[2] = c;
+}
+
+/* exp([w] th) x (Rodrigues) */
+static inline void ikc_rotate(const double *w, double th, const double *x, double *out) {
+    double c = cos(th), s = sin(th);
+    double w0 = w[0], w1 = w[1], w2 = w[2];
+    double x0 = x[0], x1 = x[1], x2 = x[2];
+    double k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c);
+    out[0] = c * x0 + s * (w1 * x2 - w2 * x1) + k * w0;
+    out[1] = c * x1 + s * (w2 * x0 - w0 * x2) + k * w1;
+    out[2] = c * x2 + s * (w0 * x1 - w1 * x0) + k * w2;
+}
+
+/* S1-R: the angle that turns u toward v about w; *flag = IKC_DEFER when either is (nearly) along w. */
+static inline double ikc_angle_about(const double *w, const double *u, const double *v, double size2,
+                                     int *flag) {
+    double w0 = w[0], w1 = w[1], w2 = w[2];
+    double u0 = u[0], u1 = u[1], u2 = u[2];
+    double v0 = v[0], v1 = v[1], v2 = v[2];
+    double uw = w0 * u0 + w1 * u1 + w2 * u2;
+    double vw = w0 * v0 + w1 * v1 + w2 * v2;
+    double a0 = u0 - uw * w0, a1 = u1 - uw * w1, a2 = u2 - uw * w2;
+    double b0 = v0 - vw * w0, b1 = v1 - vw * w1, b2 = v2 - vw * w2;
+    double sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0);
+    double th = atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2);
+    double lim = IKC_NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + size2 + 1.0);
+    *flag = ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) ? IKC_DEFER : 0;
+    return th;
+}
+
+/* Both roots of a cos th + b sin th = c (clamped to the nearest when |c| > rho): th[0..1], f[0..1]. */
+static inline void ikc_trig_roots(double a, double b, double c, double size, double *th, int *f) {
+    double rho = sqrt(a * a + b * b);
+    double phi = atan2(b, a);
+    double x = c / ikc_big(rho);
+    double delta = acos(ikc_clip1(x));
+    int flag = ((rho <= IKC_NEAR * size) ? IKC_DEFER : 0)
+               | ((fabs(x * x - 1.0) <= IKC_TANGENT) ? IKC_TANGENT_ROOT : 0);
+    th[0] = phi + delta;
+    th[1] = phi - delta;
+    f[0] = flag;
+    f[1] = flag;
+}
+
+/* ------------------------------------------------------------------------------------------------
+ * the kernels */
+
+/* H-R: h . exp(w th)(p) = d.  2 slots x 1 */
+static inline void ikc_plane_r(const double *w, const double *r, const double *p, const double *h, double d,
+                               double *q, int *f) {
+    double u[3], up[3], wu[3];
+    ikc_sub(p, r, u);
+    double uw = ikc_dot(w, u);
+    ikc_axpy(-uw, w, u, up);
+    double a = ikc_dot(h, up);
+    ikc_cross(w, u, wu);
+    double b = ikc_dot(h, wu);
+    double c = d - ikc_dot(h, r) - uw * ikc_dot(h, w);
+    double size = sqrt(ikc_dot(h, h) * (ikc_dot(u, u) + ikc_dot(r, r) + ikc_dot(p, p) + 1.0)) + IKC_TINY;
+    ikc_trig_roots(a, b, c, size, q, f);
+}
+
+/* H-T: h . (p + v th) = d.  1 slot x 1; h (nearly) across the slide: th = 0, IKC_FAMILY */
+static inline void ikc_plane_t(const double *v, const double *p, const double *h, double d, double *q, int *f) {
+    double hv = ikc_dot(h, v);
+    int across = (hv * hv) <= IKC_NEAR2 * ikc_dot(h, h);
+    double th = (d - ikc_dot(h, p)) / (across ? 1.0 : hv);
+    q[0] = across ? 0.0 * th : th;
+    f[0] = across ? IKC_FAMILY : 0;
+}
+
+/* S3-R: |exp(w th)(p) - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
+static inline void ikc_dist_r(const double *w, const double *r, const double *p, const double *qq, double d,
+                              double *q, int *f) {
+    double u[3], z[3], up[3], wu[3];
+    ikc_sub(p, r, u);
+    ikc_sub(qq, r, z);
+    double uw = ikc_dot(w, u);
+    ikc_axpy(-uw, w, u, up);
+    double a = ikc_dot(z, up);
+    ikc_cross(w, u, wu);
+    double b = ikc_dot(z, wu);
+    double c = 0.5 * (ikc_dot(u, u) + ikc_dot(z, z) - d * d) - uw * ikc_dot(z, w);
+    ikc_trig_roots(a, b, c, ikc_dot(u, u) + ikc_dot(z, z) + ikc_dot(r, r) + d * d + 1.0, q, f);
+}
+
+/* S3-T: |p + v th - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
+static inline void ikc_dist_t(const double *v, const double *p, const double *qq, double d, double *q, int *f) {
+    double e[3];
+    ikc_sub(p, qq, e);
+    double ve = ikc_dot(v, e);
+    double disc = ve * ve - ikc_dot(e, e) + d * d;
+    double root = sqrt(ikc_pos(disc));
+    int tangent =
+        (fabs(disc) <= IKC_TANGENT * (ve * ve + d * d + ikc_dot(p, p) + ikc_dot(qq, qq) + 1.0)) ? IKC_TANGENT_ROOT
+                                                                                              : 0;
+    q[0] = -ve + root;
+    q[1] = -ve - root;
+    f[0] = tangent;
+    f[1] = tangent;
+}
+
+/* S2-TTT / S1-TTT: v1 t1 + v2 t2 + v3 t3 = b (Cramer).  1 slot x 3 */
+static inline void ikc_slide3(const double *v1, const double *v2, const double *v3, const double *b, double *q,
+                              int *f) {
+    double c23[3], c31[3], c12[3];
+    ikc_cross(v2, v3, c23);
+    ikc_cross(v3, v1, c31);
+    ikc_cross(v1, v2, c12);
+    double det = ikc_dot(v1, c23);
+    double scale = sqrt(ikc_dot(v1, v1) * ikc_dot(v2, v2) * ikc_dot(v3, v3)) + IKC_TINY;
+    double inv = 1.0 / (det + (det >= 0.0 ? IKC_TINY : 0.0) - (det < 0.0 ? IKC_TINY : 0.0));
+    q[0] = ikc_dot(b, c23) * inv;
+    q[1] = ikc_dot(b, c31) * inv;
+    q[2] = ikc_dot(b, c12) * inv;
+    f[0] = (fabs(det) <= IKC_NEAR * scale) ? IKC_DEFER : 0;
+}
+
+/* O-R: exp([w] th) = R.  1 slot x 1 */
+static inline void ikc_rot_r(const double *w, const double *R, double *q, int *f) {
+    double Rw[3];
+    ikc_mat_vec(R, w, Rw);
+    double c = 0.5 * (R[0] + R[4] + R[8] - ikc_dot(w, Rw));
+    double s = 0.5 * (w[0] * (R[7] - R[5]) + w[1] * (R[2] - R[6]) + w[2] * (R[3] - R[1]));
+    q[0] = atan2(s, c);
+    f[0] = (c != c) ? IKC_DEFER : 0;
+}
+
+/* S1-RTT: exp(xi1 t1) exp(v2 t2) exp(v3 t3) = (R, t), xi1 about the axis (w, r).  1 slot x 3 */
+static inline void ikc_turn_slide2(const double *w, const double *r, const double *v2, const double *v3,
+                                   const double *R, const double *t, double *q, int *f) {
+    double t1;
+    int f1;
+    ikc_rot_r(w, R, &t1, &f1);
+    double tr[3], x[3];
+    ikc_sub(t, r, tr);
+    ikc_rotate(w, -t1, tr, x);
+    x[0] = x[0] + r[0];
+    x[1] = x[1] + r[1];
+    x[2] = x[2] + r[2];
+    double a = ikc_dot(v2, v2), b = ikc_dot(v2, v3), e = ikc_dot(v3, v3);
+    double det = a * e - b * b;
+    double inv = 1.0 / ikc_big(det);
+    double y2 = ikc_dot(v2, x), y3 = ikc_dot(v3, x);
+    q[0] = t1;
+    q[1] = (e * y2 - b * y3) * inv;
+    q[2] = (a * y3 - b * y2) * inv;
+    f[0] = f1 | ((det <= IKC_NEAR * a * e) ? IKC_DEFER : 0);
+}
+
+/* S2-R: exp(w th)(p) = q.  1 slot x 1 (argument qq is the Python kernel's q) */
+static inline void ikc_point_r(const double *w, const double *r, const double *p, const double *qq, double *q,
+                               int *f) {
+    double u[3], v[3];
+    ikc_sub(p, r, u);
+    ikc_sub(qq, r, v);
+    q[0] = ikc_angle_about(w, u, v, ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r, r), &f[0]);
+}
+
+/* S2-RR, axes meeting: exp(w1 t1) exp(w2 t2)(p) = q (Paden-Kahan 2).  2 slots x 2 (t1, t2) */
+static inline void ikc_point_rr_meet(const double *w1, const double *r1, const double *w2, const double *r2,
+                                     const double *p, const double *qq, double *q, int *f) {
+    double n[3], d21[3], m[3], c[3], u[3], v[3];
+    double k = ikc_dot(w1, w2);
+    ikc_cross(w1, w2, n);
+    double nn = ikc_dot(n, n);
+    int parallel = nn <= IKC_NEAR;
+    double den = parallel ? 1.0 : nn;
+    ikc_sub(r2, r1, d21);
+    ikc_cross(d21, w2, m);
+    double s = ikc_dot(m, n) / den;
+    ikc_axpy(s, w1, r1, c);
+    ikc_sub(p, c, u);
+    ikc_sub(qq, c, v);
+    double size2 = ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r1, r1) + ikc_dot(r2, r2);
+    double a1 = ikc_dot(w1, v), a2 = ikc_dot(w2, u);
+    double alpha = (a1 - k * a2) / den;
+    double beta = (a2 - k * a1) / den;
+    double uu = ikc_dot(u, u);
+    double g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * k) / den;
+    double gamma = sqrt(ikc_pos(g2));
+    int degenerate = (parallel ? IKC_DEFER : 0) | ((fabs(g2) * nn <= IKC_TANGENT * uu) ? IKC_TANGENT_ROOT : 0);
+    for (int i = 0; i < 2; i++) {
+        double g = i == 0 ? gamma : -gamma;
+        double z[3];
+        z[0] = alpha * w1[0] + beta * w2[0] + g * n[0];
+        z[1] = alpha * w1[1] + beta * w2[1] + g * n[1];
+        z[2] = alpha * w1[2] + beta * w2[2] + g * n[2];
+        int f1, f2;
+        double t2 = ikc_angle_about(w2, u, z, size2, &f2);
+        double t1 = ikc_angle_about(w1, z, v, size2, &f1);
+        q[2 * i] = t1;
+        q[2 * i + 1] = t2;
+        f[i] = degenerate | f1 | f2;
+    }
+}
+
+/* S2-RR, parallel axes (w2 = +-w1): a planar 2R arm.  2 slots x 2 (t1, t2) */
+static inline void ikc_point_rr_parallel(const double *w1, const double *r1, const double *w2, const double *r2,
+                                         const double *p, const double *qq, double *q, int *f) {
+    double w0 = w1[0], w1_ = w1[1], w2_ = w1[2];
+    double e0 = r1[0] - r2[0], e1 = r1[1] - r2[1], e2 = r1[2] - r2[2];
+    double h = w0 * e0 + w1_ * e1 + w2_ * e2;
+    e0 = e0 - h * w0;
+    e1 = e1 - h * w1_;
+    e2 = e2 - h * w2_;
+    double u0 = p[0] - r2[0], u1 = p[1] - r2[1], u2 = p[2] - r2[2];
+    double height = w0 * u0 + w1_ * u1 + w2_ * u2;
+    double a[3] = {u0 - height * w0, u1 - height * w1_, u2 - height * w2_};
+    double v0 = qq[0] - r1[0], v1 = qq[1] - r1[1], v2 = qq[2] - r1[2];
+    h = w0 * v0 + w1_ * v1 + w2_ * v2;
+    double b[3] = {v0 - h * w0, v1 - h * w1_, v2 - h * w2_};
+    double ee = e0 * e0 + e1 * e1 + e2 * e2;
+    double rho2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+    double rho1 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+    double x = (rho2 - rho1 + ee) / (2.0 * ikc_big(ee));
+    double y2 = rho2 / ikc_big(ee) - x * x;
+    double y = sqrt(ikc_pos(y2));
+    double f0 = w1_ * e2 - w2_ * e1, f1 = w2_ * e0 - w0 * e2, f2 = w0 * e1 - w1_ * e0; /* w x e */
+    double size2 = ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r1, r1) + ikc_dot(r2, r2);
+    int coincident = (ee <= IKC_NEAR2 * (rho1 + rho2 + size2 + 1.0)) ? IKC_DEFER : 0;
+    int degenerate = coincident | ((fabs(y2) * ee <= IKC_TANGENT * rho2) ? IKC_TANGENT_ROOT : 0);
+    for (int i = 0; i < 2; i++) {
+        double s = i == 0 ? y : -y;
+        double z[3] = {x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2};
+        double ze[3] = {z[0] - e0, z[1] - e1, z[2] - e2};
+        int g1, g2;
+        double t2 = ikc_angle_about(w2, a, z, size2, &g2);
+        double t1 = ikc_angle_about(w1, ze, b, size2, &g1);
+        q[2 * i] = t1;
+        q[2 * i + 1] = t2;
+        f[i] = degenerate | g1 | g2;
+    }
+}
+
+/* O-RR: exp([w1] t1) exp([w2] t2) = R.  1 slot x 2 */
+static inline void ikc_rot_rr(const double *w1, const double *w2, const double *R, double *q, int *f) {
+    double Rw2[3], Rtw1[3];
+    int f1, f2;
+    ikc_mat_vec(R, w2, Rw2);
+    q[0] = ikc_angle_about(w1, w2, Rw2, 0.0, &f1);
+    ikc_mat_t_vec(R, w1, Rtw1);
+    q[1] = ikc_angle_about(w2, Rtw1, w1, 0.0, &f2);
+    f[0] = f1 | f2;
+}
+
+/* O-RRR: exp([w1] t1) exp([w2] t2) exp([w3] t3) = R.  2 slots x 3; gimbal lock: t3 = 0, IKC_FAMILY */
+static inline void ikc_rot_rrr(const double *w1, const double *w2, const double *w3, const double *R, double *q,
+                               int *f) {
+    double Rw3[3], Rtw1[3], w23[3], w21[3], Rw2[3];
+    ikc_mat_vec(R, w3, Rw3);
+    ikc_mat_t_vec(R, w1, Rtw1);
+    double k12 = ikc_dot(w1, w2), k23 = ikc_dot(w2, w3);
+    ikc_cross(w2, w3, w23);
+    ikc_cross(w2, w1, w21);
+    double a = ikc_dot(w1, w3) - k12 * k23;
+    double b = ikc_dot(w1, w23);
+    double c = ikc_dot(w1, Rw3) - k12 * k23;
+    double t2_lock = atan2(b, a) + (c < 0.0 ? IKC_PI : 0.0);
+    int f_rep;
+    ikc_mat_vec(R, w2, Rw2);
+    double t1_rep = ikc_angle_about(w1, w2, Rw2, 0.0, &f_rep);
+    double roots[2];
+    int rf[2];
+    ikc_trig_roots(a, b, c, 1.0, roots, rf);
+    for (int i = 0; i < 2; i++) {
+        double t2 = roots[i];
+        double c2 = cos(t2), s2 = sin(t2);
+        double k3 = k23 * (1.0 - c2), k1 = k12 * (1.0 - c2);
+        double z[3] = {
+            c2 * w3[0] + s2 * w23[0] + k3 * w2[0],
+            c2 * w3[1] + s2 * w23[1] + k3 * w2[1],
+            c2 * w3[2] + s2 * w23[2] + k3 * w2[2],
+        };
+        double y[3] = {
+            c2 * w1[0] - s2 * w21[0] + k1 * w2[0],
+            c2 * w1[1] - s2 * w21[1] + k1 * w2[1],
+            c2 * w1[2] - s2 * w21[2] + k1 * w2[2],
+        };
+        int f1, f3;
+        double t1 = ikc_angle_about(w1, z, Rw3, 0.0, &f1);
+        double t3 = ikc_angle_about(w3, Rtw1, y, 0.0, &f3);
+        int lock = (f1 | f3) != 0;
+        q[3 * i] = lock ? t1_rep : t1;
+        q[3 * i + 1] = lock ? t2_lock : t2;
+        q[3 * i + 2] = lock ? 0.0 * t3 : t3;
+        f[i] = rf[i] | (lock ? (IKC_FAMILY | f_rep) : 0);
+    }
+}
+
+#endif /* IKC_FAST_KERNELS_H */
