@@ -1,0 +1,384 @@
+/* The end of a generated chain in C: the port of subproblems.fast.finish_one, the goal check of
+ * subproblems.fast.goal_entries, and the driver that runs a chain over N poses in a few threads.
+ *
+ * A generated chain (ikcompiler/codegen/csource.py) defines `ikc_chain`, which writes every leaf of
+ * its loop nest (joint values, pose error, flag bits), and an `ikc_robot` with the module's settings;
+ * the entry points it exports call the functions below.  Any target this code cannot settle alone
+ * (a leaf flagged DEFER, a near miss that needs Newton steps, NaN, a self-motion whose representatives
+ * all miss) returns -1: the Python module then runs its own path for that target. */
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+
+#define IKC_NEAR_MISS 1e-4  /* relative miss below which a candidate needs Newton steps (Python path) */
+#define IKC_SPLIT_ROOT 1e-6 /* copies of a tangent root closer than this are one solution */
+#define IKC_TWO_PI 6.283185307179586
+#define IKC_PI_F 3.141592653589793
+
+/* max of two errors and the largest |x| of n: NaN wins (it sends the target to the Python path) */
+static double ikc_max2(double a, double b) {
+    if (a != a || b != b) return NAN;
+    return a > b ? a : b;
+}
+
+static double ikc_maxabs(int n, const double *x) {
+    double m = 0.0;
+    for (int i = 0; i < n; i++) {
+        if (x[i] != x[i]) return NAN;
+        if (fabs(x[i]) > m) m = fabs(x[i]);
+    }
+    return m;
+}
+
+typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double *Q, double *E, int *F);
+
+typedef struct {
+    int dof, nfree, leaves, slots;
+    int target;  /* 0 pose, 1 position, 2 orientation */
+    const int *revolute;
+    const double *lower, *upper;
+    double scale, tol;
+    ikc_chain_fn chain;
+    /* the true robot, for Newton steps: all joints = A q + b (mimic joints), their twists (v, w), the
+     * home pose (rotation row-major, translation), and which of the dof returned joints are free */
+    int nall;
+    const double *twists, *home, *A, *b;
+    const int *is_free;
+} ikc_robot;
+
+/* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
+ * angular) of the true robot at returned joint values q: the C port of plan_runtime._tool_jacobian. */
+static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, double *J) {
+    const int dof = rb->dof;
+    double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};
+    double cols[rb->nall > 0 ? rb->nall : 1][6];
+    for (int i = 0; i < rb->nall; i++) {
+        double th = rb->b[i];
+        for (int j = 0; j < dof; j++) th += rb->A[i * dof + j] * q[j];
+        const double *v = rb->twists + 6 * i, *w = v + 3;
+        double Rw[3], Rv[3];
+        for (int r = 0; r < 3; r++) {
+            Rw[r] = R[3 * r] * w[0] + R[3 * r + 1] * w[1] + R[3 * r + 2] * w[2];
+            Rv[r] = R[3 * r] * v[0] + R[3 * r + 1] * v[1] + R[3 * r + 2] * v[2];
+        }
+        double pxw[3] = {p[1] * Rw[2] - p[2] * Rw[1], p[2] * Rw[0] - p[0] * Rw[2], p[0] * Rw[1] - p[1] * Rw[0]};
+        for (int r = 0; r < 3; r++) {
+            cols[i][r] = Rv[r] + pxw[r];
+            cols[i][3 + r] = Rw[r];
+        }
+        /* this joint's motion exp(xi th) as (E, t) */
+        double E[9], t[3];
+        if (w[0] == 0.0 && w[1] == 0.0 && w[2] == 0.0) {
+            for (int k = 0; k < 9; k++) E[k] = (k % 4 == 0) ? 1.0 : 0.0;
+            for (int k = 0; k < 3; k++) t[k] = v[k] * th;
+        } else {
+            double c = cos(th), s = sin(th), C = 1.0 - c;
+            E[0] = c + w[0] * w[0] * C;        E[1] = w[0] * w[1] * C - w[2] * s; E[2] = w[0] * w[2] * C + w[1] * s;
+            E[3] = w[1] * w[0] * C + w[2] * s; E[4] = c + w[1] * w[1] * C;        E[5] = w[1] * w[2] * C - w[0] * s;
+            E[6] = w[2] * w[0] * C - w[1] * s; E[7] = w[2] * w[1] * C + w[0] * s; E[8] = c + w[2] * w[2] * C;
+            double wv[3] = {w[1] * v[2] - w[2] * v[1], w[2] * v[0] - w[0] * v[2], w[0] * v[1] - w[1] * v[0]};
+            double wdv = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
+            for (int k = 0; k < 3; k++) {
+                double Ewv = E[3 * k] * wv[0] + E[3 * k + 1] * wv[1] + E[3 * k + 2] * wv[2];
+                t[k] = wv[k] - Ewv + w[k] * wdv * th;
+            }
+        }
+        double R2[9], p2[3];
+        for (int r = 0; r < 3; r++) {
+            for (int k = 0; k < 3; k++)
+                R2[3 * r + k] = R[3 * r] * E[k] + R[3 * r + 1] * E[3 + k] + R[3 * r + 2] * E[6 + k];
+            p2[r] = R[3 * r] * t[0] + R[3 * r + 1] * t[1] + R[3 * r + 2] * t[2] + p[r];
+        }
+        for (int k = 0; k < 9; k++) R[k] = R2[k];
+        for (int k = 0; k < 3; k++) p[k] = p2[k];
+    }
+    const double *H = rb->home;
+    for (int r = 0; r < 3; r++) {
+        for (int k = 0; k < 3; k++) G[3 * r + k] = R[3 * r] * H[k] + R[3 * r + 1] * H[3 + k] + R[3 * r + 2] * H[6 + k];
+        G[9 + r] = R[3 * r] * H[9] + R[3 * r + 1] * H[10] + R[3 * r + 2] * H[11] + p[r];
+    }
+    const double *tp = G + 9;
+    for (int j = 0; j < dof; j++) {
+        double col[6] = {0, 0, 0, 0, 0, 0};
+        for (int i = 0; i < rb->nall; i++) {
+            double a = rb->A[i * dof + j];
+            if (a == 0.0) continue;
+            const double *c = cols[i];
+            double wxp[3] = {c[4] * tp[2] - c[5] * tp[1], c[5] * tp[0] - c[3] * tp[2], c[3] * tp[1] - c[4] * tp[0]};
+            for (int r = 0; r < 3; r++) {
+                col[r] += a * (c[r] + wxp[r]);
+                col[3 + r] += a * c[3 + r];
+            }
+        }
+        for (int r = 0; r < 6; r++) J[r * dof + j] = col[r];
+    }
+}
+
+/* The chain's pose error of tool pose G against goal g: max(|dp|, scale max|dR|) for a pose. */
+static double ikc_pose_error(const ikc_robot *rb, const double *G, const double *g) {
+    double dp = 0.0, dr = 0.0;
+    for (int k = 0; k < 3; k++) dp += (G[9 + k] - g[9 + k]) * (G[9 + k] - g[9 + k]);
+    dp = sqrt(dp);
+    for (int k = 0; k < 9; k++) {
+        double d = G[k] - g[k];
+        if (d != d) return NAN;
+        if (fabs(d) > dr) dr = fabs(d);
+    }
+    dr *= rb->scale;
+    if (rb->target == 1) return dp;
+    if (rb->target == 2) return dr;
+    return ikc_max2(dp, dr);
+}
+
+/* Damped Gauss-Newton steps on the returned joints (free joints held) toward goal g, as
+ * plan_runtime.polish: columns scaled to unit norm, 1e-12 damping.  Returns the new pose error. */
+static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
+    const int dof = rb->dof;
+    double G[12], J[6 * dof];
+    for (int it = 0; it < iters; it++) {
+        ikc_fk_jacobian(rb, q, G, J);
+        double e[6];
+        for (int k = 0; k < 3; k++) e[k] = g[9 + k] - G[9 + k];
+        for (int k = 0; k < 3; k++) e[3 + k] = 0.0;
+        for (int c = 0; c < 3; c++) {  /* 0.5 sum over columns of R_c x Rd_c */
+            double a0 = G[c], a1 = G[3 + c], a2 = G[6 + c], b0 = g[c], b1 = g[3 + c], b2 = g[6 + c];
+            e[3] += 0.5 * (a1 * b2 - a2 * b1);
+            e[4] += 0.5 * (a2 * b0 - a0 * b2);
+            e[5] += 0.5 * (a0 * b1 - a1 * b0);
+        }
+        int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6;
+        double col[dof], M[dof][dof + 1];
+        for (int j = 0; j < dof; j++) {
+            double s = 0.0;
+            for (int r = r0; r < r1; r++) s += J[r * dof + j] * J[r * dof + j];
+            col[j] = rb->is_free[j] ? 0.0 : sqrt(s);
+            if (col[j] < 1e-300) col[j] = 1e-300;
+        }
+        for (int a = 0; a < dof; a++) {
+            for (int c = 0; c < dof; c++) {
+                double s = 0.0;
+                if (!rb->is_free[a] && !rb->is_free[c])
+                    for (int r = r0; r < r1; r++) s += J[r * dof + a] * J[r * dof + c];
+                M[a][c] = s / (col[a] * col[c]) + (a == c ? 1e-12 : 0.0);
+            }
+            double s = 0.0;
+            if (!rb->is_free[a])
+                for (int r = r0; r < r1; r++) s += J[r * dof + a] * e[r];
+            M[a][dof] = s / col[a];
+        }
+        for (int k = 0; k < dof; k++) {  /* Gaussian elimination, partial pivoting */
+            int piv = k;
+            for (int r = k + 1; r < dof; r++)
+                if (fabs(M[r][k]) > fabs(M[piv][k])) piv = r;
+            if (piv != k)
+                for (int c = k; c <= dof; c++) {
+                    double tmp = M[k][c];
+                    M[k][c] = M[piv][c];
+                    M[piv][c] = tmp;
+                }
+            if (M[k][k] == 0.0) return NAN;
+            for (int r = k + 1; r < dof; r++) {
+                double f = M[r][k] / M[k][k];
+                for (int c = k; c <= dof; c++) M[r][c] -= f * M[k][c];
+            }
+        }
+        double dq[dof];
+        for (int k = dof - 1; k >= 0; k--) {
+            double s = M[k][dof];
+            for (int c = k + 1; c < dof; c++) s -= M[k][c] * dq[c];
+            dq[k] = s / M[k][k];
+        }
+        for (int j = 0; j < dof; j++)
+            if (!rb->is_free[j]) q[j] += dq[j] / col[j];
+    }
+    ikc_fk_jacobian(rb, q, G, J);
+    return ikc_pose_error(rb, G, g);
+}
+
+/* Python's ((x + pi) % 2pi) - pi, with -pi mapped to pi: the wrap of finish_one, bit for bit. */
+static double ikc_wrap(double x) {
+    if (-IKC_PI_F < x && x <= IKC_PI_F) return x;
+    double a = x + IKC_PI_F, mod = fmod(a, IKC_TWO_PI);
+    if (mod != 0.0) {
+        if (mod < 0.0) mod += IKC_TWO_PI;
+    } else {
+        mod = 0.0;
+    }
+    double w = mod - IKC_PI_F;
+    return w == -IKC_PI_F ? IKC_PI_F : w;
+}
+
+static int ikc_inside(double v, double lo, double hi, int rev) {
+    double a = lo - 1e-7, b = hi + 1e-7;
+    if (a <= v && v <= b) return 1;
+    if (rev && ((a <= v + IKC_TWO_PI && v + IKC_TWO_PI <= b) || (a <= v - IKC_TWO_PI && v - IKC_TWO_PI <= b)))
+        return 1;
+    return 0;
+}
+
+/* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
+ * by error, duplicates (equal modulo 2 pi) and rows outside the limits left out.  Near misses (a
+ * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
+ * path gives them.  Returns the count, or -1 for the Python path.  Outputs: q (slots x dof), res,
+ * ls (inexact), cont (a representative of a self-motion). */
+static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
+                      const int *F, int limits, double *q, double *res, int *ls, int *cont) {
+    const int dof = rb->dof;
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
+    const int m = n > 0 ? n : 1;
+    int rows[m], inexact[m];
+    double W[m * dof], err[m];
+    int count = 0, family_any = 0, family_exact = 0;
+    for (int k = 0; k < n; k++) {
+        int flag = F[k];
+        if (flag & IKC_EMPTY) continue;
+        err[k] = E[k];
+        if ((flag & IKC_DEFER) || err[k] != err[k]) return -1;
+        double *w = W + k * dof;
+        for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
+        if (exact_tol < err[k] && err[k] < near) {
+            err[k] = ikc_newton(rb, g, w, (flag & IKC_FAMILY) ? 8 : 3);
+            if (err[k] != err[k]) return -1;
+            same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
+        }
+        if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
+        int ok = 1;
+        for (int j = 0; j < dof; j++) {
+            if (w[j] != w[j]) return -1;
+            if (rb->revolute[j]) w[j] = ikc_wrap(w[j]);
+            if (limits && ok && !ikc_inside(w[j], rb->lower[j], rb->upper[j], rb->revolute[j])) ok = 0;
+        }
+        if (!ok) continue;
+        inexact[k] = err[k] > exact_tol;
+        if (flag & IKC_FAMILY) {
+            family_any = 1;
+            if (!inexact[k]) family_exact = 1;
+        }
+        rows[count++] = k;
+    }
+    if (family_any && !family_exact) return -1;
+    /* stable insertion sort by (inexact, error) */
+    for (int a = 1; a < count; a++) {
+        int r = rows[a], b = a - 1;
+        while (b >= 0 && (inexact[rows[b]] > inexact[r] ||
+                          (inexact[rows[b]] == inexact[r] && err[rows[b]] > err[r]))) {
+            rows[b + 1] = rows[b];
+            b--;
+        }
+        rows[b + 1] = r;
+    }
+    int kept = 0;
+    for (int a = 0; a < count && kept < rb->slots; a++) {
+        const double *w = W + rows[a] * dof;
+        int duplicate = 0;
+        for (int b = 0; b < kept && !duplicate; b++) {
+            const double *o = q + b * dof;
+            int differs = 0;
+            for (int j = 0; j < dof; j++) {
+                double d = w[j] > o[j] ? w[j] - o[j] : o[j] - w[j];
+                if (d > same && !(rb->revolute[j] && fabs(d - IKC_TWO_PI) <= same)) {
+                    differs = 1;
+                    break;
+                }
+            }
+            duplicate = !differs;
+        }
+        if (duplicate) continue;
+        for (int j = 0; j < dof; j++) q[kept * dof + j] = w[j];
+        res[kept] = err[rows[a]];
+        ls[kept] = inexact[rows[a]];
+        cont[kept] = (F[rows[a]] & IKC_FAMILY) != 0;
+        kept++;
+    }
+    return kept;
+}
+
+/* The 12 goal entries (rotation row-major, translation) of a 4x4 row-major target. */
+static void ikc_goal_of(const ikc_robot *rb, const double *T, double *g) {
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) g[3 * i + j] = T[4 * i + j];
+    for (int i = 0; i < 3; i++) g[9 + i] = rb->target == 2 ? 0.0 : T[4 * i + 3];
+}
+
+/* goal_entries: the 12 entries of one raw target (16 entries for a pose, 9 for an orientation, 3 for
+ * a position), or 0 when they are not finite or not a rotation (the Python path raises then). */
+static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
+    if (rb->target == 1) {
+        for (int i = 0; i < 12; i++) g[i] = (i == 0 || i == 4 || i == 8) ? 1.0 : 0.0;
+        for (int i = 0; i < 3; i++) g[9 + i] = T[i];
+    } else if (rb->target == 2) {
+        for (int i = 0; i < 9; i++) g[i] = T[i];
+        g[9] = g[10] = g[11] = 0.0;
+    } else {
+        ikc_goal_of(rb, T, g);
+    }
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(g[i])) return 0;
+    if (rb->target == 1) return 1;
+    double x0 = g[0], y0 = g[1], z0 = g[2], x1 = g[3], y1 = g[4], z1 = g[5], x2 = g[6], y2 = g[7], z2 = g[8];
+    double det = (x1 * y2 - x2 * y1) * z0 + (x2 * y0 - x0 * y2) * z1 + (x0 * y1 - x1 * y0) * z2;
+    if (fabs(x0 * x0 + x1 * x1 + x2 * x2 - 1.0) > 1e-6 || fabs(y0 * y0 + y1 * y1 + y2 * y2 - 1.0) > 1e-6 ||
+        fabs(z0 * z0 + z1 * z1 + z2 * z2 - 1.0) > 1e-6 || fabs(x0 * y0 + x1 * y1 + x2 * y2) > 1e-6 ||
+        fabs(x0 * z0 + x1 * z1 + x2 * z2) > 1e-6 || fabs(y0 * z0 + y1 * z1 + y2 * z2) > 1e-6 ||
+        fabs(det - 1.0) > 1e-6)
+        return 0;
+    return 1;
+}
+
+/* One raw target: the solution count, -1 for the Python path, -2 when the target is not valid. */
+static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int limits, double *q,
+                   double *res, int *ls, int *cont) {
+    double g[12], Q[rb->leaves * rb->dof], E[rb->leaves];
+    int F[rb->leaves];
+    if (!ikc_goal_checked(rb, T, g)) return -2;
+    int n = rb->chain(g, fr, Q, E, F);
+    return ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
+}
+
+typedef struct {
+    const ikc_robot *rb;
+    int64_t start, stop;
+    const double *goals, *fr;
+    int limits;
+    double *q, *res;
+    int *ls, *cont, *count;
+} ikc_job;
+
+static void *ikc_run(void *arg) {
+    const ikc_job *job = (const ikc_job *)arg;
+    const ikc_robot *rb = job->rb;
+    const int dof = rb->dof, slots = rb->slots;
+    double g[12], Q[rb->leaves * dof], E[rb->leaves];
+    int F[rb->leaves];
+    for (int64_t i = job->start; i < job->stop; i++) {
+        ikc_goal_of(rb, job->goals + 16 * i, g);
+        int n = rb->chain(g, job->fr + rb->nfree * i, Q, E, F);
+        job->count[i] = ikc_finish(rb, g, n, Q, E, F, job->limits, job->q + i * slots * dof,
+                                   job->res + i * slots, job->ls + i * slots, job->cont + i * slots);
+    }
+    return NULL;
+}
+
+/* N validated 4x4 targets (N x 16) and their free values (N x nfree) in `threads` threads. */
+static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const double *fr, int limits,
+                     double *q, double *res, int *ls, int *cont, int *count, int threads) {
+    if (threads < 1) threads = 1;
+    if (threads > 64) threads = 64;
+    if (n < 256 * threads) threads = 1;  /* a thread costs more than a few hundred poses */
+    ikc_job jobs[64];
+    pthread_t ids[64];
+    int started[64] = {0};
+    for (int t = 0; t < threads; t++) {
+        jobs[t] = (ikc_job){rb, n * t / threads, n * (t + 1) / threads, goals, fr, limits, q, res, ls, cont,
+                            count};
+    }
+    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run, &jobs[t]) == 0;
+    ikc_run(&jobs[0]);
+    for (int t = 1; t < threads; t++) {
+        if (started[t])
+            pthread_join(ids[t], NULL);
+        else
+            ikc_run(&jobs[t]);  /* no thread to be had: do its share here */
+    }
+}

@@ -1,0 +1,235 @@
+"""Build and load C code with the machine's C compiler: the native backend of generated solvers.
+
+Why a C compiler at all: the speed goals of the generated solvers (tens of microseconds for one pose,
+several hundred thousand poses a second in batches) are out of reach of CPython's ~50 ns per float
+operation (measured: ``benchmarks/results/compiler.md``).  No Python package is added for it: the
+generated module carries its chain as C source, this module compiles it once with ``cc`` into a
+shared library cached on disk (keyed by a hash of the source and the compiler) and loads it with
+``ctypes`` from the standard library.  Without a compiler, or with ``IKC_NATIVE=0`` in the
+environment, :func:`load` returns None and the module runs its pure-Python fast path: the same
+arithmetic, the same answers, slower.
+
+The code shared by every generated chain lives beside this file: ``fast_kernels.h``, a C port of the
+kernels of :mod:`subproblems.fast` that keeps their operation order (so the two backends agree to
+rounding), and ``fast_finish.h``, the port of its ``finish_one`` and a threaded driver over N poses.
+
+Settings (environment): ``IKC_NATIVE=0`` disables the native backend; ``IKC_CACHE`` names the cache
+directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); ``CC`` the compiler.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+# -ffp-contract=off: no fused multiply-adds, so C rounds like the Python path; -fno-math-errno lets
+# sqrt inline (errno is never read).  No -ffast-math: NaN and infinity checks must keep working.
+FLAGS = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
+
+last_error: str | None = None  # why the last load returned None (for `ikc compile` to report)
+_loaded: dict[str, ctypes.CDLL] = {}
+
+
+HEADERS = ("fast_kernels.h", "fast_finish.h")  # beside this file, put in front of every chain
+
+
+def kernels_source() -> str:
+    """The C every generated chain includes: the kernels, then the finish and the driver."""
+    return "\n".join(Path(__file__).with_name(name).read_text() for name in HEADERS)
+
+
+def enabled() -> bool:
+    return os.environ.get("IKC_NATIVE", "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def compiler() -> str | None:
+    """The C compiler to use: ``$CC`` or the first of cc, gcc, clang on the PATH."""
+    cc = os.environ.get("CC")
+    if cc:
+        return shutil.which(cc.split()[0]) and cc
+    for name in ("cc", "gcc", "clang"):
+        if shutil.which(name):
+            return name
+    return None
+
+
+def cache_dir() -> Path:
+    env = os.environ.get("IKC_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "ikcompiler"
+
+
+def _compiler_id(cc: str) -> str:
+    try:
+        out = subprocess.run(cc.split() + ["--version"], capture_output=True, text=True, timeout=30)
+        return out.stdout.splitlines()[0] if out.stdout else cc
+    except (OSError, subprocess.SubprocessError):
+        return cc
+
+
+def build(source: str, *, include_kernels: bool = True) -> Path | None:
+    """Compile ``source`` (with the kernels in front) into a cached shared library; its path or None."""
+    global last_error
+    cc = compiler()
+    if cc is None:
+        last_error = "no C compiler found (set CC, or install gcc)"
+        return None
+    try:
+        text = (kernels_source() + "\n" if include_kernels else "") + source
+    except OSError as exc:
+        last_error = f"the C kernels are missing from the installation: {exc}"
+        return None
+    key = hashlib.sha256("\0".join((text, _compiler_id(cc), " ".join(FLAGS))).encode()).hexdigest()[:20]
+    directory = cache_dir()
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        directory = Path(tempfile.gettempdir()) / "ikcompiler-cache"
+        directory.mkdir(parents=True, exist_ok=True)
+    target = directory / f"ikc_{key}.so"
+    if target.exists():
+        return target
+    with tempfile.TemporaryDirectory(prefix="ikc-build-") as tmp:
+        src = Path(tmp) / "chain.c"
+        src.write_text(text)
+        lib = Path(tmp) / "chain.so"
+        try:
+            done = subprocess.run(cc.split() + list(FLAGS) + ["-o", str(lib), str(src), "-lm"],
+                                  capture_output=True, text=True, timeout=300)
+        except (OSError, subprocess.SubprocessError) as exc:
+            last_error = f"{cc} failed to run: {exc}"
+            return None
+        if done.returncode != 0:
+            last_error = f"{cc} failed: {done.stderr.strip()[:2000]}"
+            return None
+        # Another process may build the same library at the same time: copy next to the target, then
+        # rename (atomic on one file system), so nobody loads a half-written file.
+        partial = directory / f".{target.name}.{os.getpid()}"
+        shutil.copyfile(lib, partial)
+        os.replace(partial, target)
+    return target
+
+
+def load(source: str) -> ctypes.CDLL | None:
+    """The shared library of ``source``, built on first use; None when disabled or it cannot build."""
+    global last_error
+    if not enabled():
+        last_error = "disabled by IKC_NATIVE=0"
+        return None
+    if source in _loaded:
+        return _loaded[source]
+    path = build(source)
+    if path is None:
+        return None
+    try:
+        lib = ctypes.CDLL(str(path))
+    except OSError as exc:
+        last_error = f"cannot load {path}: {exc}"
+        return None
+    last_error = None
+    _loaded[source] = lib
+    return lib
+
+
+def threads() -> int:
+    """Worker threads for batches: ``IKC_THREADS``, else the cores this process may use (at most 8)."""
+    env = os.environ.get("IKC_THREADS")
+    if env and env.strip().isdigit():
+        return max(1, int(env))
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, 8))
+
+
+_TARGET_SHAPES = {"pose": (4, 4), "position": (3,), "orientation": (3, 3)}
+
+
+class NativeChain:
+    """The compiled chain of one generated module (the entry points of ``csource.chain_c_source``).
+
+    :meth:`one` solves one raw target (None: take the Python path); :meth:`many` solves N checked
+    targets and says, per target, whether the Python path must take it over.
+    """
+
+    def __init__(self, lib: ctypes.CDLL, *, dof: int, slots: int, nfree: int, target: str):
+        import threading
+
+        import numpy as np
+
+        self._np = np
+        self.dof, self.slots, self.nfree = dof, slots, nfree
+        P, I, L = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64  # noqa: E741
+        self._one = lib.ikc_solve_one
+        self._one.argtypes = [P, P, I, P, P, P, P]
+        self._one.restype = I
+        self._many = lib.ikc_solve_many
+        self._many.argtypes = [L, P, P, I, P, P, P, P, P, I]
+        self._many.restype = None
+        self.leaves_fn = lib.ikc_leaves
+        self.leaves_fn.argtypes = [P, P, P, P, P]
+        self.leaves_fn.restype = I
+        # one target: buffers reused under a lock (the call and the copies out are one critical section)
+        self._lock = threading.Lock()
+        self._T = np.zeros(_TARGET_SHAPES[target])
+        self._F = np.zeros(max(nfree, 1))
+        self._q = np.zeros((slots, dof))
+        self._res = np.zeros(slots)
+        self._ls = np.zeros(slots, dtype=np.intc)
+        self._cont = np.zeros(slots, dtype=np.intc)
+        self._addr = [a.ctypes.data for a in (self._T, self._F, self._q, self._res, self._ls, self._cont)]
+
+    def one(self, T, free, limits: bool):
+        """``(q, residual, ls, continuum)`` of one target, or None for the Python path."""
+        with self._lock:
+            try:
+                self._T[...] = T
+                if self.nfree:
+                    self._F[...] = free
+                elif len(free):
+                    return None
+            except (ValueError, TypeError):
+                return None
+            aT, aF, aq, ares, als, acont = self._addr
+            k = self._one(aT, aF, 1 if limits else 0, aq, ares, als, acont)
+            if k < 0:
+                return None
+            return self._q[:k].copy(), self._res[:k].copy(), self._ls[:k] != 0, self._cont[:k] != 0
+
+    def many(self, goals, free, limits: bool, workers: int | None = None):
+        """Solutions of N checked targets ``goals`` (N, 4, 4) with free values ``free`` (N, nfree).
+
+        Returns ``(Q, valid, ls, residual, continuum)`` as the module's batch path packs them, and
+        ``python (N,)`` marking the targets the Python path must take over (their rows are empty)."""
+        np = self._np
+        goals = np.ascontiguousarray(goals, dtype=float)
+        N = len(goals)
+        free = np.ascontiguousarray(np.broadcast_to(free, (N, self.nfree)), dtype=float)
+        Q = np.zeros((N, self.slots, self.dof))
+        res = np.full((N, self.slots), np.inf)
+        ls = np.zeros((N, self.slots), dtype=np.intc)
+        cont = np.zeros((N, self.slots), dtype=np.intc)
+        count = np.zeros(N, dtype=np.intc)
+        self._many(N, goals.ctypes.data, free.ctypes.data, 1 if limits else 0, Q.ctypes.data,
+                   res.ctypes.data, ls.ctypes.data, cont.ctypes.data, count.ctypes.data,
+                   workers or threads())
+        valid = np.arange(self.slots)[None, :] < count[:, None]
+        res[~valid] = np.inf
+        Q[~valid] = 0.0
+        return (Q, valid, (ls != 0) & valid, res, (cont != 0) & valid), count < 0
+
+
+def bind(source: str, *, dof: int, slots: int, nfree: int, target: str) -> NativeChain | None:
+    """The compiled chain of a generated module, or None (no compiler, disabled, build failed)."""
+    lib = load(source)
+    if lib is None:
+        return None
+    return NativeChain(lib, dof=dof, slots=slots, nfree=nfree, target=target)
