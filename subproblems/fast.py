@@ -158,33 +158,39 @@ def angle_about(m, w, u, v, size2=0.0):
     return th, ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) * DEFER
 
 
-def trig_roots(m, a, b, c, size):
+def trig_roots(m, a, b, c, size, rep=0.0):
     """Both roots of ``a cos th + b sin th = c`` (clamped to the nearest when ``|c| > rho``).
 
-    ``defer`` when ``rho = |(a, b)|`` is negligible against ``size``: then no angle or every angle
-    solves the equation.
+    When ``rho = |(a, b)|`` is negligible against ``size`` the equation hardly depends on ``th``: if
+    ``c`` is negligible too, every angle solves it (a self-motion): both slots hold the
+    representative ``th = rep``, flagged :data:`FAMILY`; otherwise no angle does, or the instance is
+    too close to call: :data:`DEFER`.
     """
     rho = m.sqrt(a * a + b * b)
     phi = m.atan2(b, a)
     x = c / m.big(rho)
     delta = m.acos(m.clip1(x))
-    flag = (rho <= NEAR * size) * DEFER | (abs(x * x - 1.0) <= TANGENT) * TANGENT_ROOT
-    return (phi + delta, flag), (phi - delta, flag)
+    flat = rho <= NEAR * size
+    every = flat & (abs(c) <= NEAR * size)
+    tangent = (abs(x * x - 1.0) <= TANGENT) * (rho > NEAR * size)
+    flag = (flat ^ every) * DEFER | every * FAMILY | tangent * TANGENT_ROOT
+    here = rep + 0.0 * phi
+    return (m.where(every, here, phi + delta), flag), (m.where(every, here, phi - delta), flag)
 
 
 # ---------------------------------------------------------------------------------------------------
 # the kernels
 
 
-def plane_r(m, w, r, p, h, d):
-    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r)."""
+def plane_r(m, w, r, p, h, d, rep=0.0):
+    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r); ``rep``: see :func:`trig_roots`."""
     u = sub(p, r)
     uw = dot(w, u)
     up = axpy(-uw, w, u)
     a = dot(h, up)
     b = dot(h, cross(w, u))
     c = d - dot(h, r) - uw * dot(h, w)
-    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY)
+    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY, rep)
 
 
 def plane_t(m, v, p, h, d):
@@ -196,8 +202,9 @@ def plane_t(m, v, p, h, d):
     return (m.where(across, 0.0 * th, th), across * FAMILY),
 
 
-def dist_r(m, w, r, p, q, d):
-    """S3-R: ``|exp(w th)(p) - q| = d``: the plane equation with normal ``q - r``."""
+def dist_r(m, w, r, p, q, d, rep=0.0):
+    """S3-R: ``|exp(w th)(p) - q| = d``: the plane equation with normal ``q - r``; ``rep``: see
+    :func:`trig_roots`."""
     u = sub(p, r)
     z = sub(q, r)
     uw = dot(w, u)
@@ -205,7 +212,7 @@ def dist_r(m, w, r, p, q, d):
     a = dot(z, up)
     b = dot(z, cross(w, u))
     c = 0.5 * (dot(u, u) + dot(z, z) - d * d) - uw * dot(z, w)
-    return trig_roots(m, a, b, c, dot(u, u) + dot(z, z) + dot(r, r) + d * d + 1.0)
+    return trig_roots(m, a, b, c, dot(u, u) + dot(z, z) + dot(r, r) + d * d + 1.0, rep)
 
 
 def dist_t(m, v, p, q, d):
@@ -337,12 +344,13 @@ def rot_rr(m, w1, w2, R):
     return (t1, t2, f1 | f2),
 
 
-def rot_rrr(m, w1, w2, w3, R):
+def rot_rrr(m, w1, w2, w3, R, rep=0.0):
     """O-RRR: ``exp([w1] t1) exp([w2] t2) exp([w3] t3) = R``.
 
     ``w1 . R w3 = w1 . exp([w2] t2) w3`` gives t2 (two roots); then t1 turns ``exp([w2] t2) w3`` onto
     ``R w3`` and t3 turns ``R^T w1`` onto ``exp(-[w2] t2) w1``.  Gimbal lock (``exp([w2] t2) w3``
-    along ``w1``) gives the representative t3 = 0, flagged :data:`FAMILY`.
+    along ``w1``) gives the representative t3 = ``rep``, flagged :data:`FAMILY` (the native backend
+    tries other values when the rest of the chain cannot complete ``rep = 0``).
     """
     Rw3 = mat_vec(R, w3)
     Rtw1 = mat_t_vec(R, w1)
@@ -353,11 +361,12 @@ def rot_rrr(m, w1, w2, w3, R):
     b = dot(w1, w23)
     c = dot(w1, Rw3) - k12 * k23
     # at a gimbal lock t2 is the tangent root phi (or phi + pi): use it exactly, not via acos(~1);
-    # the representative t3 = 0 then has t1 turning w2 onto R exp(-[w2] t2) w2 = R w2
+    # the representative t3 = rep then has t1 turning w2 onto R exp(-[w3] rep) exp(-[w2] t2) w2, which
+    # is R exp(-[w3] rep) w2
     t2_lock = m.atan2(b, a) + (c < 0.0) * math.pi
-    t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, w2))
+    t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, rotate(m, w3, -rep, w2)))
     out = []
-    for t2, f2 in trig_roots(m, a, b, c, 1.0):
+    for t2, f2 in trig_roots(m, a, b, c, 1.0, rep):
         c2, s2 = m.cos(t2), m.sin(t2)
         k3, k1 = k23 * (1.0 - c2), k12 * (1.0 - c2)
         z = (  # exp([w2] t2) w3
@@ -376,7 +385,7 @@ def rot_rrr(m, w1, w2, w3, R):
         lock = (f1 | f3) != 0
         t1 = m.where(lock, t1_rep, t1)
         t2 = m.where(lock, t2_lock, t2)
-        t3 = m.where(lock, 0.0 * t3, t3)
+        t3 = m.where(lock, rep + 0.0 * t3, t3)
         f13 = lock * (FAMILY | f_rep)
         out.append((t1, t2, t3, f2 | f13))
     return tuple(out)

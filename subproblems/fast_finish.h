@@ -30,7 +30,12 @@ static double ikc_maxabs(int n, const double *x) {
     return m;
 }
 
-typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double *Q, double *E, int *F);
+typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double rep, double *Q, double *E, int *F);
+
+#define IKC_PYTHON (-1)       /* the Python path takes this target */
+#define IKC_INVALID (-2)      /* not a finite rigid transform: the Python path raises the error */
+#define IKC_FAMILY_MISS (-3)  /* a self-motion whose representatives all miss: try others */
+#define IKC_REPS 16           /* representatives tried: rep = k pi / 8 */
 
 typedef struct {
     int dof, nfree, leaves, slots;
@@ -131,12 +136,17 @@ static double ikc_pose_error(const ikc_robot *rb, const double *G, const double 
 }
 
 /* Damped Gauss-Newton steps on the returned joints (free joints held) toward goal g, as
- * plan_runtime.polish: columns scaled to unit norm, 1e-12 damping.  Returns the new pose error. */
+ * plan_runtime.polish: columns scaled to unit norm, 1e-12 damping; at most `iters`, fewer once the
+ * error is far inside the exact tolerance.  Returns the new pose error. */
 static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
     const int dof = rb->dof;
+    const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
     double G[12], J[6 * dof];
     for (int it = 0; it < iters; it++) {
         ikc_fk_jacobian(rb, q, G, J);
+        double now = ikc_pose_error(rb, G, g);
+        if (now != now) return NAN;
+        if (now <= done) return now;
         double e[6];
         for (int k = 0; k < 3; k++) e[k] = g[9 + k] - G[9 + k];
         for (int k = 0; k < 3; k++) e[3 + k] = 0.0;
@@ -219,7 +229,7 @@ static int ikc_inside(double v, double lo, double hi, int rev) {
 /* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
  * by error, duplicates (equal modulo 2 pi) and rows outside the limits left out.  Near misses (a
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
- * path gives them.  Returns the count, or -1 for the Python path.  Outputs: q (slots x dof), res,
+ * path gives them.  Returns the count, IKC_PYTHON, or IKC_FAMILY_MISS.  Outputs: q (slots x dof), res,
  * ls (inexact), cont (a representative of a self-motion). */
 static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
                       const int *F, int limits, double *q, double *res, int *ls, int *cont) {
@@ -234,18 +244,18 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         int flag = F[k];
         if (flag & IKC_EMPTY) continue;
         err[k] = E[k];
-        if ((flag & IKC_DEFER) || err[k] != err[k]) return -1;
+        if ((flag & IKC_DEFER) || err[k] != err[k]) return IKC_PYTHON;
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
             err[k] = ikc_newton(rb, g, w, (flag & IKC_FAMILY) ? 8 : 3);
-            if (err[k] != err[k]) return -1;
+            if (err[k] != err[k]) return IKC_PYTHON;
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
         int ok = 1;
         for (int j = 0; j < dof; j++) {
-            if (w[j] != w[j]) return -1;
+            if (w[j] != w[j]) return IKC_PYTHON;
             if (rb->revolute[j]) w[j] = ikc_wrap(w[j]);
             if (limits && ok && !ikc_inside(w[j], rb->lower[j], rb->upper[j], rb->revolute[j])) ok = 0;
         }
@@ -257,7 +267,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         }
         rows[count++] = k;
     }
-    if (family_any && !family_exact) return -1;
+    if (family_any && !family_exact) return IKC_FAMILY_MISS;
     /* stable insertion sort by (inexact, error) */
     for (int a = 1; a < count; a++) {
         int r = rows[a], b = a - 1;
@@ -294,15 +304,9 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
     return kept;
 }
 
-/* The 12 goal entries (rotation row-major, translation) of a 4x4 row-major target. */
-static void ikc_goal_of(const ikc_robot *rb, const double *T, double *g) {
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) g[3 * i + j] = T[4 * i + j];
-    for (int i = 0; i < 3; i++) g[9 + i] = rb->target == 2 ? 0.0 : T[4 * i + 3];
-}
-
-/* goal_entries: the 12 entries of one raw target (16 entries for a pose, 9 for an orientation, 3 for
- * a position), or 0 when they are not finite or not a rotation (the Python path raises then). */
+/* goal_entries: the 12 entries (rotation row-major, translation) of one raw target (16 entries for a
+ * pose, 9 for an orientation, 3 for a position), or 0 when they are not finite or not a rotation (the
+ * Python path raises then). */
 static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
     if (rb->target == 1) {
         for (int i = 0; i < 12; i++) g[i] = (i == 0 || i == 4 || i == 8) ? 1.0 : 0.0;
@@ -311,7 +315,11 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
         for (int i = 0; i < 9; i++) g[i] = T[i];
         g[9] = g[10] = g[11] = 0.0;
     } else {
-        ikc_goal_of(rb, T, g);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) g[3 * i + j] = T[4 * i + j];
+        for (int i = 0; i < 3; i++) g[9 + i] = T[4 * i + 3];
+        for (int i = 12; i < 16; i++)
+            if (!isfinite(T[i])) return 0;
     }
     for (int i = 0; i < 12; i++)
         if (!isfinite(g[i])) return 0;
@@ -326,14 +334,64 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
     return 1;
 }
 
-/* One raw target: the solution count, -1 for the Python path, -2 when the target is not valid. */
+/* Leaves, finish, and for a self-motion whose representatives (rep = 0) all miss, the chain again
+ * with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first representative that is exact
+ * (the family's interval of reachable values may not contain 0).  Family leaves that no
+ * representative completes (an interval narrower than the grid: a stretched arm at a wrist lock) get
+ * Newton steps from their best representative, as the reference runtime pulls its representatives
+ * onto the family.  Count or IKC_PYTHON. */
+static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
+                      double *res, int *ls, int *cont) {
+    const int L = rb->leaves, dof = rb->dof;
+    double Q[L * dof], E[L];
+    int F[L];
+    int n = rb->chain(g, fr, 0.0, Q, E, F);
+    int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
+    if (k != IKC_FAMILY_MISS) return k;
+    const double exact_tol = rb->tol * rb->scale;
+    double Q2[L * dof], E2[L], B[L * dof], EB[L];
+    int F2[L];
+    for (int j = 0; j < n; j++) {
+        for (int c = 0; c < dof; c++) B[j * dof + c] = Q[j * dof + c];
+        EB[j] = E[j];
+    }
+    for (int r = 1; r < IKC_REPS; r++) {
+        int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
+        double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
+        if (rep <= -IKC_PI_F) continue;
+        int n2 = rb->chain(g, fr, rep, Q2, E2, F2);
+        if (n2 != n) return IKC_PYTHON;
+        for (int j = 0; j < n; j++) {
+            if (!(F[j] & IKC_FAMILY) || E[j] <= exact_tol || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
+                continue;
+            if (E2[j] <= exact_tol) {
+                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
+                E[j] = E2[j];
+                F[j] = F2[j];
+            } else if (E2[j] < EB[j]) {
+                for (int c = 0; c < dof; c++) B[j * dof + c] = Q2[j * dof + c];
+                EB[j] = E2[j];
+            }
+        }
+    }
+    for (int j = 0; j < n; j++) {
+        if (!(F[j] & IKC_FAMILY) || E[j] <= exact_tol || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
+        double e = ikc_newton(rb, g, B + j * dof, 60);
+        if (e <= exact_tol) {
+            for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
+            E[j] = e;
+        }
+    }
+    k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
+    return k == IKC_FAMILY_MISS ? IKC_PYTHON : k;
+}
+
+/* One raw target: the solution count, IKC_PYTHON, or IKC_INVALID. */
 static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int limits, double *q,
                    double *res, int *ls, int *cont) {
-    double g[12], Q[rb->leaves * rb->dof], E[rb->leaves];
-    int F[rb->leaves];
-    if (!ikc_goal_checked(rb, T, g)) return -2;
-    int n = rb->chain(g, fr, Q, E, F);
-    return ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
+    double g[12];
+    if (!ikc_goal_checked(rb, T, g)) return IKC_INVALID;
+    return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
 }
 
 typedef struct {
@@ -348,19 +406,21 @@ typedef struct {
 static void *ikc_run(void *arg) {
     const ikc_job *job = (const ikc_job *)arg;
     const ikc_robot *rb = job->rb;
-    const int dof = rb->dof, slots = rb->slots;
-    double g[12], Q[rb->leaves * dof], E[rb->leaves];
-    int F[rb->leaves];
+    const int dof = rb->dof, slots = rb->slots, stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
+    double g[12];
     for (int64_t i = job->start; i < job->stop; i++) {
-        ikc_goal_of(rb, job->goals + 16 * i, g);
-        int n = rb->chain(g, job->fr + rb->nfree * i, Q, E, F);
-        job->count[i] = ikc_finish(rb, g, n, Q, E, F, job->limits, job->q + i * slots * dof,
+        if (!ikc_goal_checked(rb, job->goals + stride * i, g)) {
+            job->count[i] = IKC_INVALID;
+            continue;
+        }
+        job->count[i] = ikc_settle(rb, g, job->fr + rb->nfree * i, job->limits, job->q + i * slots * dof,
                                    job->res + i * slots, job->ls + i * slots, job->cont + i * slots);
     }
     return NULL;
 }
 
-/* N validated 4x4 targets (N x 16) and their free values (N x nfree) in `threads` threads. */
+/* N raw targets (N x 16, 9 or 3 entries, as ikc_one takes them) and their free values (N x nfree) in
+ * `threads` threads; count[i] is the solution count, IKC_PYTHON or IKC_INVALID. */
 static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const double *fr, int limits,
                      double *q, double *res, int *ls, int *cont, int *count, int threads) {
     if (threads < 1) threads = 1;

@@ -112,16 +112,21 @@ static inline double ikc_angle_about(const double *w, const double *u, const dou
     return th;
 }
 
-/* Both roots of a cos th + b sin th = c (clamped to the nearest when |c| > rho): th[0..1], f[0..1]. */
-static inline void ikc_trig_roots(double a, double b, double c, double size, double *th, int *f) {
+/* Both roots of a cos th + b sin th = c (clamped to the nearest when |c| > rho): th[0..1], f[0..1].
+ * rho and c both negligible: every angle solves it, both slots th = rep, IKC_FAMILY; rho alone
+ * negligible: IKC_DEFER. */
+static inline void ikc_trig_roots(double a, double b, double c, double size, double rep, double *th, int *f) {
     double rho = sqrt(a * a + b * b);
     double phi = atan2(b, a);
     double x = c / ikc_big(rho);
     double delta = acos(ikc_clip1(x));
-    int flag = ((rho <= IKC_NEAR * size) ? IKC_DEFER : 0)
-               | ((fabs(x * x - 1.0) <= IKC_TANGENT) ? IKC_TANGENT_ROOT : 0);
-    th[0] = phi + delta;
-    th[1] = phi - delta;
+    int flat = rho <= IKC_NEAR * size;
+    int every = flat && fabs(c) <= IKC_NEAR * size;
+    int tangent = (fabs(x * x - 1.0) <= IKC_TANGENT) && rho > IKC_NEAR * size;
+    int flag = ((flat && !every) ? IKC_DEFER : 0) | (every ? IKC_FAMILY : 0) | (tangent ? IKC_TANGENT_ROOT : 0);
+    double here = rep + 0.0 * phi;
+    th[0] = every ? here : phi + delta;
+    th[1] = every ? here : phi - delta;
     f[0] = flag;
     f[1] = flag;
 }
@@ -131,7 +136,7 @@ static inline void ikc_trig_roots(double a, double b, double c, double size, dou
 
 /* H-R: h . exp(w th)(p) = d.  2 slots x 1 */
 static inline void ikc_plane_r(const double *w, const double *r, const double *p, const double *h, double d,
-                               double *q, int *f) {
+                               double rep, double *q, int *f) {
     double u[3], up[3], wu[3];
     ikc_sub(p, r, u);
     double uw = ikc_dot(w, u);
@@ -141,7 +146,7 @@ static inline void ikc_plane_r(const double *w, const double *r, const double *p
     double b = ikc_dot(h, wu);
     double c = d - ikc_dot(h, r) - uw * ikc_dot(h, w);
     double size = sqrt(ikc_dot(h, h) * (ikc_dot(u, u) + ikc_dot(r, r) + ikc_dot(p, p) + 1.0)) + IKC_TINY;
-    ikc_trig_roots(a, b, c, size, q, f);
+    ikc_trig_roots(a, b, c, size, rep, q, f);
 }
 
 /* H-T: h . (p + v th) = d.  1 slot x 1; h (nearly) across the slide: th = 0, IKC_FAMILY */
@@ -155,7 +160,7 @@ static inline void ikc_plane_t(const double *v, const double *p, const double *h
 
 /* S3-R: |exp(w th)(p) - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
 static inline void ikc_dist_r(const double *w, const double *r, const double *p, const double *qq, double d,
-                              double *q, int *f) {
+                              double rep, double *q, int *f) {
     double u[3], z[3], up[3], wu[3];
     ikc_sub(p, r, u);
     ikc_sub(qq, r, z);
@@ -165,7 +170,7 @@ static inline void ikc_dist_r(const double *w, const double *r, const double *p,
     ikc_cross(w, u, wu);
     double b = ikc_dot(z, wu);
     double c = 0.5 * (ikc_dot(u, u) + ikc_dot(z, z) - d * d) - uw * ikc_dot(z, w);
-    ikc_trig_roots(a, b, c, ikc_dot(u, u) + ikc_dot(z, z) + ikc_dot(r, r) + d * d + 1.0, q, f);
+    ikc_trig_roots(a, b, c, ikc_dot(u, u) + ikc_dot(z, z) + ikc_dot(r, r) + d * d + 1.0, rep, q, f);
 }
 
 /* S3-T: |p + v th - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
@@ -328,9 +333,9 @@ static inline void ikc_rot_rr(const double *w1, const double *w2, const double *
     f[0] = f1 | f2;
 }
 
-/* O-RRR: exp([w1] t1) exp([w2] t2) exp([w3] t3) = R.  2 slots x 3; gimbal lock: t3 = 0, IKC_FAMILY */
-static inline void ikc_rot_rrr(const double *w1, const double *w2, const double *w3, const double *R, double *q,
-                               int *f) {
+/* O-RRR: exp([w1] t1) exp([w2] t2) exp([w3] t3) = R.  2 slots x 3; gimbal lock: t3 = rep, IKC_FAMILY */
+static inline void ikc_rot_rrr(const double *w1, const double *w2, const double *w3, const double *R, double rep,
+                               double *q, int *f) {
     double Rw3[3], Rtw1[3], w23[3], w21[3], Rw2[3];
     ikc_mat_vec(R, w3, Rw3);
     ikc_mat_t_vec(R, w1, Rtw1);
@@ -342,11 +347,13 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
     double c = ikc_dot(w1, Rw3) - k12 * k23;
     double t2_lock = atan2(b, a) + (c < 0.0 ? IKC_PI : 0.0);
     int f_rep;
-    ikc_mat_vec(R, w2, Rw2);
+    double w2_rep[3];
+    ikc_rotate(w3, -rep, w2, w2_rep);  /* t1 turns w2 onto R exp(-[w3] rep) w2 */
+    ikc_mat_vec(R, w2_rep, Rw2);
     double t1_rep = ikc_angle_about(w1, w2, Rw2, 0.0, &f_rep);
     double roots[2];
     int rf[2];
-    ikc_trig_roots(a, b, c, 1.0, roots, rf);
+    ikc_trig_roots(a, b, c, 1.0, rep, roots, rf);
     for (int i = 0; i < 2; i++) {
         double t2 = roots[i];
         double c2 = cos(t2), s2 = sin(t2);
@@ -367,7 +374,7 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
         int lock = (f1 | f3) != 0;
         q[3 * i] = lock ? t1_rep : t1;
         q[3 * i + 1] = lock ? t2_lock : t2;
-        q[3 * i + 2] = lock ? 0.0 * t3 : t3;
+        q[3 * i + 2] = lock ? rep + 0.0 * t3 : t3;
         f[i] = rf[i] | (lock ? (IKC_FAMILY | f_rep) : 0);
     }
 }

@@ -151,6 +151,7 @@ def threads() -> int:
 
 
 _TARGET_SHAPES = {"pose": (4, 4), "position": (3,), "orientation": (3, 3)}
+PYTHON, INVALID = -1, -2  # codes of NativeChain.many besides a solution count
 
 
 class NativeChain:
@@ -205,10 +206,12 @@ class NativeChain:
             return self._q[:k].copy(), self._res[:k].copy(), self._ls[:k] != 0, self._cont[:k] != 0
 
     def many(self, goals, free, limits: bool, workers: int | None = None):
-        """Solutions of N checked targets ``goals`` (N, 4, 4) with free values ``free`` (N, nfree).
+        """Solutions of N raw targets ``goals`` ((N, 4, 4) poses, (N, 3, 3) orientations or (N, 3)
+        positions, as :meth:`one` takes them) with free values ``free`` (N, nfree).
 
         Returns ``(Q, valid, ls, residual, continuum)`` as the module's batch path packs them, and
-        ``python (N,)`` marking the targets the Python path must take over (their rows are empty)."""
+        ``code (N,)``: the solution count, :data:`PYTHON` for targets the Python path must take over,
+        :data:`INVALID` for targets that are not finite rigid transforms (rows empty for both)."""
         np = self._np
         goals = np.ascontiguousarray(goals, dtype=float)
         N = len(goals)
@@ -224,7 +227,7 @@ class NativeChain:
         valid = np.arange(self.slots)[None, :] < count[:, None]
         res[~valid] = np.inf
         Q[~valid] = 0.0
-        return (Q, valid, (ls != 0) & valid, res, (cont != 0) & valid), count < 0
+        return (Q, valid, (ls != 0) & valid, res, (cont != 0) & valid), count
 
 
 def bind(source: str, *, dof: int, slots: int, nfree: int, target: str) -> NativeChain | None:

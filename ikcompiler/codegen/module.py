@@ -363,19 +363,29 @@ def _free_columns(init):
     return init[:, [_INDEPENDENT[pos] for pos in _FREE]]
 
 
-def _solve_chunk(goals, Td, init, limits):
+def _native_batch(Ts, free, limits):
+    """solve_batch_info on the native backend (it checks the targets itself), or None when the module
+    has none or the targets' shape is not the target's (the Python path then raises the error)."""
     native = _native_chain()
     if native is None:
-        return _python_chunk(goals, Td, init, limits)
-    parts, python = native.many(goals, _free_columns(init), limits)
-    if python.any():  # targets the C finish cannot settle alone: the Python path takes them over
+        return None
+    Ts = np.asarray(Ts, dtype=float)
+    shape = {"pose": (4, 4), "position": (3,), "orientation": (3, 3)}[TARGET]
+    if Ts.ndim < len(shape) or Ts.shape[Ts.ndim - len(shape):] != shape:
+        return None
+    raw = Ts.reshape((-1,) + shape)
+    init = _init(len(raw), free)
+    parts, code = native.many(raw, _free_columns(init), limits)
+    python = code < 0
+    if python.any():  # targets the C finish cannot settle alone (or invalid: _targets raises there)
         idx = np.nonzero(python)[0]
-        for whole, part in zip(parts, _python_chunk(goals[idx], Td[idx], init[idx], limits)):
+        goals, Td = _targets(raw[idx])
+        for whole, part in zip(parts, _solve_chunk(goals, Td, init[idx], limits)):
             whole[idx] = part
     return parts
 
 
-def _python_chunk(goals, Td, init, limits):
+def _solve_chunk(goals, Td, init, limits):
     if not FAST_PATH or _fast_chain is None:
         return _reference_chunk(goals, Td, init, limits)
     if _SEARCH:
@@ -445,6 +455,9 @@ def solve_batch_info(Ts, *free, limits=True, chunk=4096):
     targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
     the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
     """
+    done = _native_batch(Ts, free, limits)
+    if done is not None:
+        return done
     goals, Td = _targets(Ts)
     init = _init(len(goals), free)
     parts = [_solve_chunk(goals[i:i + chunk], Td[i:i + chunk], init[i:i + chunk], limits)

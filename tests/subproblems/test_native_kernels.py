@@ -38,11 +38,13 @@ EXAMPLES = settings().max_examples
 AGREE = 1e-12
 
 # name: (argument kinds, slots, value kinds).  Argument kinds: "u" a unit axis, "v" any 3-vector,
-# "p" a point, "R" a rotation (9 entries, row-major), "s" a scalar.  Value kinds: "R" an angle, "T" a slide.
+# "p" a point, "R" a rotation (9 entries, row-major), "s" a scalar (the last one of plane_r, dist_r and
+# rot_rrr is ``rep``, the representative of a self-motion; 0.0 where an instance leaves it out).  Value
+# kinds: "R" an angle, "T" a slide.
 KERNELS = {
-    "plane_r": ("uppvs", 2, "R"),
+    "plane_r": ("uppvss", 2, "R"),
     "plane_t": ("vpvs", 1, "T"),
-    "dist_r": ("uppps", 2, "R"),
+    "dist_r": ("uppps" + "s", 2, "R"),
     "dist_t": ("upps", 2, "T"),
     "slide3": ("vvvp", 1, "TTT"),
     "turn_slide2": ("upvvRp", 1, "RTT"),
@@ -51,7 +53,7 @@ KERNELS = {
     "point_rr_parallel": ("upuppp", 2, "RR"),
     "rot_r": ("uR", 1, "R"),
     "rot_rr": ("uuR", 1, "RR"),
-    "rot_rrr": ("uuuR", 2, "RRR"),
+    "rot_rrr": ("uuuRs", 2, "RRR"),
 }
 # the Python argument names of the ten kernels test_fast_kernels specifies, for its instances
 SPEC_BY_NAME = {s.name: s for s in SPECS}
@@ -110,6 +112,7 @@ def call_py(name, args):
 
 def _plain(name, args):
     kinds = KERNELS[name][0]
+    args = list(args) + [0.0] * (len(kinds) - len(args))  # rep left out: the chains' default
     return [float(a) if k == "s" else tuple(float(x) for x in np.asarray(a, dtype=float).ravel())
             for k, a in zip(kinds, args)]
 
