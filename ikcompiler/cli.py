@@ -48,11 +48,26 @@ def _cmd_compile(args) -> int:
         f"up to {module.MAX_SOLUTIONS} solutions, "
         + ("fast path" if module.FAST_PATH else "reference runtime only (a step has no fast kernel)")
     )
+    if getattr(module, "_NATIVE_SOURCE", None):
+        print(_native_status(module))
     if module.METHOD != "closed-form":
         print(
             f"note: no closed-form chain; see `ikc explain {args.robot}` for what was tried", file=sys.stderr
         )
     return 0
+
+
+def _native_status(module) -> str:
+    """Build the module's C chain now (so the first solve does not pay for it) and say how it went."""
+    import time
+
+    from subproblems import native
+
+    start = time.perf_counter()
+    if module._native_chain() is None:
+        return (f"native backend unavailable: {native.last_error}; the module runs its Python fast path "
+                "(same answers, slower)")
+    return f"native backend: C chain ready in {time.perf_counter() - start:.2f} s (cache {native.cache_dir()})"
 
 
 def _cmd_explain(args) -> int:

@@ -158,23 +158,21 @@ static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int it
         }
         int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6;
         double col[dof], M[dof][dof + 1];
-        for (int j = 0; j < dof; j++) {
+        for (int j = 0; j < dof; j++) {  /* scale the columns to unit norm; free joints' columns to 0 */
             double s = 0.0;
             for (int r = r0; r < r1; r++) s += J[r * dof + j] * J[r * dof + j];
-            col[j] = rb->is_free[j] ? 0.0 : sqrt(s);
-            if (col[j] < 1e-300) col[j] = 1e-300;
+            col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
+            for (int r = r0; r < r1; r++) J[r * dof + j] = rb->is_free[j] ? 0.0 : J[r * dof + j] / col[j];
         }
         for (int a = 0; a < dof; a++) {
             for (int c = 0; c < dof; c++) {
                 double s = 0.0;
-                if (!rb->is_free[a] && !rb->is_free[c])
-                    for (int r = r0; r < r1; r++) s += J[r * dof + a] * J[r * dof + c];
-                M[a][c] = s / (col[a] * col[c]) + (a == c ? 1e-12 : 0.0);
+                for (int r = r0; r < r1; r++) s += J[r * dof + a] * J[r * dof + c];
+                M[a][c] = s + (a == c ? 1e-12 : 0.0);
             }
             double s = 0.0;
-            if (!rb->is_free[a])
-                for (int r = r0; r < r1; r++) s += J[r * dof + a] * e[r];
-            M[a][dof] = s / col[a];
+            for (int r = r0; r < r1; r++) s += J[r * dof + a] * e[r];
+            M[a][dof] = s;
         }
         for (int k = 0; k < dof; k++) {  /* Gaussian elimination, partial pivoting */
             int piv = k;
