@@ -67,7 +67,8 @@ def _native_status(module) -> str:
     if module._native_chain() is None:
         return (f"native backend unavailable: {native.last_error}; the module runs its Python fast path "
                 "(same answers, slower)")
-    return f"native backend: C chain ready in {time.perf_counter() - start:.2f} s (cache {native.cache_dir()})"
+    seconds = time.perf_counter() - start
+    return f"native backend: C chain ready in {seconds:.2f} s (cache {native.cache_dir()})"
 
 
 def _cmd_explain(args) -> int:
