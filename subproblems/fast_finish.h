@@ -9,6 +9,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
+#include <stdlib.h>
 
 #define IKC_NEAR_MISS 1e-4  /* relative miss below which a candidate needs Newton steps (Python path) */
 #define IKC_SPLIT_ROOT 1e-6 /* copies of a tangent root closer than this are one solution */
@@ -49,6 +50,9 @@ typedef struct {
     int nall;
     const double *twists, *home, *A, *b;
     const int *is_free;
+    /* search plans: the chain takes the searched joints' values after the free ones (fr), gridded
+     * over `grid` values per searched joint in [-pi, pi); 0 searched joints for a closed form */
+    int nsearch, grid;
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
@@ -384,12 +388,84 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
     return k == IKC_FAMILY_MISS ? IKC_PYTHON : k;
 }
 
+#define IKC_SEED_ERROR 1.0  /* grid minima missing by more than this (relative) are not seeds */
+
+/* The search fallback (the module's _fast_search_candidates): the chain on every grid value of the
+ * searched joint(s); the local minima of each leaf's error along the grid (circular; on a plateau its
+ * first cell) within IKC_SEED_ERROR of the target get 8 Newton steps on the true robot; then the
+ * finish.  1-D and 2-D grids.  Count or IKC_PYTHON. */
+static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
+                      double *res, int *ls, int *cont) {
+    const int L = rb->leaves, dof = rb->dof, G = rb->grid, S = rb->nsearch;
+    const int cells = S == 1 ? G : G * G;
+    if (S < 1 || S > 2 || G < 3) return IKC_PYTHON;
+    double *E = malloc(sizeof(double) * (size_t)cells * L);
+    double *Q = malloc(sizeof(double) * (size_t)cells * L * dof);
+    int *F = malloc(sizeof(int) * (size_t)L);
+    int *seed = malloc(sizeof(int) * (size_t)cells * L);
+    int status = 0;
+    if (!E || !Q || !F || !seed) status = IKC_PYTHON;
+    double f2[rb->nfree + 2];
+    for (int j = 0; j < rb->nfree; j++) f2[j] = fr[j];
+    for (int cell = 0; !status && cell < cells; cell++) {
+        int i0 = S == 1 ? cell : cell / G, i1 = cell % G;
+        f2[rb->nfree] = -IKC_PI_F + IKC_TWO_PI * i0 / G;
+        if (S == 2) f2[rb->nfree + 1] = -IKC_PI_F + IKC_TWO_PI * i1 / G;
+        int n = rb->chain(g, f2, 0.0, Q + (size_t)cell * L * dof, E + (size_t)cell * L, F);
+        if (n != L) status = IKC_PYTHON;
+        for (int k = 0; k < n; k++) {
+            double *e = E + (size_t)cell * L + k;
+            if (*e != *e || (F[k] & IKC_EMPTY)) *e = INFINITY;
+        }
+    }
+    int count = 0;
+    const double bound = IKC_SEED_ERROR * rb->scale;
+    for (int cell = 0; !status && cell < cells; cell++) {
+        int i0 = S == 1 ? cell : cell / G, i1 = cell % G;
+        for (int k = 0; k < L; k++) {
+            double e = E[(size_t)cell * L + k];
+            if (!(e <= bound)) continue;
+            /* neighbours along each searched axis (circular) */
+            int prev0 = S == 1 ? (i0 + G - 1) % G : ((i0 + G - 1) % G) * G + i1;
+            int next0 = S == 1 ? (i0 + 1) % G : ((i0 + 1) % G) * G + i1;
+            int minimum = e < E[(size_t)prev0 * L + k] && e <= E[(size_t)next0 * L + k];
+            if (S == 2) {
+                int prev1 = i0 * G + (i1 + G - 1) % G, next1 = i0 * G + (i1 + 1) % G;
+                minimum = minimum && e < E[(size_t)prev1 * L + k] && e <= E[(size_t)next1 * L + k];
+            }
+            if (minimum) seed[count++] = cell * L + k;
+        }
+    }
+    if (!status) {
+        double C[count > 0 ? count * dof : 1], CE[count > 0 ? count : 1];
+        int CF[count > 0 ? count : 1];
+        for (int a = 0; a < count; a++) {
+            for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
+            CE[a] = ikc_newton(rb, g, C + a * dof, 8);
+            CF[a] = 0;
+        }
+        status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
+        if (status < 0) status = IKC_PYTHON;
+    }
+    free(E);
+    free(Q);
+    free(F);
+    free(seed);
+    return status;
+}
+
+static int ikc_solve_goal(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
+                          double *res, int *ls, int *cont) {
+    if (rb->nsearch) return ikc_search(rb, g, fr, limits, q, res, ls, cont);
+    return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
+}
+
 /* One raw target: the solution count, IKC_PYTHON, or IKC_INVALID. */
 static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int limits, double *q,
                    double *res, int *ls, int *cont) {
     double g[12];
     if (!ikc_goal_checked(rb, T, g)) return IKC_INVALID;
-    return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
+    return ikc_solve_goal(rb, g, fr, limits, q, res, ls, cont);
 }
 
 typedef struct {
@@ -411,7 +487,7 @@ static void *ikc_run(void *arg) {
             job->count[i] = IKC_INVALID;
             continue;
         }
-        job->count[i] = ikc_settle(rb, g, job->fr + rb->nfree * i, job->limits, job->q + i * slots * dof,
+        job->count[i] = ikc_solve_goal(rb, g, job->fr + rb->nfree * i, job->limits, job->q + i * slots * dof,
                                    job->res + i * slots, job->ls + i * slots, job->cont + i * slots);
     }
     return NULL;

@@ -193,13 +193,14 @@ def _array(values, fmt) -> str:
 
 
 def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
-                   tol: float, slots: int, twists, home, A, b) -> str | None:
+                   tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0) -> str | None:
     """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
 
     ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
     ``free`` the positions of the free joints among them; ``twists`` (all joints, mimic ones too),
     ``home`` (4x4) and ``A``, ``b`` (all joint values = A q + b) describe the true robot for the
-    Newton steps of the finish.
+    Newton steps of the finish.  ``search`` joints gridded over ``grid`` values each (a search plan:
+    the chain takes their values after the free ones).
     """
     if target not in TARGET_CODES:
         return None
@@ -227,7 +228,7 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {tr.leaves}, {slots},",
         f"    {TARGET_CODES[target]},",
         f"    ikc_revolute_, ikc_lower_, ikc_upper_, {_number(scale)}, {_number(tol)}, ikc_chain,",
-        f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_}};",
+        f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid}}};",
     ]
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
