@@ -53,6 +53,9 @@ typedef struct {
     /* search plans: the chain takes the searched joints' values after the free ones (fr), gridded
      * over `grid` values per searched joint in [-pi, pi); 0 searched joints for a closed form */
     int nsearch, grid;
+    /* snapped plans (a calibrated robot): the chain runs on the snapped robot and every leaf gets
+     * this many Newton steps on the true robot before the finish; 0 otherwise */
+    int polish;
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
@@ -454,9 +457,29 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
     return status;
 }
 
+/* A snapped plan (the module's _POLISH branch): leaves of the snapped robot's chain, each corrected by
+ * Newton steps on the true robot, then the finish.  Count or IKC_PYTHON (a leaf near a degenerate
+ * geometry of the snapped robot). */
+static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
+                        double *res, int *ls, int *cont) {
+    const int L = rb->leaves, dof = rb->dof;
+    double Q[L * dof], E[L];
+    int F[L];
+    int n = rb->chain(g, fr, 0.0, Q, E, F);
+    for (int k = 0; k < n; k++) {
+        if (F[k] & IKC_DEFER) return IKC_PYTHON;
+        if (F[k] & IKC_EMPTY) continue;
+        E[k] = ikc_newton(rb, g, Q + k * dof, rb->polish);
+        F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
+    }
+    int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
+    return k < 0 ? IKC_PYTHON : k;
+}
+
 static int ikc_solve_goal(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                           double *res, int *ls, int *cont) {
     if (rb->nsearch) return ikc_search(rb, g, fr, limits, q, res, ls, cont);
+    if (rb->polish) return ikc_polished(rb, g, fr, limits, q, res, ls, cont);
     return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
 }
 

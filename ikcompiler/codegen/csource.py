@@ -193,14 +193,16 @@ def _array(values, fmt) -> str:
 
 
 def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
-                   tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0) -> str | None:
+                   tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0,
+                   polish: int = 0) -> str | None:
     """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
 
     ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
     ``free`` the positions of the free joints among them; ``twists`` (all joints, mimic ones too),
     ``home`` (4x4) and ``A``, ``b`` (all joint values = A q + b) describe the true robot for the
     Newton steps of the finish.  ``search`` joints gridded over ``grid`` values each (a search plan:
-    the chain takes their values after the free ones).
+    the chain takes their values after the free ones).  ``polish``: Newton steps on the true robot for
+    every leaf of a snapped plan (the chain itself runs on the snapped robot).
     """
     if target not in TARGET_CODES:
         return None
@@ -228,7 +230,8 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {tr.leaves}, {slots},",
         f"    {TARGET_CODES[target]},",
         f"    ikc_revolute_, ikc_lower_, ikc_upper_, {_number(scale)}, {_number(tol)}, ikc_chain,",
-        f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid}}};",
+        f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid},",
+        f"    {polish}}};",
     ]
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",

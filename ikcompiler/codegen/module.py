@@ -156,12 +156,12 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"FAST_PATH = {fast is not None}\n")
     out.append(fast if fast is not None else "\n\n_fast_chain = None\n")
     native = None
-    if fast is not None and not plan.plan_twists:
+    if fast is not None:
         kinds = "".join(output.joints[i].kind for i in output.independent)
         native = chain_c_source(fast, kinds=kinds, lower=output.lower, upper=output.upper, free=free_idx,
                                 target=plan.target, scale=scale, tol=tol, slots=slots, twists=chain.twists,
                                 home=np.asarray(chain.home, float), A=A, b=b, search=len(plan.search),
-                                grid=plan.grid)
+                                grid=plan.grid, polish=10 if plan.snapped else 0)
     out.append(
         "\n\n# Native backend: the fast chain above in C (the same arithmetic), built with the machine's C\n"
         "# compiler on first use and cached (subproblems.native); without a compiler, or with NATIVE set\n"
