@@ -365,6 +365,14 @@ def rot_rrr(m, w1, w2, w3, R, rep=0.0):
     # is R exp(-[w3] rep) w2
     t2_lock = m.atan2(b, a) + (c < 0.0) * math.pi
     t1_rep, f_rep = angle_about(m, w1, w2, mat_vec(R, rotate(m, w3, -rep, w2)))
+    # whether t2_lock is a lock at all (exp([w2] t2_lock) w3 along w1): then a tangent t2 equation is
+    # that lock, its roots split by upstream roundoff (a stretched arm before the wrist) by ~sqrt(eps)
+    cl, sl = m.cos(t2_lock), m.sin(t2_lock)
+    kl = k23 * (1.0 - cl)
+    zl = (cl * w3[0] + sl * w23[0] + kl * w2[0], cl * w3[1] + sl * w23[1] + kl * w2[1],
+          cl * w3[2] + sl * w23[2] + kl * w2[2])
+    off = cross(w1, zl)
+    aligned = dot(off, off) <= NEAR2
     out = []
     for t2, f2 in trig_roots(m, a, b, c, 1.0, rep):
         c2, s2 = m.cos(t2), m.sin(t2)
@@ -382,7 +390,7 @@ def rot_rrr(m, w1, w2, w3, R, rep=0.0):
         t1, f1 = angle_about(m, w1, z, Rw3)
         t3, f3 = angle_about(m, w3, Rtw1, y)
         # Gimbal lock (exp([w2] t2) w3 along w1): only t1 +- t3 is fixed; the representative above.
-        lock = (f1 | f3) != 0
+        lock = ((f1 | f3) != 0) | (((f2 & TANGENT_ROOT) != 0) & aligned)
         t1 = m.where(lock, t1_rep, t1)
         t2 = m.where(lock, t2_lock, t2)
         t3 = m.where(lock, rep + 0.0 * t3, t3)
@@ -500,6 +508,7 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
     revolute = [k == "R" for k in kinds]
     bounds = list(zip(revolute, lower, upper))
     rows = []
+    family_seen = False  # a self-motion leaf, inside the limits or not
     for leaf in leaves:
         err, flag = leaf[-2], leaf[-1]
         if flag & EMPTY:
@@ -508,6 +517,7 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
             return None
         if flag & TANGENT_ROOT:
             same = SPLIT_ROOT  # two copies of one double root: merge them below
+        family_seen = family_seen or bool(flag & FAMILY)
         q = list(leaf[:-2])
         for j, rev in enumerate(revolute):
             if rev:
@@ -526,8 +536,10 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
                 rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
         else:
             rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
-    if any(r[3] for r in rows) and not any(r[3] and not r[0] for r in rows):
-        return None  # a self-motion whose representatives all miss: the reference path completes them
+    if family_seen and not any(r[3] and not r[0] for r in rows):
+        # a self-motion none of whose representatives is exact inside the limits: the reference path
+        # completes them (its Newton steps move along the family)
+        return None
     rows.sort(key=_row_order)
     kept = []
     for row in rows:
@@ -610,9 +622,8 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
     reference = bad.any(axis=1)
     route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
     route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON
-    route[family.any(axis=1) & ~(family & ~inexact).any(axis=1)] = ROUTE_REFERENCE
     split = ((flag & TANGENT_ROOT) != 0).any(axis=1)  # merge the two copies of a double root
-    keep = (route == ROUTE_DONE)[:, None] & ~empty
+    keep = ~empty
     for j, k in enumerate(kinds):
         col = Q[:, :, j]
         if k == "R":
@@ -626,6 +637,9 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
                     (col - 2 * math.pi >= lo) & (col - 2 * math.pi <= hi)
                 )
             keep &= inside
+    # a self-motion none of whose representatives is exact inside the limits: the reference path
+    route[family.any(axis=1) & ~(family & ~inexact & keep).any(axis=1)] = ROUTE_REFERENCE
+    keep &= (route == ROUTE_DONE)[:, None]
     # order: exact first, then by error; rows not kept last
     key = np.where(keep, inexact * 1e300 + np.nan_to_num(err), np.inf)
     order = np.argsort(key, axis=1, kind="stable")

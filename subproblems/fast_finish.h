@@ -231,6 +231,15 @@ static int ikc_inside(double v, double lo, double hi, int rev) {
     return 0;
 }
 
+/* Whether joint values q (any 2 pi representation of a revolute value) lie inside the limits. */
+static int ikc_row_inside(const ikc_robot *rb, const double *q) {
+    for (int j = 0; j < rb->dof; j++) {
+        double v = rb->revolute[j] ? ikc_wrap(q[j]) : q[j];
+        if (!ikc_inside(v, rb->lower[j], rb->upper[j], rb->revolute[j])) return 0;
+    }
+    return 1;
+}
+
 /* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
  * by error, duplicates (equal modulo 2 pi) and rows outside the limits left out.  Near misses (a
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
@@ -264,12 +273,12 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             if (rb->revolute[j]) w[j] = ikc_wrap(w[j]);
             if (limits && ok && !ikc_inside(w[j], rb->lower[j], rb->upper[j], rb->revolute[j])) ok = 0;
         }
-        if (!ok) continue;
         inexact[k] = err[k] > exact_tol;
-        if (flag & IKC_FAMILY) {
+        if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
             family_any = 1;
-            if (!inexact[k]) family_exact = 1;
+            if (ok && !inexact[k]) family_exact = 1;
         }
+        if (!ok) continue;
         rows[count++] = k;
     }
     if (family_any && !family_exact) return IKC_FAMILY_MISS;
@@ -339,9 +348,10 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
     return 1;
 }
 
-/* Leaves, finish, and for a self-motion whose representatives (rep = 0) all miss, the chain again
- * with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first representative that is exact
- * (the family's interval of reachable values may not contain 0).  Family leaves that no
+/* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
+ * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
+ * representative that is exact and inside the limits (the family's interval of reachable values may
+ * not contain 0, or 0 may lie outside a limit).  Family leaves that no
  * representative completes (an interval narrower than the grid: a stretched arm at a wrist lock) get
  * Newton steps from their best representative, as the reference runtime pulls its representatives
  * onto the family.  Count or IKC_PYTHON. */
@@ -353,12 +363,12 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
-    const double exact_tol = rb->tol * rb->scale;
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double Q2[L * dof], E2[L], B[L * dof], EB[L];
     int F2[L];
-    for (int j = 0; j < n; j++) {
+    for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
         for (int c = 0; c < dof; c++) B[j * dof + c] = Q[j * dof + c];
-        EB[j] = E[j];
+        EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
     }
     for (int r = 1; r < IKC_REPS; r++) {
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
@@ -367,22 +377,27 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
         int n2 = rb->chain(g, fr, rep, Q2, E2, F2);
         if (n2 != n) return IKC_PYTHON;
         for (int j = 0; j < n; j++) {
-            if (!(F[j] & IKC_FAMILY) || E[j] <= exact_tol || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
+            if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
                 continue;
-            if (E2[j] <= exact_tol) {
-                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
-                E[j] = E2[j];
+            if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;  /* settled */
+            double *row = Q2 + j * dof, e = E2[j];
+            if (exact_tol < e && e < near) e = ikc_newton(rb, g, row, 8);  /* a tangent root: polish */
+            int inside = !limits || ikc_row_inside(rb, row);
+            if (e <= exact_tol && inside) {
+                for (int c = 0; c < dof; c++) Q[j * dof + c] = row[c];
+                E[j] = e;
                 F[j] = F2[j];
-            } else if (E2[j] < EB[j]) {
-                for (int c = 0; c < dof; c++) B[j * dof + c] = Q2[j * dof + c];
-                EB[j] = E2[j];
+            } else if (inside && e < EB[j]) {
+                for (int c = 0; c < dof; c++) B[j * dof + c] = row[c];
+                EB[j] = e;
             }
         }
     }
     for (int j = 0; j < n; j++) {
-        if (!(F[j] & IKC_FAMILY) || E[j] <= exact_tol || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
+        if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
+        if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
         double e = ikc_newton(rb, g, B + j * dof, 60);
-        if (e <= exact_tol) {
+        if (e <= exact_tol && (!limits || ikc_row_inside(rb, B + j * dof))) {
             for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
             E[j] = e;
         }

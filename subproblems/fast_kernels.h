@@ -351,6 +351,15 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
     ikc_rotate(w3, -rep, w2, w2_rep);  /* t1 turns w2 onto R exp(-[w3] rep) w2 */
     ikc_mat_vec(R, w2_rep, Rw2);
     double t1_rep = ikc_angle_about(w1, w2, Rw2, 0.0, &f_rep);
+    /* whether t2_lock is a lock at all (exp([w2] t2_lock) w3 along w1): then a tangent t2 equation is
+     * that lock, its roots split by upstream roundoff by ~sqrt(eps) */
+    double cl = cos(t2_lock), sl = sin(t2_lock);
+    double kl = k23 * (1.0 - cl);
+    double zl[3] = {cl * w3[0] + sl * w23[0] + kl * w2[0], cl * w3[1] + sl * w23[1] + kl * w2[1],
+                    cl * w3[2] + sl * w23[2] + kl * w2[2]};
+    double off[3];
+    ikc_cross(w1, zl, off);
+    int aligned = ikc_dot(off, off) <= IKC_NEAR2;
     double roots[2];
     int rf[2];
     ikc_trig_roots(a, b, c, 1.0, rep, roots, rf);
@@ -371,7 +380,7 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
         int f1, f3;
         double t1 = ikc_angle_about(w1, z, Rw3, 0.0, &f1);
         double t3 = ikc_angle_about(w3, Rtw1, y, 0.0, &f3);
-        int lock = (f1 | f3) != 0;
+        int lock = ((f1 | f3) != 0) || ((rf[i] & IKC_TANGENT_ROOT) && aligned);
         q[3 * i] = lock ? t1_rep : t1;
         q[3 * i + 1] = lock ? t2_lock : t2;
         q[3 * i + 2] = lock ? rep + 0.0 * t3 : t3;

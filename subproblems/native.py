@@ -190,13 +190,15 @@ class NativeChain:
 
     def one(self, T, free, limits: bool):
         """``(q, residual, ls, continuum)`` of one target, or None for the Python path."""
+        # exactly the target's shape and one value per free joint: anything else (which numpy would
+        # broadcast into the buffers) goes the Python way, which raises the documented error
+        if len(free) != self.nfree or self._np.shape(T) != self._T.shape:
+            return None
         with self._lock:
             try:
                 self._T[...] = T
                 if self.nfree:
                     self._F[...] = free
-                elif len(free):
-                    return None
             except (ValueError, TypeError):
                 return None
             aT, aF, aq, ares, als, acont = self._addr

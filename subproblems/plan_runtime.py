@@ -436,16 +436,20 @@ def _tool_jacobian(twists, TH, home, A):
     return G, J @ A
 
 
-def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4):
+def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4, hold=()):
     """Damped Gauss-Newton on the independent joints of every row toward its target (M, 4, 4).
 
     Corrects solutions of snapped near-relations and seeds of the numerical fallback.  Rows that do
-    not converge stay where they end; the final check flags them.
+    not converge stay where they end; the final check flags them.  ``hold``: positions in
+    ``independent`` of joints that keep their values (free joints: the caller chose them).
     """
     Q = TH[:, list(independent)].copy()
+    hold = list(hold)
     for _ in range(iters):
         full = Q @ A.T + b
         G, J = _tool_jacobian(twists, full, home, A)
+        if hold:
+            J[:, :, hold] = 0.0  # a zero column gets a zero step (the damping keeps the system regular)
         e_pos = targets[:, :3, 3] - G[:, :3, 3]
         if target == "position":
             e, J = e_pos, J[:, :3, :]

@@ -337,9 +337,6 @@ REDUCED = [("ur5", "position", ("wrist_1_joint", "wrist_2_joint", "wrist_3_joint
            ("puma560", "orientation", ("j1", "j2", "j3"))]
 
 
-@pytest.mark.xfail(strict=True, reason="NativeChain.one copies the target and the free values into its "
-                   "buffers with numpy broadcasting: a scalar position target becomes (x, x, x) and one "
-                   "free value fills every free joint, where the Python path raises")
 @pytest.mark.filterwarnings(NAN_MATMUL)
 @pytest.mark.parametrize(("name", "target", "free"), REDUCED)
 def test_bad_input_on_reduced_targets(name, target, free):

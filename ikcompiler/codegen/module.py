@@ -237,9 +237,9 @@ def _init(N, free):
 
 
 def _newton(TH, goals, iters):
-    """Newton steps on the true robot for candidate rows TH toward their goals."""
+    """Newton steps on the true robot for candidate rows TH toward their goals (free joints held)."""
     return _rt.polish(TH, goals, twists=_TWISTS, home=_HOME, A=_A, b=_B, independent=_VARY,
-                      target=_SOLVE_TARGET, iters=iters)
+                      target=_SOLVE_TARGET, iters=iters, hold=_FREE)
 
 
 def _candidates(goals, Td, init):
