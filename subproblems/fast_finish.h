@@ -1,17 +1,18 @@
-/* The end of a generated chain in C: the port of subproblems.fast.finish_one, the goal check of
- * subproblems.fast.goal_entries, and the driver that runs a chain over N poses in a few threads.
+/* The end of a generated chain in C: the port of subproblems.fast.finish_one and goal_entries, Newton
+ * steps on the true robot (plan_runtime.polish), the search fallback over a grid, and the driver that
+ * runs a chain over N poses in a few threads.
  *
  * A generated chain (ikcompiler/codegen/csource.py) defines `ikc_chain`, which writes every leaf of
  * its loop nest (joint values, pose error, flag bits), and an `ikc_robot` with the module's settings;
- * the entry points it exports call the functions below.  Any target this code cannot settle alone
- * (a leaf flagged DEFER, a near miss that needs Newton steps, NaN, a self-motion whose representatives
- * all miss) returns -1: the Python module then runs its own path for that target. */
+ * the entry points it exports call the functions below.  A target this code cannot settle alone (a
+ * leaf flagged DEFER, NaN, a self-motion none of whose representatives can be completed inside the
+ * limits) returns IKC_PYTHON: the Python module then runs its own path for that target. */
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 
-#define IKC_NEAR_MISS 1e-4  /* relative miss below which a candidate needs Newton steps (Python path) */
+#define IKC_NEAR_MISS 1e-4  /* relative miss below which a candidate gets Newton steps */
 #define IKC_SPLIT_ROOT 1e-6 /* copies of a tangent root closer than this are one solution */
 #define IKC_TWO_PI 6.283185307179586
 #define IKC_PI_F 3.141592653589793
@@ -36,7 +37,7 @@ typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double rep, do
 #define IKC_PYTHON (-1)       /* the Python path takes this target */
 #define IKC_INVALID (-2)      /* not a finite rigid transform: the Python path raises the error */
 #define IKC_FAMILY_MISS (-3)  /* a self-motion whose representatives all miss: try others */
-#define IKC_REPS 16           /* representatives tried: rep = k pi / 8 */
+#define IKC_REPS 16           /* representatives tried: rep = k pi / 8, k = 1 .. 8 and -1 .. -7 */
 
 typedef struct {
     int dof, nfree, leaves, slots;
