@@ -27,7 +27,9 @@ How each is solved and what is returned in degenerate cases:
 * ``O-RR``: ``t1`` rotates ``w2`` onto ``R w2`` about ``w1``, then ``t2`` is ``O-R`` on ``exp(-[w1]t1) R``.
   Parallel axes (``w2 = s w1``): only ``t1 + s t2`` is determined; ``t1 = 0`` is returned, ``continuum``.
 * ``O-RRR``: ``w1^T exp([w2]t2) w3 = w1^T R w3`` gives ``t2`` (two roots), ``t1`` rotates ``exp([w2]t2) w3``
-  onto ``R w3`` about ``w1``, ``t3`` is ``O-R`` on the rest.  Degenerate cases, all ``continuum``:
+  onto ``R w3`` about ``w1``, ``t3`` is ``O-R`` on the rest; near a gimbal lock or nearly parallel
+  consecutive axes also ``t1`` first and Gauss-Newton restarts (see :func:`_general_rrr_b`; the scalar
+  path runs the vectorised one on one instance).  Degenerate cases, all ``continuum``:
   ``w1 || w2``: ``t1 = 0`` (``w1 || w2 || w3``: ``t1 = t2 = 0``); ``w2 || w3``: ``t2 = 0``; gimbal lock
   (``exp([w2]t2) w3 = +-w1``, i.e. ``R w3 = +-w1``, e.g. ``t2 = 0`` of ZYZ Euler angles): ``t1 = 0``.
   Unreachable ``R`` (possible unless the axes allow every rotation): the root of the clamped equation,
@@ -37,6 +39,8 @@ How each is solved and what is returned in degenerate cases:
 * ``direction_rr``: the intermediate vector ``z = exp([w2]t2) u = exp(-[w1]t1) v`` has ``w2.z = w2.u``,
   ``w1.z = w1.v``, ``|z| = |u|``: two candidates.  ``w1 || w2``: ``t1 = 0``, ``continuum``; ``u || w2``:
   ``t2 = 0``; ``v || w1``: ``t1 = 0`` (both ``continuum``); no real ``z``: the nearest one, ``ls``.
+  Nearly parallel axes, ``v`` nearly on axis 1 or ``u`` nearly on axis 2 (within 1e-6): Gauss-Newton
+  also starts from eight points of the degenerate family; at most the two best exact points are kept.
 
 Every function returns a list of :class:`~subproblems.core.Solution` (plain floats, angles wrapped to
 (-pi, pi]); exact solutions are polished by Gauss-Newton and verified; without an exact one, the best
@@ -89,6 +93,12 @@ FREE_TOL = 1e-10
 DEDUP_TOL = 1e-6
 #: Candidates with a residual below this are polished before the exactness check.
 POLISH_TOL = 1e-5
+#: Gauss-Newton steps on the general ``O-RRR`` candidates (linear convergence near a singularity).
+GN_ITERS = 12
+#: Below this ``|w1 x w2|`` or ``|w2 x w3|`` the general ``O-RRR`` candidates get Gauss-Newton restarts.
+NEAR_PAR = 1e-6
+#: ``O-RRR``: two exact, distinct first candidates with a Jacobian determinant at least this are final.
+WELL_COND = 1e-3
 
 _TWO_PI = 2.0 * math.pi
 _SQRT8 = math.sqrt(8.0)
@@ -252,19 +262,21 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
     if c12 <= PAR_TOL and c23 <= PAR_TOL:
         s3 = 1.0 if w1 @ w3 > 0 else -1.0
         cand = np.array([0.0, 0.0, s3 * _angle_r(w1, R)[0]])
-        if not general_ok or exact(cand):
+        # forced only when no pair is resolvable: w1 || w2 exactly with w3 ~1e-9 off is a 1-D family
+        # (taken below), not the 2-D one
+        if exact(cand) or (not general_ok and float(np.linalg.norm(np.cross(w1, w3))) <= _DEGEN):
             return [(cand, None, 2)]
     if c12 <= PAR_TOL:
         ((th, _, _),) = rotation_families([w1, w3], R)
         s = 1.0 if w1 @ w2 > 0 else -1.0
         cand = np.array([0.0, s * th[0], th[1]])
-        if not general_ok or exact(cand):
+        if c12 <= _DEGEN or exact(cand):
             return [(cand, np.array([1.0, -s, 0.0]), 1)]
     if c23 <= PAR_TOL:
         ((th, _, _),) = rotation_families([w1, w2], R)
         s = 1.0 if w2 @ w3 > 0 else -1.0
         cand = np.array([th[0], 0.0, s * th[1]])
-        if not general_ok or exact(cand):
+        if c23 <= _DEGEN or exact(cand):
             return [(cand, np.array([0.0, 1.0, -s]), 1)]
     Rw3 = R @ w3
     if np.linalg.norm(np.cross(w1, Rw3)) <= GIMBAL_TOL:
@@ -274,23 +286,9 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
         if exact(cand):
             sigma = 1.0 if w1 @ Rw3 > 0 else -1.0
             return [(cand, np.array([1.0, 0.0, -sigma]), 1)]
-    # general: w1^T exp([w2]t2) w3 = w1^T R w3, i.e. alpha + beta cos t2 + gamma sin t2 = delta
-    w3par = w2 * float(w2 @ w3)
-    alpha = float(w1 @ w3par)
-    beta = float(w1 @ (w3 - w3par))
-    gamma = float(w1 @ np.cross(w2, w3))
-    delta = float(w1 @ Rw3)
-    rho = math.hypot(beta, gamma)
-    psi = math.atan2(gamma, beta)
-    c = (delta - alpha) / rho if rho > 0.0 else 0.0  # rho = 0: every t2 does the same (least squares)
-    out = []
-    for sgn in (1.0, -1.0):
-        t2 = psi + sgn * math.acos(max(-1.0, min(1.0, c)))
-        a = rotation_exp(w2, t2) @ w3
-        t1, _ = _angle_about(w1, a, Rw3)
-        t3, _ = _angle_r(w3, (rotation_exp(w1, t1) @ rotation_exp(w2, t2)).T @ R)
-        out.append((np.array([t1, t2, t3]), None, 0))
-    return out
+    # the general case shares the vectorised code (one instance), so both paths give the same rows
+    C = _general_rrr_b(np.array([ws])[:, :3], R[None], Rw3[None])[0]
+    return [(C[0], None, 0), (C[1], None, 0)]
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -299,6 +297,15 @@ def rotation_families(ws, R) -> list[tuple[np.ndarray, np.ndarray | None, int]]:
 
 
 def _solve_orientation(ws, R) -> list[Solution]:
+    if len(ws) == 3:
+        # O-RRR: the vectorised path on one instance (near singular configurations the polished rows
+        # and their least-squares flags would otherwise depend on the path's rounding)
+        W = np.array([ws])
+        b = _finish_b("O-RRR", W, R[None], *rotation_families_batch(W, R[None]))
+        rows = sorted(
+            (tuple(float(a) for a in q), bool(f)) for q, f in zip(b.q[0][b.valid[0]], b.ls[0][b.valid[0]])
+        )
+        return [Solution(q, ls=f, continuum=bool(b.continuum[0])) for q, f in rows]
     cands = []
     for th, n, dim in rotation_families(ws, R):
         if dim == 0:
@@ -406,11 +413,30 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
         be = (a2 - k * a1) / cc
         g2 = (float(u @ u) - al * al - be * be - 2.0 * al * be * k) / cc
         g = math.sqrt(max(0.0, g2))
+        starts = []
         for sg in (g, -g) if g > 0 else (0.0,):
             z = al * w1 + be * w2 + sg * c
             t2, _ = _angle_about(w2, u, z, scale)
             t1, _ = _angle_about(w1, z, v, scale)
-            t1, t2 = _polish_direction(w1, w2, u, v, t1, t2, scale)
+            starts.append((t1, t2))
+        iters = 4
+        if cc < 1e-12 or np.linalg.norm(np.cross(w1, v)) < 1e-6 * scale:
+            # nearly parallel axes, or v nearly on axis 1: the formulas above lose the angles
+            # (~eps / |w1 x w2|^2, or t1 entirely); the solutions lie near the family of the
+            # degenerate case (t1 = tau, t2 turning u towards exp(-[w1]tau) v): Gauss-Newton from
+            # eight points of it finds them
+            iters = 30
+            for tau in np.arange(8) * (math.pi / 4):
+                t2, _ = _angle_about(w2, u, rotation_exp(w1, -tau) @ v, scale)
+                starts.append((float(tau), t2))
+        if np.linalg.norm(np.cross(w2, u)) < 1e-6 * scale:
+            # u nearly on axis 2: the same with the roles of the joints swapped
+            iters = 30
+            for tau in np.arange(8) * (math.pi / 4):
+                t1, _ = _angle_about(w1, rotation_exp(w2, tau) @ u, v, scale)
+                starts.append((t1, float(tau)))
+        for t1, t2 in starts:
+            t1, t2 = _polish_direction(w1, w2, u, v, t1, t2, scale, iters=iters)
             cands.append((t1, t2, False))
     scored = []
     for t1, t2, cont in cands:
@@ -426,6 +452,9 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
             max(abs(math.remainder(a - b, _TWO_PI)) for a, b in zip(s[1], k_[1])) > DEDUP_TOL for k_ in kept
         ):
             kept.append(s)
+    # never more than theory allows (2): near a tangency several polished starts stall at different
+    # points that all meet the tolerance; the best ones are kept
+    kept = kept[:2]
     kept.sort(key=lambda s: s[1])
     return [Solution(th, continuum=cont) for _, th, cont in kept]
 
@@ -506,6 +535,8 @@ def _polish_b(W, R, TH, fixed, iters: int = 4) -> np.ndarray:
         return TH
     err = rotation_error_batch(product_batch(W, TH), R)
     for _ in range(iters):
+        if not np.any(err > 1e-15):
+            break
         E = product_batch(W, TH)
         M = _tr(E) @ R
         e = 0.5 * np.stack(
@@ -520,9 +551,119 @@ def _polish_b(W, R, TH, fixed, iters: int = 4) -> np.ndarray:
         TH2 = TH + step
         err2 = rotation_error_batch(product_batch(W, TH2), R)
         better = (err2 < err) & (err > 1e-15)
+        if not better.any():
+            break
         TH = np.where(better[..., None], TH2, TH)
         err = np.where(better, err2, err)
     return TH
+
+
+def _general_rrr_b(W, R, Rw3) -> np.ndarray:
+    """(N, 2, 3): the two isolated candidates of ``O-RRR`` from both eliminations, polished.
+
+    ``t2`` first: ``w1^T exp([w2]t2) w3 = w1^T R w3`` (``alpha + beta cos t2 + gamma sin t2 = delta``),
+    then ``t1`` turns ``exp([w2]t2) w3`` onto ``R w3``.  Near a gimbal lock (``R w3`` close to ``+-w1``)
+    this equation has a double root and ``t1`` is lost.  ``t1`` first: ``z = exp([w2]t2) w3 =
+    exp(-[w1]t1) R w3`` keeps its component along ``w2``, so ``w2^T exp(-[w1]t1) R w3 = w2^T w3``
+    (``A cos t1 + B sin t1 = C``), then ``t2`` turns ``w3`` onto ``z``: accurate near a gimbal lock (all
+    coefficients small but relatively accurate), yet it has the double root when ``w2`` and ``w3`` are
+    nearly parallel, where the ``t2``-first form is fine.  Neither is uniformly better.  The ``t2``-first
+    pair is polished (:data:`GN_ITERS` Gauss-Newton steps) and final when both rows are exact, distinct
+    and well conditioned (``|det J| >= WELL_COND``); otherwise the ``t1``-first pair is added, and for
+    consecutive axes nearly parallel (below :data:`NEAR_PAR`, where both eliminations lose the angles:
+    their coefficients are of size ``|w1 x w2|`` or ``|w2 x w3|``, squared when all three line up)
+    Gauss-Newton restarts from eight points of the parallel family; the best candidate and the best one
+    farther than :data:`DEDUP_TOL` from it are returned (it again when all agree).  Without an exact
+    candidate these are least-squares candidates (the clamped roots, polished).  The scalar path calls
+    this with one instance.
+    """
+    N = W.shape[0]
+    w1, w2, w3 = W[:, 0], W[:, 1], W[:, 2]
+    # t2 first
+    w3par = w2 * _dot(w2, w3)[:, None]
+    alpha = _dot(w1, w3par)
+    beta = _dot(w1, w3 - w3par)
+    gamma = _dot(w1, np.cross(w2, w3))
+    delta = _dot(w1, Rw3)
+    rho = np.hypot(beta, gamma)
+    psi = np.arctan2(gamma, beta)
+    with np.errstate(over="ignore"):  # rho subnormal
+        c = np.where(rho > 0, np.clip((delta - alpha) / np.where(rho > 0, rho, 1.0), -1.0, 1.0), 0.0)
+    t2 = psi[:, None] + np.array([1.0, -1.0]) * np.arccos(c)[:, None]  # (N, 2)
+    W2 = np.repeat(W[:, None], 2, 1)
+    t1, _ = _angle_about_b(W2[:, :, 0], _mv(rexp_batch(W2[:, :, 1], t2), w3[:, None]), Rw3[:, None])
+    E12 = rexp_batch(W2[:, :, 0], t1) @ rexp_batch(W2[:, :, 1], t2)
+    t3, _ = _angle_r_b(W2[:, :, 2], _tr(E12) @ R[:, None])
+    C = _polish_b(
+        W2, np.repeat(R[:, None], 2, 1), np.stack([t1, t2, t3], -1), np.zeros((N, 2, 3), bool), iters=GN_ITERS
+    )
+    err = rotation_error_batch(product_batch(W2, C), R[:, None])
+    settled = (err.max(1) <= EXACT_TOL) & (np.max(np.abs(_wrap_b(C[:, 0] - C[:, 1])), -1) > DEDUP_TOL)
+    settled &= _jac_det_b(W2, C).min(1) >= WELL_COND
+    idx = np.nonzero(~settled)[0]
+    if not len(idx):
+        return C
+    n = len(idx)
+    Ws, Rs, Rw3s = W[idx], R[idx], Rw3[idx]
+    v1, v2, v3 = Ws[:, 0], Ws[:, 1], Ws[:, 2]
+    # t1 first (where R w3 is off the axis w1)
+    u_par = v1 * _dot(v1, Rw3s)[:, None]
+    bb = Rw3s - u_par
+    first1 = np.linalg.norm(bb, axis=-1) > FREE_TOL
+    A1 = _dot(v2, bb)
+    B1 = -_dot(v2, np.cross(v1, bb))
+    C1 = _dot(v2, v3) - _dot(v2, u_par)
+    r1 = np.hypot(A1, B1)
+    with np.errstate(over="ignore"):
+        d1 = np.where(r1 > 0, np.arccos(np.clip(C1 / np.where(r1 > 0, r1, 1.0), -1.0, 1.0)), 0.0)
+    t1b = np.arctan2(B1, A1)[:, None] + np.array([1.0, -1.0]) * d1[:, None]
+    V2 = np.repeat(Ws[:, None], 2, 1)
+    zb = _mv(rexp_batch(V2[:, :, 0], -t1b), Rw3s[:, None])
+    t2b, _ = _angle_about_b(V2[:, :, 1], V2[:, :, 2], zb)
+    E12 = rexp_batch(V2[:, :, 0], t1b) @ rexp_batch(V2[:, :, 1], t2b)
+    t3b, _ = _angle_r_b(V2[:, :, 2], _tr(E12) @ Rs[:, None])
+    rows = [np.stack([t1b, t2b, t3b], -1)]
+    oks = [np.repeat(first1[:, None], 2, 1)]
+    # restarts from the parallel families where consecutive axes are nearly parallel
+    c12 = np.linalg.norm(np.cross(v1, v2), axis=-1)
+    c23 = np.linalg.norm(np.cross(v2, v3), axis=-1)
+    if (np.minimum(c12, c23) < NEAR_PAR).any():
+        for tau in np.arange(8) * (math.pi / 4):
+            tt = np.full(n, tau)
+            th23, _, _ = _rr_b(v2, v3, _tr(rexp_batch(v1, tt)) @ Rs)
+            rows.append(np.stack([tt, th23[:, 0], th23[:, 1]], -1)[:, None])
+            oks.append((c12 < NEAR_PAR)[:, None])
+            th12, _, _ = _rr_b(v1, v2, Rs @ _tr(rexp_batch(v3, tt)))
+            rows.append(np.stack([th12[:, 0], th12[:, 1], tt], -1)[:, None])
+            oks.append((c23 < NEAR_PAR)[:, None])
+    S = np.concatenate(rows, 1)
+    Sok = np.concatenate(oks, 1)
+    M = S.shape[1]
+    Wm = np.repeat(Ws[:, None], M, 1)
+    S = _polish_b(
+        Wm, np.repeat(Rs[:, None], M, 1), S, ~Sok[..., None] | np.zeros(S.shape, bool), iters=GN_ITERS
+    )
+    Serr = np.where(Sok, rotation_error_batch(product_batch(Wm, S), Rs[:, None]), np.inf)
+    Call = np.concatenate([C[idx], S], 1)
+    eall = np.concatenate([err[idx], Serr], 1)
+    # the best candidate and the best one farther than DEDUP_TOL from it (or it again)
+    ar = np.arange(n)
+    i0 = np.argmin(eall, axis=1)
+    first = Call[ar, i0]
+    dist = np.max(np.abs(_wrap_b(Call - first[:, None])), axis=-1)
+    e2 = np.where(dist > DEDUP_TOL, eall, np.inf)
+    i1 = np.where(np.isfinite(e2).any(1), np.argmin(e2, axis=1), i0)
+    C = C.copy()
+    C[idx] = np.stack([first, Call[ar, i1]], 1)
+    return C
+
+
+def _jac_det_b(W, TH) -> np.ndarray:
+    """Vectorised :func:`_jac_det` for axes (..., 3, 3) and angles (..., 3)."""
+    E1 = rexp_batch(W[..., 0, :], TH[..., 0])
+    a = _mv(E1, W[..., 1, :])
+    b = _mv(E1 @ rexp_batch(W[..., 1, :], TH[..., 1]), W[..., 2, :])
+    return np.abs(_dot(W[..., 0, :], np.cross(a, b)))
 
 
 def rotation_families_batch(W, R):
@@ -544,24 +685,7 @@ def rotation_families_batch(W, R):
     p12 = np.linalg.norm(np.cross(w1, w2), axis=-1) <= PAR_TOL
     p23 = np.linalg.norm(np.cross(w2, w3), axis=-1) <= PAR_TOL
     Rw3 = _mv(R, w3)
-    # general
-    w3par = w2 * _dot(w2, w3)[:, None]
-    alpha = _dot(w1, w3par)
-    beta = _dot(w1, w3 - w3par)
-    gamma = _dot(w1, np.cross(w2, w3))
-    delta = _dot(w1, Rw3)
-    rho = np.hypot(beta, gamma)
-    psi = np.arctan2(gamma, beta)
-    c = np.clip((delta - alpha) / np.where(rho > 0, rho, 1.0), -1.0, 1.0)
-    t2 = psi[:, None] + np.array([1.0, -1.0]) * np.arccos(c)[:, None]  # (N, 2)
-    W2 = np.repeat(w2[:, None], 2, 1)
-    W1 = np.repeat(w1[:, None], 2, 1)
-    E2 = rexp_batch(W2, t2)
-    a = _mv(E2, w3[:, None])
-    t1, _ = _angle_about_b(W1, a, Rw3[:, None])
-    E12 = rexp_batch(W1, t1) @ E2
-    t3, _ = _angle_r_b(np.repeat(w3[:, None], 2, 1), _tr(E12) @ R[:, None])
-    TH = np.stack([t1, t2, t3], -1)
+    TH = _general_rrr_b(W, R, Rw3)
     cvalid = np.ones((N, 2), bool)
     n = np.zeros((N, 3))
     dim = np.zeros(N, int)
@@ -587,9 +711,10 @@ def rotation_families_batch(W, R):
     c12 = np.linalg.norm(np.cross(w1, w2), axis=-1)
     c23 = np.linalg.norm(np.cross(w2, w3), axis=-1)
     gen_bad = np.minimum(c12, c23) <= _DEGEN
-    use_all = p12 & p23 & (gen_bad | exact(aall))
-    use_12 = ~use_all & p12 & (gen_bad | exact(a12))
-    use_23 = ~use_all & ~use_12 & p23 & (gen_bad | exact(a23))
+    c13 = np.linalg.norm(np.cross(w1, w3), axis=-1)
+    use_all = p12 & p23 & ((gen_bad & (c13 <= _DEGEN)) | exact(aall))
+    use_12 = ~use_all & p12 & ((c12 <= _DEGEN) | exact(a12))
+    use_23 = ~use_all & ~use_12 & p23 & ((c23 <= _DEGEN) | exact(a23))
     taken = use_all | use_12 | use_23
     gim = ~taken & (np.linalg.norm(np.cross(w1, Rw3), axis=-1) <= GIMBAL_TOL) & exact(agim)
     sig = np.where(_dot(w1, Rw3) > 0, 1.0, -1.0)

@@ -230,3 +230,74 @@ def test_registered_signature_ignores_v():
     tw = [revolute_twist([0, 0, 1], [5, 5, 0])]
     r = solve("O-R", tw, T=to_T(rotation_exp([0, 0, 1], 1.0)))
     assert abs(r.q[0, 0] - 1.0) < 1e-12 and r.residual[0] < 1e-12
+
+
+def _tilted(rng, w, eps):
+    p = np.cross(w, rng.normal(size=3))
+    v = w + eps * p / np.linalg.norm(p)
+    return v / np.linalg.norm(v)
+
+
+@pytest.mark.parametrize("family", ["near-gimbal", "axes-12-near-parallel", "axes-23-near-parallel"])
+def test_orientation_rrr_near_singular_families(family):
+    """Regression (issue 3): near a gimbal lock the t2 equation has a double root and t1 was lost
+    (fixed by e1b6bdd's t1-first elimination), but that elimination has the double root for axes 2, 3
+    nearly parallel and lost the drawn angles there (why e1b6bdd was reverted); axes 1, 2 nearly
+    parallel (2e-8) lost them in both.  Every instance must come back exact with the drawn angles."""
+    rng = np.random.default_rng(7)
+    for eps in (1e-8, 2e-8, 1e-7):
+        for _ in range(12):
+            ws = [v / np.linalg.norm(v) for v in rng.normal(size=(3, 3))]
+            th = rng.uniform(-math.pi, math.pi, 3)
+            if family == "near-gimbal":  # exp([w2]t2) w3 within eps of w1
+                ws[2] = rotation_exp(ws[1], -th[1]) @ _tilted(rng, ws[0], eps)
+            elif family == "axes-12-near-parallel":
+                ws[1] = _tilted(rng, ws[0], eps)
+            else:
+                ws[2] = _tilted(rng, ws[1], eps)
+            tws = [revolute_twist(w, [0.0, 0.0, 0.0]) for w in ws]
+            R = product(tws, th)
+            r = solve("O-RRR", tws, T=to_T(R))
+            assert not r.ls.any() and len(r.q) <= 2 and np.all(r.residual <= TOL), (eps, ws, th, r)
+            if not r.continuum:
+                assert contains_solution(r.q, th, "RRR", recovery_tol(tws, th)), (eps, ws, th, r)
+            b = solve_batch("O-RRR", np.array([tws]), T=to_T(R)[None])
+            assert b.valid[0].sum() == len(r.q) and not b.ls[0].any()
+
+
+def test_orientation_rrr_axis_1e9_from_two_parallel_axes():
+    """Regression (thorough profile): w2 = w3 exactly, w1 tilted by 1e-9: the family of the parallel
+    pair (2, 3) is exact; the all-parallel and (1, 2) representatives are not and were forced."""
+    tws = np.array([[0, 0, 0, 0, 1, 1e-9], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 1, 0.0]])
+    th = [math.pi / 2, 0.0, 0.0]
+    R = rotation_exp(tws[0, 3:] / np.linalg.norm(tws[0, 3:]), th[0])
+    r = solve("O-RRR", tws, T=to_T(R))
+    assert r.continuum and not r.ls.any() and np.all(r.residual <= TOL)
+
+
+@pytest.mark.parametrize("family", ["axes-near-parallel", "v-near-axis-1", "u-near-axis-2"])
+def test_direction_rr_near_degenerate_families(family):
+    """Regression (issue 3): Gauss-Newton restarts from the degenerate family recover the angles."""
+    rng = np.random.default_rng(11)
+    for eps in (1e-8, 1e-7):
+        for _ in range(12):
+            w1, w2, u = (v / np.linalg.norm(v) for v in rng.normal(size=(3, 3)))
+            th = rng.uniform(-math.pi, math.pi, 2)
+            if family == "axes-near-parallel":
+                w2 = _tilted(rng, w1, eps)
+            elif family == "u-near-axis-2":
+                u = _tilted(rng, w2, eps)
+            E = rotation_exp(w1, th[0]) @ rotation_exp(w2, th[1])
+            if family == "v-near-axis-1":
+                u = E.T @ _tilted(rng, w1, eps)
+            v = E @ u
+            sols = direction_rr(w1, w2, u, v)
+            assert 1 <= len(sols) <= 2
+            for s in sols:
+                assert not s.ls
+                assert np.linalg.norm(rotation_exp(w1, s.q[0]) @ rotation_exp(w2, s.q[1]) @ u - v) <= TOL * 3
+            if not any(s.continuum for s in sols):
+                J = np.column_stack([np.cross(w1, v), E @ np.cross(w2, u)])
+                sv = np.linalg.svd(J, compute_uv=False).min()
+                tol = TOL if sv > 1e-6 else min(1e-2, 1e-10 / max(sv, 1e-300))
+                assert contains_solution([s.q for s in sols], th, "RR", tol), (eps, family, th, sols)
