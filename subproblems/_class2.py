@@ -41,6 +41,10 @@ FREE_TOL = 1e-10
 FREE_POINT_TOL = 10 * EXACT_TOL
 #: Relative size under which an eliminant coefficient counts as zero.
 COEF_TOL = 1e-12
+#: Floating-point error of evaluating a chain, per unit of translation (one eps): added to a row's
+#: residual before the exactness check, so a row whose joint values are too large to verify (~5e6
+#: times the problem's size) is never flagged exact.
+ROUNDOFF = float(np.finfo(float).eps)
 #: Candidates whose residual is at most this times the problem scale are not polished: the closed
 #: forms and eigenvalue roots normally land there, and Gauss-Newton would not change them.
 POLISH_TOL = 1e-14
@@ -149,6 +153,11 @@ def residual(twists, p, q, th) -> float:
     return float(np.linalg.norm(chain_point_jac(twists, th, p)[0] - q))
 
 
+def roundoff(kinds: str, th) -> float:
+    """Evaluation error of the chain at ``th``: :data:`ROUNDOFF` times the sum of the translations."""
+    return ROUNDOFF * float(sum(abs(float(t)) for k, t in zip(kinds, th) if k == "T"))
+
+
 def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> list[Solution]:
     """Polish, verify, deduplicate ``candidates`` (iterable of ``(th, free)``); see the module doc.
 
@@ -189,7 +198,11 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
             if row[0] > FAR_TOL * scale:
                 polish_row(row)
     rows += _snapped_rows(kinds, twists, p, q, rows, scale)
-    scored = [(r, th, free or has_free_joint(twists, p, th, scale)) for r, th, free in rows]
+    # a row's residual counts its own evaluation error: translations of ~1e8 on a unit problem (nearly
+    # parallel prismatic directions) cannot be verified to EXACT_TOL, so they are not exact
+    scored = [
+        (r + roundoff(kinds, th), th, free or has_free_joint(twists, p, th, scale)) for r, th, free in rows
+    ]
     exact = [s for s in scored if s[0] <= EXACT_TOL * scale]
     if not exact:
         r, th, free = min(scored, key=lambda s: s[0])
@@ -677,7 +690,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     Cand = np.zeros((N, C, m))
     Cand[ni, ci] = th
     res = np.full((N, C), np.inf)
-    res[ni, ci] = r
+    res[ni, ci] = r + ROUNDOFF * np.abs(np.where(rev, 0.0, th)).sum(axis=-1)
     cfree = cand_free.copy()
     cfree[ni, ci] |= free_row
     exact = res <= EXACT_TOL * scale[:, None]
