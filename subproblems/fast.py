@@ -193,13 +193,13 @@ def plane_r(m, w, r, p, h, d, rep=0.0):
     return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY, rep)
 
 
-def plane_t(m, v, p, h, d):
+def plane_t(m, v, p, h, d, rep=0.0):
     """H-T: ``h . (p + v th) = d``.  With ``h`` (nearly) across the slide every ``th`` gives the same
-    value: the representative ``th = 0``, flagged :data:`FAMILY`."""
+    value: the representative ``th = rep``, flagged :data:`FAMILY`."""
     hv = dot(h, v)
     across = (hv * hv) <= NEAR2 * dot(h, h)
     th = (d - dot(h, p)) / m.where(across, 1.0, hv)
-    return (m.where(across, 0.0 * th, th), across * FAMILY),
+    return (m.where(across, rep + 0.0 * th, th), across * FAMILY),
 
 
 def dist_r(m, w, r, p, q, d, rep=0.0):

@@ -149,12 +149,13 @@ static inline void ikc_plane_r(const double *w, const double *r, const double *p
     ikc_trig_roots(a, b, c, size, rep, q, f);
 }
 
-/* H-T: h . (p + v th) = d.  1 slot x 1; h (nearly) across the slide: th = 0, IKC_FAMILY */
-static inline void ikc_plane_t(const double *v, const double *p, const double *h, double d, double *q, int *f) {
+/* H-T: h . (p + v th) = d.  1 slot x 1; h (nearly) across the slide: th = rep, IKC_FAMILY */
+static inline void ikc_plane_t(const double *v, const double *p, const double *h, double d, double rep,
+                               double *q, int *f) {
     double hv = ikc_dot(h, v);
     int across = (hv * hv) <= IKC_NEAR2 * ikc_dot(h, h);
     double th = (d - ikc_dot(h, p)) / (across ? 1.0 : hv);
-    q[0] = across ? 0.0 * th : th;
+    q[0] = across ? rep + 0.0 * th : th;
     f[0] = across ? IKC_FAMILY : 0;
 }
 

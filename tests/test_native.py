@@ -289,7 +289,9 @@ def _same_outcome(module, fn, *args, what=None, **kw):
     mine, ref = _outcome(fn, *args, **kw), _python(module, _outcome, fn, *args, **kw)
     if mine[0] == "ok" and ref[0] == "ok":
         a, b = (np.asarray(x[0] if isinstance(x, tuple) else x) for x in (mine[1], ref[1]))
-        assert a.shape == b.shape, (what, a, b)
+        # the same kind of answer; the rows themselves are compared by the solution-set tests (a good
+        # target here can be a self-motion, where each path returns its own representatives)
+        assert a.shape[1:] == b.shape[1:], (what, a, b)
         return None
     assert mine == ref, (what, mine, ref)
     return mine
@@ -353,12 +355,12 @@ def test_bad_input_on_reduced_targets(name, target, free):
 def _same_results(a, b, Ts):
     S, V, L, _, C = a.solve_batch_info(Ts)
     Sb, Vb, Lb, _, Cb = b.solve_batch_info(Ts)
-    assert np.array_equal(V & ~L, Vb & ~Lb)
     for k, T in enumerate(Ts):
         x, y = S[k][V[k] & ~L[k]], Sb[k][Vb[k] & ~Lb[k]]
-        if C[k].any() or Cb[k].any():
+        if C[k].any() or Cb[k].any():  # a self-motion: each path its own representatives, all exact
             _exact_round_trip(b, y, T, k)
             continue
+        assert len(x) == len(y), (k, x, y)
         assert _set_distance(x, y) <= SAME and _set_distance(y, x) <= SAME, (k, x, y)
 
 

@@ -13,9 +13,9 @@ points wrap the shared finish and driver (``subproblems/fast_finish.h``):
 * ``ikc_solve_many(n, goals, free, limits, q, res, ls, cont, count, threads)``: n checked 4x4 targets;
 * ``ikc_leaves(goal12, free, Q, E, F)``: the raw leaves of one goal (tests compare them with Python).
 
-The C chain takes one more input than the Python one, ``rep``: the representative of a self-motion
-that the kernels return (the Python chain always uses 0); the finish reruns the chain with other
-values when the representatives of 0 cannot be completed.
+Both chains take ``rep``, the representative of a self-motion the kernels return (the Python path
+always uses 0); the C finish reruns the chain with other values when the representatives of 0 cannot
+be completed inside the limits.
 
 :func:`chain_c_source` returns None for a chain it cannot translate (a step that calls a reference
 solver, which has no C port): such modules keep their Python fast path alone.
@@ -31,7 +31,6 @@ KERNEL_SLOTS = {
     "plane_r": 2, "plane_t": 1, "dist_r": 2, "dist_t": 2, "slide3": 1, "turn_slide2": 1, "point_r": 1,
     "point_rr_meet": 2, "point_rr_parallel": 2, "rot_r": 1, "rot_rr": 1, "rot_rrr": 2,
 }
-REP_KERNELS = ("plane_r", "dist_r", "rot_rrr")  # take the representative of a self-motion, last
 _MATH = {"cos": "cos", "sin": "sin", "sqrt": "sqrt", "atan2": "atan2"}
 _BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.BitOr: "|"}
 TARGET_CODES = {"pose": 0, "position": 1, "orientation": 2}
@@ -132,8 +131,6 @@ class _Translator:
         names = [e.id for e in node.target.elts]
         outs, flag, slots = len(names) - 1, names[-1], KERNEL_SLOTS[kernel]
         args = [self.argument(a) for a in node.iter.args[1:]]
-        if kernel in REP_KERNELS:
-            args.append("rep")
         self.emit("{")
         self.depth += 1
         self.emit(f"double {flag}_q[{slots * outs}];")

@@ -151,8 +151,9 @@ IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
 class _Emitter:
     """Walks the plan, emitting the loop nest."""
 
-    def __init__(self, twists, kinds, home, couplings, free_joints, scale, target):
+    def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans):
         self.c = _Code()
+        self.spans = spans  # per joint: the slide length a representative rep = pi stands for
         self.twists = np.where(np.abs(twists) <= ZERO, 0.0, twists)
         self.kinds = kinds
         self.home = np.where(np.abs(home) <= ZERO, 0.0, home)
@@ -295,7 +296,7 @@ class _Emitter:
             ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
             fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
             outs = [f"a{c.count}_{i}" for i in range(len(ws))]
-            self._loop(outs, _call(fn, *ws, Tp[:9]))
+            self._loop(outs, _call(fn, *ws, Tp[:9], *(["rep"] if len(ws) == 3 else [])))
             for col, g in enumerate(step["group_ids"]):
                 group = step["groups"][col]
                 if len(group) == 1:
@@ -331,7 +332,7 @@ class _Emitter:
             diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
             d = c.let(f"m.sqrt({_render(c.dot(diff, diff))})", "d")
             if code == "S3-R":
-                call = _call("dist_r", args[0][0], args[0][1], point, centre, d)
+                call = _call("dist_r", args[0][0], args[0][1], point, centre, d, "rep")
             elif code == "S3-T":
                 call = _call("dist_t", args[0][0], point, centre, d)
             else:
@@ -348,9 +349,10 @@ class _Emitter:
                 p_in, d = Tpp, c.dot(h, point, "d")
                 tw = tuple([c.scaled(-1.0, args[0][0])] + list(args[0][1:]))
             if letters == "R":
-                call = _call("plane_r", tw[0], tw[1], p_in, h, d)
+                call = _call("plane_r", tw[0], tw[1], p_in, h, d, "rep")
             elif letters == "T":
-                call = _call("plane_t", tw[0], p_in, h, d)
+                slide = c.lin([(self.spans[solve[0]] / math.pi, "rep")])  # rep in [-pi, pi]: a slide
+                call = _call("plane_t", tw[0], p_in, h, d, slide)
             else:
                 if kind == "HT":
                     args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
@@ -452,8 +454,10 @@ def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | 
     couplings = [(chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings]
     steps = classify_pairs(plan.steps, twists, chain.joint_types, scale)
     known = list(free_joints) + list(plan.search)
+    spans = [max(abs(j.lower), abs(j.upper)) if math.isfinite(j.lower) and math.isfinite(j.upper) else scale
+             for j in chain.joints]
     em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, known, scale,
-                  plan.target)
+                  plan.target, spans)
     c = em.c
     goal = [f"g{i}" for i in range(12)]
     c.emit(f"{', '.join(goal)} = goal")
@@ -480,6 +484,7 @@ def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | 
         return None
     doc = (
         '    """Every candidate of the chain above as straight-line arithmetic on backend ``m``: a list of\n'
-        '    (joint values..., pose error, defer) over the solution slots of each step."""\n'
+        '    (joint values..., pose error, defer) over the solution slots of each step.  ``rep`` picks the\n'
+        '    representative a step returns where its joint is free (a self-motion)."""\n'
     )
-    return "\n\ndef _fast_chain(m, goal, free=()):\n" + doc + body + "\n    return out\n"
+    return "\n\ndef _fast_chain(m, goal, free=(), rep=0.0):\n" + doc + body + "\n    return out\n"

@@ -38,12 +38,12 @@ EXAMPLES = settings().max_examples
 AGREE = 1e-12
 
 # name: (argument kinds, slots, value kinds).  Argument kinds: "u" a unit axis, "v" any 3-vector,
-# "p" a point, "R" a rotation (9 entries, row-major), "s" a scalar (the last one of plane_r, dist_r and
-# rot_rrr is ``rep``, the representative of a self-motion; 0.0 where an instance leaves it out).  Value
-# kinds: "R" an angle, "T" a slide.
+# "p" a point, "R" a rotation (9 entries, row-major), "s" a scalar (the last one of plane_r, plane_t,
+# dist_r and rot_rrr is ``rep``, the representative of a self-motion; 0.0 where an instance leaves it
+# out).  Value kinds: "R" an angle, "T" a slide.
 KERNELS = {
     "plane_r": ("uppvss", 2, "R"),
-    "plane_t": ("vpvs", 1, "T"),
+    "plane_t": ("vpvss", 1, "T"),
     "dist_r": ("uppps" + "s", 2, "R"),
     "dist_t": ("upps", 2, "T"),
     "slide3": ("vvvp", 1, "TTT"),
