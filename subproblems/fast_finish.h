@@ -507,6 +507,16 @@ static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int l
     return ikc_solve_goal(rb, g, fr, limits, q, res, ls, cont);
 }
 
+/* One raw target, exact solutions only (they come first): their count, IKC_PYTHON or IKC_INVALID. */
+static int ikc_one_exact(const ikc_robot *rb, const double *T, const double *fr, int limits, double *q) {
+    double res[rb->slots];
+    int ls[rb->slots], cont[rb->slots];
+    int k = ikc_one(rb, T, fr, limits, q, res, ls, cont);
+    int e = 0;
+    while (e < k && !ls[e]) e++;
+    return k < 0 ? k : e;
+}
+
 typedef struct {
     const ikc_robot *rb;
     int64_t start, stop;

@@ -175,6 +175,9 @@ class NativeChain:
         self._many = lib.ikc_solve_many
         self._many.argtypes = [L, P, P, I, P, P, P, P, P, I]
         self._many.restype = None
+        self._exact = lib.ikc_solve_exact
+        self._exact.argtypes = [P, P, I, P]
+        self._exact.restype = I
         self.leaves_fn = lib.ikc_leaves
         self.leaves_fn.argtypes = [P, P, P, P, P]
         self.leaves_fn.restype = I
@@ -206,6 +209,21 @@ class NativeChain:
             if k < 0:
                 return None
             return self._q[:k].copy(), self._res[:k].copy(), self._ls[:k] != 0, self._cont[:k] != 0
+
+    def exact(self, T, free, limits: bool):
+        """The exact solutions (k, dof) of one target, or None for the Python path (``solve``)."""
+        if len(free) != self.nfree or self._np.shape(T) != self._T.shape:
+            return None
+        with self._lock:
+            try:
+                self._T[...] = T
+                if self.nfree:
+                    self._F[...] = free
+            except (ValueError, TypeError):
+                return None
+            aT, aF, aq = self._addr[:3]
+            k = self._exact(aT, aF, 1 if limits else 0, aq)
+            return None if k < 0 else self._q[:k].copy()
 
     def many(self, goals, free, limits: bool, workers: int | None = None):
         """Solutions of N raw targets ``goals`` ((N, 4, 4) poses, (N, 3, 3) orientations or (N, 3)

@@ -9,7 +9,8 @@ module's settings (joint kinds, limits, tolerances) become an ``ikc_robot`` and 
 points wrap the shared finish and driver (``subproblems/fast_finish.h``):
 
 * ``ikc_solve_one(T, free, limits, q, res, ls, cont)``: one raw target; the solution count, -1 for
-  the Python path, -2 for an invalid target;
+  the Python path, -2 for an invalid target; ``ikc_solve_exact(T, free, limits, q)`` the same with
+  the exact solutions alone (``solve``);
 * ``ikc_solve_many(n, goals, free, limits, q, res, ls, cont, count, threads)``: n checked 4x4 targets;
 * ``ikc_leaves(goal12, free, Q, E, F)``: the raw leaves of one goal (tests compare them with Python).
 
@@ -249,6 +250,10 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         "int ikc_solve_one(const double *T, const double *fr, int limits, double *q, double *res, int *ls,",
         "                  int *cont) {",
         "    return ikc_one(&ikc_this, T, fr, limits, q, res, ls, cont);",
+        "}",
+        "",
+        "int ikc_solve_exact(const double *T, const double *fr, int limits, double *q) {",
+        "    return ikc_one_exact(&ikc_this, T, fr, limits, q);",
         "}",
         "",
         "void ikc_solve_many(int64_t n, const double *goals, const double *fr, int limits, double *q,",

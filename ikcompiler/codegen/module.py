@@ -418,9 +418,9 @@ def _solve_chunk(goals, Td, init, limits):
     return tuple(parts)
 
 
-def _fast_one(T, free, limits):
+def _fast_one(T, free, limits, native=True):
     """(q, residual, ls, continuum) of one target on the fast path, or None to go the batch way."""
-    native = _native_chain()
+    native = _native_chain() if native else None
     if native is not None:
         found = native.one(T, free, limits)
         if found is not None:
@@ -489,7 +489,12 @@ def solve_info(T, *free, limits=True):
 def solve(T, *free, limits=True):
     """Every exact solution of one target inside the joint limits, one row each in JOINT_NAMES order;
     (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits."""
-    found = _fast_one(T, free, limits)
+    native = _native_chain()
+    if native is not None:
+        q = native.exact(T, free, limits)
+        if q is not None:
+            return q
+    found = _fast_one(T, free, limits, native=False)
     if found is not None:
         return found[0][~found[2]]
     q, _, ls, _ = solve_info(T, *free, limits=limits)
