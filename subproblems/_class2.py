@@ -342,6 +342,64 @@ def trig_roots(
     return [float(np.angle(z)) for z in roots if abs(z) > 0.0]
 
 
+def lin_trig_roots(f0: float, c1: float, s1: float, at0: float | None = None) -> list[float]:
+    """Roots of ``f0 + c1 cos th + s1 sin th`` (not identically zero) to full relative accuracy.
+
+    Half-angle substitution, ``u = tan(th / 2)``: ``(f0 - c1) u^2 + 2 s1 u + (f0 + c1) = 0``, solved by
+    the cancellation-free quadratic formula in ``u`` or in ``1 / u`` (whichever keeps the roots within
+    the unit disc).  Unlike the eigenvalues of :func:`trig_roots`, two roots ``delta`` apart come back
+    with errors ~eps relative to the coefficients' size, not ~eps / delta (a circle nearly tangent
+    to a plane).  Without real roots: the angle where ``|f|`` is smallest, twice (as :func:`trig_roots`).
+    ``at0``: ``f(0) = f0 + c1`` when the caller has it without the cancellation of that sum.
+    """
+    A, B, C = f0 - c1, s1, f0 + c1 if at0 is None else at0
+    disc = B * B - A * C
+    if disc < 0.0 or (A == 0.0 and B == 0.0 and C == 0.0):
+        th = math.atan2(s1, c1) if f0 < 0 else math.atan2(-s1, -c1)
+        return [th, th]
+    sq = math.copysign(math.sqrt(disc), B) if B != 0.0 else math.sqrt(disc)
+    qq = -(B + sq)
+    flip = abs(C) > abs(A)  # solve for w = 1 / u = cot(th / 2)
+    a, c = (C, A) if flip else (A, C)
+    if a == 0.0:  # linear (a double root at infinity when b vanishes too)
+        roots = [-c / (2 * B), math.inf] if B != 0.0 else [math.inf, math.inf]
+    else:
+        roots = [qq / a, c / qq if qq != 0.0 else 0.0]
+    out = []
+    for r in roots:
+        if flip:
+            out.append(math.pi if r == 0.0 else 2 * math.atan2(1.0, r) if math.isfinite(r) else 0.0)
+        else:
+            out.append(2 * math.atan(r) if math.isfinite(r) else math.pi)
+    return [wrap(t) for t in out]
+
+
+@np.errstate(all="ignore")
+def lin_trig_roots_batch(f0, c1, s1, at0=None):
+    """Vectorised :func:`lin_trig_roots`: roots (N, 2) of ``f0 + c1 cos th + s1 sin th`` (0 twice when
+    ``c1 = s1 = 0``, as :func:`trig_roots_batch`)."""
+    A, B, C = f0 - c1, s1, f0 + c1 if at0 is None else at0
+    disc = B * B - A * C
+    lsq = (disc < 0.0) | ((A == 0.0) & (B == 0.0) & (C == 0.0))
+    th_ls = np.where(f0 < 0, np.arctan2(s1, c1), np.arctan2(-s1, -c1))
+    sq = np.sqrt(np.maximum(disc, 0.0))
+    sq = np.where(B < 0, -sq, sq)
+    qq = -(B + sq)
+    flip = np.abs(C) > np.abs(A)
+    a, c = np.where(flip, C, A), np.where(flip, A, C)
+    lin = a == 0.0
+    bb = np.where(B != 0.0, B, 1.0)
+    r1 = np.where(lin, np.where(B != 0.0, -c / (2 * bb), np.inf), qq / np.where(lin, 1.0, a))
+    r2 = np.where(lin, np.inf, np.where(qq != 0.0, c / np.where(qq != 0.0, qq, 1.0), 0.0))
+    r = np.stack([r1, r2], -1)
+    th_u = np.where(np.isfinite(r), 2 * np.arctan(r), np.pi)
+    th_w = np.where(r == 0.0, np.pi, np.where(np.isfinite(r), 2 * np.arctan2(1.0, r), 0.0))
+    th = np.where(flip[..., None], th_w, th_u)
+    th = np.where(lsq[..., None], th_ls[..., None], th)
+    th = np.where(((c1 == 0.0) & (s1 == 0.0))[..., None], 0.0, th)
+    return np.where(th > math.pi, th - TWO_PI, th)  # exact for small angles, unlike wrap_batch
+
+
 def quadratic_form_to_fourier(A, B, C, D, E, F):
     """``A c^2 + B s c + C s^2 + D c + E s + F`` as ``(f0, c1, s1, c2, s2)`` for :func:`trig_roots`."""
     return F + (A + C) / 2, D, E, (A - C) / 2, B / 2

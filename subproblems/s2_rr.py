@@ -51,12 +51,12 @@ from subproblems._class2 import (
     circle_of_batch,
     finalize,
     finalize_batch,
+    lin_trig_roots_batch,
     problem_scale,
     problem_scale_batch,
     real_quadratic_roots,
     rotation_angle,
     rotation_angle_batch,
-    trig_roots_batch,
 )
 from subproblems.core import BatchResult, Solution, register
 
@@ -91,9 +91,12 @@ def rr_candidates(twists, p, q, scale: float) -> tuple[list, bool]:
         d = d / nd
         h1, h2 = float(w1 @ q), float(w2 @ p)
         x0 = (h1 * np.cross(w2, d) + h2 * np.cross(d, w1)) / (float(np.cross(w1, w2) @ d))
-        for c, rad2 in ((r1, float((q - r1) @ (q - r1))), (r2, float((p - r2) @ (p - r2)))):
+        # |x0 + s d - c|^2 = |a - c|^2 with the constant |x0 - c|^2 - |a - c|^2 as a product: the
+        # difference of squares cancels to ~eps |a - c|^2 absolute, which a point near the other
+        # axis turns into a wrong angle (axes 1e-7 from meeting, tangent line)
+        for c, a in ((r1, q), (r2, p)):
             b = float(d @ (x0 - c))
-            for s in real_quadratic_roots(1.0, 2 * b, float((x0 - c) @ (x0 - c)) - rad2):
+            for s in real_quadratic_roots(1.0, 2 * b, float((x0 - a) @ (x0 + a - 2 * c))):
                 xs.append(x0 + s * d)
     out = []
     for x in xs:
@@ -121,10 +124,14 @@ def rr_theta1_candidates_batch(x1, x2, p, q, scale):
     k = c0 - r2
     m2 = 2 * np.stack([np.sum(k * cc, -1), -np.sum(k * cs, -1)], -1)
     e2 = np.sum((p - r2) ** 2, -1) - np.sum(k * k, -1) - np.sum(cc * cc, -1)
-    z = np.zeros_like(e1)
-    F1 = np.stack([-e1, m1[:, 0], m1[:, 1], z, z], -1)
-    F2 = np.stack([-e2, m2[:, 0], m2[:, 1], z, z], -1)
-    roots = [trig_roots_batch(F1)[:, :2], trig_roots_batch(F2)[:, :2]]
+    # roots of -e_i + m_i . (cos, sin) by the half-angle formula, with the values at th = 0 free of
+    # the cancellation in e_i (y(0) = q): two roots ~1e-7 apart keep full accuracy (see lin_trig_roots)
+    at1 = np.sum(w2 * (q - p), -1)
+    at2 = np.sum((q - p) * (q + p - 2 * r2), -1)
+    roots = [
+        lin_trig_roots_batch(-e1, m1[:, 0], m1[:, 1], at1),
+        lin_trig_roots_batch(-e2, m2[:, 0], m2[:, 1], at2),
+    ]
     M = np.stack([m1, m2], -2)
     det = np.linalg.det(M)
     regular = np.abs(det) > 1e-12 * (np.abs(M).max(axis=(-1, -2)) ** 2 + 1e-300)

@@ -64,6 +64,8 @@ from subproblems._class2 import (
     finalize_batch,
     inverted,
     inverted_batch,
+    lin_trig_roots,
+    lin_trig_roots_batch,
     problem_scale,
     problem_scale_batch,
     quadratic_form_to_fourier,
@@ -99,17 +101,19 @@ def _eliminant(x1, x2, x3, p, q):
     D = k1 * k1 * dc - 2 * k1 * P1 * gc - 2 * g0 * gc
     E = k1 * k1 * ds - 2 * k1 * P1 * gs - 2 * g0 * gs
     F = k1 * k1 * (d0 - P0) - 2 * k1 * P1 * g0 - g0 * g0
-    return (A, B, C, D, E, F), (c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds)
+    return (A, B, C, D, E, F), (c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds, r2)
 
 
 def _candidates_for(th1_list, x2, x3, p, q, aux, scale):
-    c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds = aux
+    c0, cc, cs, k1, P0, P1, g0, gc, gs, d0, dc, ds, r2 = aux
     v = x3[:3]
     out = []
     for th1 in th1_list:
         c, s = math.cos(th1), math.sin(th1)
         y = c0 + cc * c - cs * s
-        ts = real_quadratic_roots(1.0, 2 * P1, P0 - (d0 + dc * c + ds * s))
+        # D(z(t)) = D(y): t^2 + 2 P1 t + |p - r2|^2 - |y - r2|^2 = 0, the constant as a product
+        # (P0 - D(y) cancels to ~eps absolute: p and y near axis 2 lose t, hence th_2)
+        ts = real_quadratic_roots(1.0, 2 * P1, float((p - y) @ (p + y - 2 * r2)))
         if abs(k1) > COEF_TOL:
             ts.append((g0 + gc * c + gs * s) / k1)
         for t in ts:
@@ -130,7 +134,7 @@ def rrt_candidates(twists, p, q, scale):
         c = r1 + ab[0] * w1
         b = float((p - c) @ v)
         out = []
-        for t in real_quadratic_roots(1.0, 2 * b, float((p - c) @ (p - c) - (q - c) @ (q - c))):
+        for t in real_quadratic_roots(1.0, 2 * b, float((p - q) @ (p + q - 2 * c))):  # |p-c|^2 - |q-c|^2
             pt = p + t * v
             for (th1, th2), free in rr_candidates(twists[:2], pt, q, scale)[0]:
                 out.append(((th1, th2, t), free))
@@ -147,8 +151,14 @@ def rrt_candidates(twists, p, q, scale):
     k1, g0, gc, gs = aux[3], aux[6], aux[7], aux[8]
     if abs(k1) <= K1_TOL:
         # v (nearly) perpendicular to axis 2: the eliminant is (nearly) -g^2, every root double and
-        # located only to sqrt(eps); the roots of g itself are the accurate candidates
-        roots = list(roots) + list(trig_roots(g0, gc, gs, ref=scale) or [])
+        # located only to sqrt(eps); the roots of g itself are the accurate candidates (half-angle
+        # formula: two roots ~1e-7 apart, a circle nearly tangent to the plane h = k0, keep full
+        # accuracy, not ~eps / 1e-7 as eigenvalues)
+        # (with k1 below COEF_TOL, where t never comes from g / k1, the eliminant is -g^2 to roundoff
+        # and its eigenvalue roots are only noise near those of g: not candidates)
+        roots = [] if abs(k1) <= COEF_TOL else list(roots)
+        if max(abs(gc), abs(gs)) > COEF_TOL * max(abs(g0), scale):
+            roots += lin_trig_roots(g0, gc, gs)
     return [_candidates_for(roots, x2, x3, p, q, aux, scale)], False
 
 
@@ -198,17 +208,18 @@ def rrt_batch(tw, p, q) -> BatchResult:
     four = np.stack(quadratic_form_to_fourier(A, B, C, D, E, F), -1)
     free1 = np.abs(four).max(-1) <= COEF_TOL * scale * scale
     z = np.zeros_like(g0)
-    groots = trig_roots_batch(np.stack([g0, gc, gs, z, z], -1))[:, :2]
+    gok = np.maximum(np.abs(gc), np.abs(gs)) > COEF_TOL * np.maximum(np.abs(g0), scale)
+    groots = np.where(gok[:, None], lin_trig_roots_batch(g0, gc, gs), np.nan)
     groots = np.where((np.abs(k1) <= K1_TOL)[:, None], groots, np.nan)  # see rrt_candidates
-    th1 = np.concatenate(
-        [trig_roots_batch(four), np.zeros((len(F), 1)), np.arctan2(ds, dc)[:, None], groots], axis=1
-    )  # (N, 8)
+    eroots = np.where((np.abs(k1) <= COEF_TOL)[:, None], np.nan, trig_roots_batch(four))  # as scalar
+    reps = [np.zeros((len(F), 1)), np.arctan2(ds, dc)[:, None]]
+    th1 = np.concatenate([eroots, *reps, groots], axis=1)  # (N, 8)
     c, s = np.cos(th1), np.sin(th1)
     y = c0[:, None] + cc[:, None] * c[..., None] - cs[:, None] * s[..., None]
     ts = quadratic_roots_batch(
         np.ones_like(c),
         2 * P1[:, None] * np.ones_like(c),
-        P0[:, None] - (d0[:, None] + dc[:, None] * c + ds[:, None] * s),
+        dot(p[:, None] - y, p[:, None] + y - 2 * r2[:, None]),  # as _candidates_for
     )
     ok = np.abs(k1) > COEF_TOL
     tl = np.where(
@@ -264,7 +275,7 @@ def _intersecting_candidates(tw, p, q, scale):
     a = (np.sum(w1 * d, -1) - c12 * np.sum(w2 * d, -1)) / det
     c = r1 + a[:, None] * w1
     pc, qc = p - c, q - c
-    t = quadratic_roots_batch(np.ones_like(a), 2 * np.sum(pc * v, -1), np.sum(pc * pc - qc * qc, -1))
+    t = quadratic_roots_batch(np.ones_like(a), 2 * np.sum(pc * v, -1), np.sum((p - q) * (pc + qc), -1))
     N = len(a)
     # S2-RR for each t: instances (N, 2) flattened to (2N,)
     pt = (p[:, None] + t[..., None] * v[:, None]).reshape(-1, 3)

@@ -411,3 +411,57 @@ def test_s2_rrt_translation_perpendicular_to_axis_2_near_meeting_axes():
     r, Qb, lsb, _ = _both_paths("S2-RRT", tw, p, q)
     assert not r.ls.any() and not lsb.any()
     check_exact_rows("S2-RRT", np.array(tw), p, q, r)
+
+
+# Axes 1 and 2 1e-7 from meeting (or meeting at a point 1e-7 from the path of p), p 1e-7 from axis 2
+# and q on a circle about axis 1 of radius ~1 that nearly touches the plane of p's circle: the
+# solutions come in pairs ~1e-7 apart in th_1, and a 1e-16 error in th_1 or in a squared distance
+# turns into ~0.1 rad of th_2.  (ci profile, run alone: test_recovers_drawn_joint_values[S2-RRT].)
+_NEAR_MEETING = {
+    # translation perpendicular to axis 2, axes skew by 1e-7: failed at 85f1b80 (th_2 0.915)
+    "skew": [
+        [-0.0, 1.0, -0.0, 1.0, 0.0, 0.0],
+        [1e-07, -0.0, -0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    ],
+    # axes meeting at (1e-7, 0, 2): the law-of-cosines path; failed at 85f1b80 (th_2 1.0004)
+    "meeting": [
+        [-0.0, 2.0, -0.0, 1.0, 0.0, 0.0],
+        [-0.0, -1e-07, -0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    ],
+}
+
+
+@pytest.mark.parametrize("which", sorted(_NEAR_MEETING))
+def test_s2_rrt_axes_1e7_from_meeting_recover_drawn_values(which):
+    """The drawn joint values come back (scalar and vectorised paths, and S2-TRR by inversion): the
+    axial condition's roots by the half-angle formula (not eigenvalues) and every difference of
+    squared distances as a product, ``|a - c|^2 - |b - c|^2 = (a - b) . (a + b - 2 c)``."""
+    tw = np.array(_NEAR_MEETING[which])
+    th = np.array([0.0, 1.0, 0.0])
+    p = np.zeros(3)
+    q = fk_point(tw, th, p)
+    r, Qb, lsb, _ = _both_paths("S2-RRT", tw, p, q)
+    check_exact_rows("S2-RRT", tw, p, q, r)
+    assert not r.ls.any() and not lsb.any() and not r.continuum
+    assert contains_solution(r.q, th, "RRT", TOL) and contains_solution(Qb, th, "RRT", TOL)
+    inv = -tw[::-1]
+    r, Qb, lsb, _ = _both_paths("S2-TRR", inv, q, p)
+    assert contains_solution(r.q, th[::-1], "TRR", TOL) and contains_solution(Qb, th[::-1], "TRR", TOL)
+    if which == "meeting":  # its S2-RR step alone (geometric scalar path, algebraic vectorised path)
+        r, Qb, lsb, _ = _both_paths("S2-RR", tw[:2], p, q)
+        assert contains_solution(r.q, th[:2], "RR", TOL) and contains_solution(Qb, th[:2], "RR", TOL)
+
+
+def test_lin_trig_roots_two_roots_1e7_apart_to_full_accuracy():
+    """``1 - cos th + a sin th`` has the roots 0 and ``-2 atan(a)`` exactly; eigenvalues (trig_roots)
+    place them only to ~eps / |a|."""
+    from subproblems._class2 import lin_trig_roots, lin_trig_roots_batch
+
+    for a in (4.6e-8, -3e-7, 1e-9):
+        want = sorted([0.0, -2 * math.atan(a)])
+        got = sorted(lin_trig_roots(1.0, -1.0, a))
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-22), (a, got)
+        gb = np.sort(lin_trig_roots_batch(np.array([1.0]), np.array([-1.0]), np.array([a]))[0])
+        assert np.allclose(gb, want, rtol=1e-12, atol=1e-22), (a, gb)
