@@ -143,16 +143,46 @@ static double ikc_pose_error(const ikc_robot *rb, const double *G, const double 
     return ikc_max2(dp, dr);
 }
 
+/* Solve the n x n system M x = M[:, n] by Gaussian elimination with partial pivoting; 0 if singular. */
+static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
+    for (int k = 0; k < n; k++) {
+        int piv = k;
+        for (int r = k + 1; r < n; r++)
+            if (fabs(M[r][k]) > fabs(M[piv][k])) piv = r;
+        if (piv != k)
+            for (int c = k; c <= n; c++) {
+                double tmp = M[k][c];
+                M[k][c] = M[piv][c];
+                M[piv][c] = tmp;
+            }
+        if (M[k][k] == 0.0) return 0;
+        for (int r = k + 1; r < n; r++) {
+            double f = M[r][k] / M[k][k];
+            for (int c = k; c <= n; c++) M[r][c] -= f * M[k][c];
+        }
+    }
+    for (int k = n - 1; k >= 0; k--) {
+        double s = M[k][n];
+        for (int c = k + 1; c < n; c++) s -= M[k][c] * x[c];
+        x[k] = s / M[k][k];
+    }
+    return 1;
+}
+
 /* Damped Gauss-Newton steps on the returned joints (free joints held) toward goal g, as
- * plan_runtime.polish: columns scaled to unit norm, 1e-12 damping; at most `iters`, fewer once the
- * error is far inside the exact tolerance.  Returns the new pose error. */
-static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
+ * plan_runtime.polish (columns scaled to unit norm, 1e-12 damping), except that a step which does
+ * not lower the error is retried with 100x the damping (Levenberg-Marquardt; up to 8 tries) when
+ * `guarded`: at a doubly singular configuration the plain step runs off along the null directions.
+ * Unguarded, every step is taken (far seeds of the search may need to climb before they descend).  At most `iters`
+ * steps, fewer once the error is far inside the exact tolerance.  Returns the new pose error. */
+static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded) {
     const int dof = rb->dof;
     const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
-    double G[12], J[6 * dof];
+    double G[12], J[6 * dof], trial[dof], G2[12], J2[6 * dof];
+    double lambda = 1e-12;  /* damping: raised when a step makes things worse (Levenberg-Marquardt) */
+    ikc_fk_jacobian(rb, q, G, J);
+    double now = ikc_pose_error(rb, G, g);
     for (int it = 0; it < iters; it++) {
-        ikc_fk_jacobian(rb, q, G, J);
-        double now = ikc_pose_error(rb, G, g);
         if (now != now) return NAN;
         if (now <= done) return now;
         double e[6];
@@ -165,50 +195,53 @@ static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int it
             e[5] += 0.5 * (a0 * b1 - a1 * b0);
         }
         int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6;
-        double col[dof], M[dof][dof + 1];
+        double col[dof], Js[6 * dof], JtJ[dof][dof], Jte[dof];
         for (int j = 0; j < dof; j++) {  /* scale the columns to unit norm; free joints' columns to 0 */
             double s = 0.0;
             for (int r = r0; r < r1; r++) s += J[r * dof + j] * J[r * dof + j];
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
-            for (int r = r0; r < r1; r++) J[r * dof + j] = rb->is_free[j] ? 0.0 : J[r * dof + j] / col[j];
+            for (int r = r0; r < r1; r++) Js[r * dof + j] = rb->is_free[j] ? 0.0 : J[r * dof + j] / col[j];
         }
         for (int a = 0; a < dof; a++) {
             for (int c = 0; c < dof; c++) {
                 double s = 0.0;
-                for (int r = r0; r < r1; r++) s += J[r * dof + a] * J[r * dof + c];
-                M[a][c] = s + (a == c ? 1e-12 : 0.0);
+                for (int r = r0; r < r1; r++) s += Js[r * dof + a] * Js[r * dof + c];
+                JtJ[a][c] = s;
             }
             double s = 0.0;
-            for (int r = r0; r < r1; r++) s += J[r * dof + a] * e[r];
-            M[a][dof] = s;
+            for (int r = r0; r < r1; r++) s += Js[r * dof + a] * e[r];
+            Jte[a] = s;
         }
-        for (int k = 0; k < dof; k++) {  /* Gaussian elimination, partial pivoting */
-            int piv = k;
-            for (int r = k + 1; r < dof; r++)
-                if (fabs(M[r][k]) > fabs(M[piv][k])) piv = r;
-            if (piv != k)
-                for (int c = k; c <= dof; c++) {
-                    double tmp = M[k][c];
-                    M[k][c] = M[piv][c];
-                    M[piv][c] = tmp;
-                }
-            if (M[k][k] == 0.0) return NAN;
-            for (int r = k + 1; r < dof; r++) {
-                double f = M[r][k] / M[k][k];
-                for (int c = k; c <= dof; c++) M[r][c] -= f * M[k][c];
+        int accepted = 0;
+        for (int attempt = 0; attempt < 8 && !accepted; attempt++) {
+            double M[dof][dof + 1], dq[dof];
+            for (int a = 0; a < dof; a++) {
+                for (int c = 0; c < dof; c++) M[a][c] = JtJ[a][c] + (a == c ? lambda : 0.0);
+                M[a][dof] = Jte[a];
+            }
+            if (!ikc_solve_linear(dof, M, dq)) return now;
+            for (int j = 0; j < dof; j++) trial[j] = q[j] + (rb->is_free[j] ? 0.0 : dq[j] / col[j]);
+            ikc_fk_jacobian(rb, trial, G2, J2);
+            double next = ikc_pose_error(rb, G2, g);
+            if (next < now || !guarded) {  /* accept; trust the linear model more next time */
+                for (int j = 0; j < dof; j++) q[j] = trial[j];
+                for (int k = 0; k < 12; k++) G[k] = G2[k];
+                for (int k = 0; k < 6 * dof; k++) J[k] = J2[k];
+                now = next;
+                lambda = lambda > 1e-11 ? lambda * 0.1 : 1e-12;
+                accepted = 1;
+            } else {  /* reject: a shorter, more gradient-like step */
+                lambda *= 100.0;
             }
         }
-        double dq[dof];
-        for (int k = dof - 1; k >= 0; k--) {
-            double s = M[k][dof];
-            for (int c = k + 1; c < dof; c++) s -= M[k][c] * dq[c];
-            dq[k] = s / M[k][k];
-        }
-        for (int j = 0; j < dof; j++)
-            if (!rb->is_free[j]) q[j] += dq[j] / col[j];
+        if (!accepted) break;
     }
-    ikc_fk_jacobian(rb, q, G, J);
-    return ikc_pose_error(rb, G, g);
+    return now;
+}
+
+/* Newton steps that never raise the error (near misses, self-motion representatives). */
+static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
+    return ikc_newton_steps(rb, g, q, iters, 1);
 }
 
 /* Python's ((x + pi) % 2pi) - pi, with -pi mapped to pi: the wrap of finish_one, bit for bit. */
@@ -460,7 +493,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         int CF[count > 0 ? count : 1];
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
-            CE[a] = ikc_newton(rb, g, C + a * dof, 8);
+            CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0);  /* plain steps, as the Python search */
             CF[a] = 0;
         }
         status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
@@ -485,7 +518,7 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     for (int k = 0; k < n; k++) {
         if (F[k] & IKC_DEFER) return IKC_PYTHON;
         if (F[k] & IKC_EMPTY) continue;
-        E[k] = ikc_newton(rb, g, Q + k * dof, rb->polish);
+        E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
     }
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);

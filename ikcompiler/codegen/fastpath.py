@@ -154,6 +154,7 @@ class _Emitter:
     def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans):
         self.c = _Code()
         self.spans = spans  # per joint: the slide length a representative rep = pi stands for
+        self.reps = 0  # steps given a representative so far
         self.twists = np.where(np.abs(twists) <= ZERO, 0.0, twists)
         self.kinds = kinds
         self.home = np.where(np.abs(home) <= ZERO, 0.0, home)
@@ -228,6 +229,15 @@ class _Emitter:
                 G_u[i] = sofar
         return G_u, sofar
 
+    def rep(self, length: float = math.pi):
+        """The representative for the next step that can meet a self-motion: ``rep`` times 1, -2, 3,
+        -4, ... for the first, second, ... such step, so that one sweep of ``rep`` moves two families
+        of one target independently (a shoulder and a wrist singularity at once); ``length`` is what
+        ``rep = pi`` stands for (pi for an angle, the joint's travel for a slide)."""
+        self.reps += 1
+        factor = (self.reps if self.reps % 2 else -self.reps) * length / math.pi
+        return "rep" if factor == 1.0 else self.c.lin([(factor, "rep")])
+
     def twist(self, j, key, sign):
         """Joint j's axis carried by the motion ``key``: ``(w, r)`` (revolute) or ``(v,)`` (prismatic)."""
         G = self.prefix(key)
@@ -296,7 +306,7 @@ class _Emitter:
             ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
             fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
             outs = [f"a{c.count}_{i}" for i in range(len(ws))]
-            self._loop(outs, _call(fn, *ws, Tp[:9], *(["rep"] if len(ws) == 3 else [])))
+            self._loop(outs, _call(fn, *ws, Tp[:9], *([self.rep()] if len(ws) == 3 else [])))
             for col, g in enumerate(step["group_ids"]):
                 group = step["groups"][col]
                 if len(group) == 1:
@@ -332,7 +342,7 @@ class _Emitter:
             diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
             d = c.let(f"m.sqrt({_render(c.dot(diff, diff))})", "d")
             if code == "S3-R":
-                call = _call("dist_r", args[0][0], args[0][1], point, centre, d, "rep")
+                call = _call("dist_r", args[0][0], args[0][1], point, centre, d, self.rep())
             elif code == "S3-T":
                 call = _call("dist_t", args[0][0], point, centre, d)
             else:
@@ -349,10 +359,9 @@ class _Emitter:
                 p_in, d = Tpp, c.dot(h, point, "d")
                 tw = tuple([c.scaled(-1.0, args[0][0])] + list(args[0][1:]))
             if letters == "R":
-                call = _call("plane_r", tw[0], tw[1], p_in, h, d, "rep")
+                call = _call("plane_r", tw[0], tw[1], p_in, h, d, self.rep())
             elif letters == "T":
-                slide = c.lin([(self.spans[solve[0]] / math.pi, "rep")])  # rep in [-pi, pi]: a slide
-                call = _call("plane_t", tw[0], p_in, h, d, slide)
+                call = _call("plane_t", tw[0], p_in, h, d, self.rep(self.spans[solve[0]]))
             else:
                 if kind == "HT":
                     args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
