@@ -7,18 +7,24 @@ For every zoo robot (or those named with ``--robots``):
   ``sample_configurations``), plus solution counts, recovery of the sampled joint vector and the worst
   pose error, all checked with our chain's FK;
 * batch throughput of ``solve_batch`` in poses/s (10 000 poses, fewer for slow solvers: see ``--budget``);
-* both on the module's default path (the fast path where the plan has one) and, for modules with a fast
-  path, again on the reference runtime (``FAST_PATH = False``, same poses and budget): the speed-up,
-  whether both paths give the same solutions, and the fraction of poses the fast path defers to the
-  reference runtime (its first stage, ``_fast_chain`` + ``subproblems.fast.finish_many``, run untimed);
+* all on the module's default path: the native backend where the module carries its fast chain in C
+  (``_NATIVE_SOURCE``; built with the system C compiler on first use, into a fresh temporary
+  ``IKC_CACHE`` for this run, and the one-off build timed apart from the Python compile), else the
+  Python fast path where the plan has one, else the reference runtime;
+* for modules with a fast path, the same timings again on the Python fast path (``NATIVE = False``)
+  and on the reference runtime (``FAST_PATH = False``), same poses and budget: the speed-ups, whether
+  the paths give the same solutions (native vs Python fast path, default path vs reference runtime),
+  and the fraction of poses each hands on (native: to the Python path, ``_native_chain().many`` /
+  ``.one``; Python fast path: to the reference runtime, its first stage ``_fast_leaves`` +
+  ``subproblems.fast.finish_many``), counted untimed;
 * the same figures for EAIK where it applies (revolute joints only, no coupled joints, at most 6
   unlocked joints; a 7R arm locks its free joint at one value for all poses).  EAIK is built from our
   chain's twists (axis directions H, axis points turned into offsets P, home rotation as the tool
   rotation) and runs in a subprocess per robot and stage, so an abort in its batch call is reported
   and does not end the run.
 
-Then one closed-form robot's single-pose ``solve`` on its default (fast) path is profiled (cProfile,
-top entries by own time).
+Then one closed-form robot's single-pose ``solve`` on its default (native or fast) path is profiled
+(cProfile, top entries by own time).
 
 Results: ``benchmarks/results/compiler.md`` (tables and notes) and ``benchmarks/results/compiler.json``.
 
@@ -30,6 +36,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import cProfile
 import datetime as _dt
 import importlib.metadata as _md
@@ -38,6 +45,7 @@ import math
 import os
 import platform
 import pstats
+import shutil
 import signal
 import subprocess
 import sys
@@ -372,8 +380,25 @@ def _time_batch(module, Tb, Qb, cols, opts):
     return n_b, n_b / min(runs), out
 
 
+PYTHON_FAST = {"NATIVE": False}  # module flags of each path besides the default one
+REFERENCE = {"FAST_PATH": False}
+
+
+@contextlib.contextmanager
+def _flags(module, flags: dict):
+    """Run the block with the module's path flags (``FAST_PATH``, ``NATIVE``) set, then restore them."""
+    old = {k: getattr(module, k) for k in flags}
+    try:
+        for k, v in flags.items():
+            setattr(module, k, v)
+        yield module
+    finally:
+        for k, v in old.items():
+            setattr(module, k, v)
+
+
 def _deferred_batch(module, Ts, free_values) -> float:
-    """Fraction of the batch targets the fast path hands to the reference runtime.
+    """Fraction of the batch targets the Python fast path hands to the reference runtime.
 
     The module's own first stage, untimed: its fast chain on the array backend (``_fast_leaves``) and
     ``subproblems.fast.finish_many`` with the module's settings (limits on, as ``solve_batch``), whose
@@ -395,35 +420,56 @@ def _deferred_batch(module, Ts, free_values) -> float:
 
 
 def _deferred_one(module, T, free_values) -> bool:
-    """Whether a single-pose ``solve`` of T leaves the scalar fast path (``_fast_one`` gives None)."""
-    with np.errstate(all="ignore"):
+    """Whether a single-pose ``solve`` of T leaves the scalar Python fast path (``_fast_one`` with
+    ``NATIVE = False`` gives None)."""
+    with np.errstate(all="ignore"), _flags(module, PYTHON_FAST):
         return module._fast_one(T, tuple(free_values), True) is None
 
 
-SPLIT_TOL = 1e-4  # two copies of one tangent root can be this far apart (see _bench_reference)
+def _native_deferred_batch(module, Ts, free_values) -> tuple[float, int]:
+    """Fraction of the batch targets the native backend hands to the Python path (its per-target code
+    from ``_native_chain().many`` below 0, as ``_native_batch`` reads it), and how many it calls
+    invalid (code -2; the sampled poses are all valid)."""
+    from subproblems import native as _native
+
+    raw = np.asarray(Ts, dtype=float)
+    init = module._init(len(raw), free_values)
+    _, code = module._native_chain().many(raw, module._free_columns(init), True)
+    return (float(np.mean(code < 0)) if len(code) else float("nan")), int((code == _native.INVALID).sum())
 
 
-def _disagreements(module, Ts, free_cols, kinds: str, batch: bool = False) -> tuple[list[int], int]:
-    """Poses whose exact solutions differ between the fast path and the reference runtime, and the
-    number of self-motion poses left out of the comparison (either path flags a continuum)."""
+def _native_deferred_one(module, T, free_values) -> bool:
+    """Whether the native backend hands a single-pose target to the Python path (``one`` gives None)."""
+    return module._native_chain().one(T, tuple(free_values), True) is None
 
-    def run(fast: bool):
-        module.FAST_PATH = fast
-        try:
-            if batch:
-                Q, valid, ls, _, cont = module.solve_batch_info(Ts, *free_cols)
-                return [(Q[i][valid[i] & ~ls[i]], cont[i][valid[i]].any()) for i in range(len(Ts))]
-            out = []
-            for i, T in enumerate(Ts):
-                q, _, ls, cont = module.solve_info(T, *[f[i] for f in free_cols])
-                out.append((q[~ls], cont.any()))
-            return out
-        finally:
-            module.FAST_PATH = True
 
-    fast, ref = run(True), run(False)
-    differ, skipped = [], 0
-    for i, ((a, ca), (b, cb)) in enumerate(zip(fast, ref)):
+SPLIT_TOL = 1e-4  # two copies of one tangent root can be this far apart (see _compare)
+
+
+def _outcomes(module, flags: dict, Ts, free_cols, batch: bool = False) -> list:
+    """Per pose, (exact solutions, whether a row flags a continuum) on the path that ``flags`` select:
+    ``solve_batch_info`` over all the poses at once, or ``solve_info`` pose by pose."""
+    with _flags(module, flags):
+        if batch:
+            Q, valid, ls, _, cont = module.solve_batch_info(Ts, *free_cols)
+            return [(Q[i][valid[i] & ~ls[i]], cont[i][valid[i]].any()) for i in range(len(Ts))]
+        out = []
+        for i, T in enumerate(Ts):
+            q, _, ls, cont = module.solve_info(T, *[f[i] for f in free_cols])
+            out.append((q[~ls], cont.any()))
+        return out
+
+
+def _compare(first: list, second: list, kinds: str) -> dict:
+    """Poses whose exact solutions differ between two paths' outcomes (pose by pose, the shorter list).
+
+    Self-motion poses (either path flags a continuum) are left out, since each path returns its own
+    representative of the family; elsewhere the exact solution sets must match both ways within
+    SPLIT_TOL (the two copies of a tangent root can stay that far apart and both pass the pose check,
+    so counts alone may differ by such copies).  Also the largest distance between matched rows.
+    """
+    differ, skipped, worst = [], 0, 0.0
+    for i, ((a, ca), (b, cb)) in enumerate(zip(first, second)):
         if ca or cb:
             skipped += 1
             continue
@@ -432,45 +478,60 @@ def _disagreements(module, Ts, free_cols, kinds: str, batch: bool = False) -> tu
         if len(a) == 0 or len(b) == 0:
             differ.append(i)
             continue
-        if max(_joint_distance(b, r, kinds).min() for r in a) > SPLIT_TOL or max(
-            _joint_distance(a, r, kinds).min() for r in b
-        ) > SPLIT_TOL:
+        d = max(
+            max(_joint_distance(b, r, kinds).min() for r in a),
+            max(_joint_distance(a, r, kinds).min() for r in b),
+        )
+        if d > SPLIT_TOL:
             differ.append(i)
-    return differ, skipped
+        else:
+            worst = max(worst, float(d))
+    return {
+        "differ": differ,
+        "self_motion": skipped,
+        "poses": min(len(first), len(second)),
+        "max_distance": worst,
+    }
 
 
-def _bench_reference(
-    module, chain, kinds, cols, opts, T1, Q1, fast_times, fast_sols, Tb, Qb, fast_valid, fast_pps
-):
-    """The same single-pose and batch timings with ``FAST_PATH = False`` (the reference runtime).
+def _agreement(result: dict, key: str, cmp_single: dict, cmp_batch: dict, Q1, Qb) -> None:
+    """Store two comparisons (single, batch) in ``result`` under ``key``: counts, examples, distances."""
+    for kind, cmp, Q in (("single", cmp_single, Q1), ("batch", cmp_batch, Qb)):
+        result[f"{kind}_{key}"] = len(cmp["differ"])
+        result[f"{kind}_{key}_poses"] = cmp["poses"]
+        result[f"{kind}_{key}_self_motion"] = cmp["self_motion"]
+        result[f"{kind}_{key}_max_distance"] = cmp["max_distance"]
+        result[f"{kind}_{key}_examples"] = [
+            {"pose": int(i), "q": [float(x) for x in Q[i]]} for i in cmp["differ"][:5]
+        ]
 
-    Same poses as the default path (the first ones of each set when the budget cuts the run short);
-    the single-pose speed-up compares medians over the poses both timed.  Also checks that both paths
-    return the same solutions, single and batch (see :func:`_disagreements`).
-    """
-    module.FAST_PATH = False
-    try:
-        times, sols = _time_single(module, T1, Q1, cols, opts)
-        n_b, pps, (_, valid) = _time_batch(module, Tb, Qb, cols, opts)
-    finally:
-        module.FAST_PATH = True
+
+def _bench_path(module, flags: dict, cols, opts, T1, Q1, base_times, Tb, Qb, base_pps) -> dict:
+    """The same single-pose and batch timings on another path (``flags``: the Python fast path or the
+    reference runtime), same poses as the default path (the first ones of each set when the budget cuts
+    the run short).  Speed-ups are of the default path over this one: the single-pose one compares
+    medians over the poses both timed, the batch one throughputs."""
+    with _flags(module, flags):
+        times, _ = _time_single(module, T1, Q1, cols, opts)
+        n_b, pps, _ = _time_batch(module, Tb, Qb, cols, opts)
     n1 = len(times)
-    ref: dict = {"single_n": n1, "single_us": _median(times) * 1e6, "batch_n": n_b, "batch_pps": pps}
-    ref["single_speedup"] = _median(times) / _median(fast_times[:n1])
-    ref["batch_speedup"] = fast_pps / pps  # per pose; the reference's poses may be the first of the set
-    # Agreement, untimed: self-motion poses (either path flags a continuum) are left out, since each
-    # path returns its own representative of the family; elsewhere the exact solution sets must match
-    # both ways within SPLIT_TOL (the two copies of a tangent root can stay that far apart and both
-    # pass the pose check, so counts alone may differ by such copies).
-    differ, skipped = _disagreements(module, T1[:n1], [Q1[:n1, c] for c in cols], kinds)
-    ref["single_disagree"] = len(differ)
-    ref["single_self_motion"] = skipped
-    ref["single_disagree_examples"] = [{"pose": i, "q": [float(x) for x in Q1[i]]} for i in differ[:5]]
-    bdiff, bskipped = _disagreements(module, Tb[:n_b], [Qb[:n_b, c] for c in cols], kinds, batch=True)
-    ref["batch_disagree"] = len(bdiff)
-    ref["batch_self_motion"] = bskipped
-    ref["batch_disagree_examples"] = [{"pose": int(i), "q": [float(x) for x in Qb[i]]} for i in bdiff[:5]]
-    return ref
+    res: dict = {"single_n": n1, "single_us": _median(times) * 1e6, "batch_n": n_b, "batch_pps": pps}
+    res["single_speedup"] = _median(times) / _median(base_times[:n1])
+    res["batch_speedup"] = base_pps / pps  # per pose; this path's poses may be the first of the set
+    return res
+
+
+def _native_reason(module) -> str:
+    """Why a module with a fast path runs it in Python (no C chain, or the C chain did not build)."""
+    from subproblems import native as _native
+
+    if getattr(module, "_NATIVE_SOURCE", None):
+        return f"C build unavailable: {_native.last_error}"
+    if module._SEARCH:
+        return "no C chain (search plan)"
+    if module._POLISH:
+        return "no C chain (snapped plan, Newton steps on the true robot)"
+    return "no C chain (a step has no C port)"
 
 
 def bench_robot(name: str, opts) -> dict:
@@ -488,8 +549,19 @@ def bench_robot(name: str, opts) -> dict:
         t0 = time.perf_counter()
         module = compile_robot(chain, free=free)
         times.append(time.perf_counter() - t0)
-    row["compile_s"] = _median(times)
+    row["compile_s"] = _median(times)  # the Python compile only: the C build is timed below
     row["method"] = module.METHOD
+
+    fast = bool(getattr(module, "FAST_PATH", False)) and getattr(module, "_fast_chain", None) is not None
+    native = None
+    if fast and getattr(module, "NATIVE", False) and getattr(module, "_NATIVE_SOURCE", None):
+        # the one-off C build (into this run's fresh IKC_CACHE) and load, before any timing
+        t0 = time.perf_counter()
+        native = module._native_chain()
+        row["native_build_s"] = time.perf_counter() - t0
+    row["path"] = "native" if native is not None else "fast" if fast else "reference"
+    if fast and native is None:
+        row["native_reason"] = _native_reason(module)
 
     Q1, T1 = _poses(chain, opts.poses, SEED_SINGLE, cols, values)
     times, sols = _time_single(module, T1, Q1, cols, opts)
@@ -499,20 +571,53 @@ def bench_robot(name: str, opts) -> dict:
     row["accuracy"] = _accuracy(chain, T1[:n1], Q1[:n1], sols, kinds, cols)
 
     Qb, Tb = _poses(chain, opts.batch, SEED_BATCH, cols, values)
-    n_b, pps, (_, valid_b) = _time_batch(module, Tb, Qb, cols, opts)
+    n_b, pps, _ = _time_batch(module, Tb, Qb, cols, opts)
     row["batch_n"] = n_b
     row["batch_pps"] = pps
 
-    fast = bool(getattr(module, "FAST_PATH", False)) and getattr(module, "_fast_chain", None) is not None
-    row["path"] = "fast" if fast else "reference"
     if fast:
-        row["deferred_fraction"] = _deferred_batch(module, Tb[:n_b], [Qb[:n_b, c] for c in cols])
-        row["deferred_single_fraction"] = float(
-            np.mean([_deferred_one(module, T1[i], [Q1[i, c] for c in cols]) for i in range(n1)])
-        )
-        row["reference"] = _bench_reference(
-            module, chain, kinds, cols, opts, T1[:n1], Q1[:n1], times, sols, Tb[:n_b], Qb[:n_b], valid_b, pps
-        )
+        T1, Q1, Tn, Qn = T1[:n1], Q1[:n1], Tb[:n_b], Qb[:n_b]  # EAIK's batch keeps the full set
+        free1, freeb = [Q1[:, c] for c in cols], [Qn[:, c] for c in cols]
+        py = {
+            "deferred_fraction": _deferred_batch(module, Tn, freeb),
+            "deferred_single_fraction": float(
+                np.mean([_deferred_one(module, T1[i], [Q1[i, c] for c in cols]) for i in range(n1)])
+            ),
+        }
+        # agreement, untimed: each path's outcomes once, compared pairwise (see _compare)
+        base1, baseb = _outcomes(module, {}, T1, free1), _outcomes(module, {}, Tn, freeb, batch=True)
+        if native is not None:
+            row["native"] = dict(
+                zip(("deferred_fraction", "invalid"), _native_deferred_batch(module, Tn, freeb))
+            )
+            row["native"]["deferred_single_fraction"] = float(
+                np.mean([_native_deferred_one(module, T1[i], [Q1[i, c] for c in cols]) for i in range(n1)])
+            )
+            py.update(_bench_path(module, PYTHON_FAST, cols, opts, T1, Q1, times, Tn, Qn, pps))
+            py1 = _outcomes(module, PYTHON_FAST, T1[: py["single_n"]], [f[: py["single_n"]] for f in free1])
+            pyb = _outcomes(
+                module, PYTHON_FAST, Tn[: py["batch_n"]], [f[: py["batch_n"]] for f in freeb], True
+            )
+            _agreement(py, "disagree", _compare(base1, py1, kinds), _compare(baseb, pyb, kinds), Q1, Qn)
+        else:  # the Python fast path is the default one: its figures are the row's
+            py.update(single_n=n1, single_us=row["single_us"], batch_n=n_b, batch_pps=pps)
+        row["python_fast"] = py
+        ref = _bench_path(module, REFERENCE, cols, opts, T1, Q1, times, Tn, Qn, pps)
+        ref1 = _outcomes(module, REFERENCE, T1[: ref["single_n"]], [f[: ref["single_n"]] for f in free1])
+        refb = _outcomes(module, REFERENCE, Tn[: ref["batch_n"]], [f[: ref["batch_n"]] for f in freeb], True)
+        _agreement(ref, "disagree", _compare(base1, ref1, kinds), _compare(baseb, refb, kinds), Q1, Qn)
+        if native is not None:  # the Python fast path against the reference too (JSON only)
+            n1p, nbp = min(py["single_n"], ref["single_n"]), min(py["batch_n"], ref["batch_n"])
+            _agreement(
+                ref,
+                "python_disagree",
+                _compare(py1[:n1p], ref1, kinds),
+                _compare(pyb[:nbp], refb, kinds),
+                Q1,
+                Qn,
+            )
+        row["reference"] = ref
+        row["deferred_fraction"] = (row.get("native") or py)["deferred_fraction"]  # of the default path
 
     reason = eaik_reason(chain, free)
     if opts.no_eaik:
@@ -534,14 +639,15 @@ def _short(path: str) -> str:
 
 
 def profile_solve(row: dict, lines: int = 10, seconds: float = 1.0) -> dict:
-    """cProfile of ``solve`` on the module's default path (the fast path where it has one) over the
+    """cProfile of ``solve`` on the module's default path (native or fast where it has one) over the
     robot's single-pose targets, repeated to about ``seconds`` of unprofiled time: where one call goes."""
     module, (Ts, fvs) = row["_module"], row["_poses"]
     Ts, fvs = Ts[:200], fvs[:200]
     per_call = (row.get("single_us") or 1e3) * 1e-6
     rounds = max(1, min(100, math.ceil(seconds / per_call / len(Ts))))
-    fast = bool(getattr(module, "FAST_PATH", False)) and getattr(module, "_fast_chain", None) is not None
-    deferred = sum(_deferred_one(module, T, fv) for T, fv in zip(Ts, fvs)) if fast else None
+    path = row.get("path", "reference")
+    handed = {"native": _native_deferred_one, "fast": _deferred_one}.get(path)
+    deferred = sum(handed(module, T, fv) for T, fv in zip(Ts, fvs)) if handed else None
     prof = cProfile.Profile()
     t0 = time.perf_counter()
     prof.enable()
@@ -575,6 +681,8 @@ def profile_solve(row: dict, lines: int = 10, seconds: float = 1.0) -> dict:
             group = "generated module"
         elif where.startswith("subproblems/fast.py"):
             group = "subproblems/fast.py"
+        elif where.startswith("subproblems/native.py"):
+            group = "subproblems/native.py (with the C call, which the profiler does not see apart)"
         elif where.startswith("subproblems/"):
             group = "reference runtime and subproblems"
         elif "numpy" in where:
@@ -587,7 +695,7 @@ def profile_solve(row: dict, lines: int = 10, seconds: float = 1.0) -> dict:
     return {
         "robot": row["robot"],
         "method": row["method"],
-        "path": "fast" if fast else "reference",
+        "path": path,
         "poses": len(Ts),
         "rounds": rounds,
         "deferred_poses": deferred,
@@ -647,6 +755,15 @@ def _machine() -> dict:
         )
     except OSError:
         commit, dirty = "", False
+    from subproblems import native as _native
+
+    cc, cc_id = _native.compiler(), None
+    if cc:
+        try:
+            done = subprocess.run(cc.split() + ["--version"], capture_output=True, text=True, timeout=30)
+            cc_id = (done.stdout.splitlines() or [cc])[0]
+        except (OSError, subprocess.SubprocessError):
+            cc_id = cc
     return {
         "date": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "cpu": cpu,
@@ -658,6 +775,9 @@ def _machine() -> dict:
         "eaik": ver("eaik"),
         "commit": commit + (" + uncommitted changes in ikcompiler/ or subproblems/" if dirty else ""),
         "load_average": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+        "cc": cc_id,
+        "native_enabled": _native.enabled(),
+        "native_threads": _native.threads(),
     }
 
 
@@ -667,27 +787,35 @@ def render_markdown(rows, profile, meta, opts) -> str:
         "",
         f"Generated by `benchmarks/compiler.py` on {meta['date']}. Machine: {meta['cpu']}, "
         f"{meta['cores']} cores, {meta['platform']}; Python {meta['python']}, numpy {meta['numpy']}, "
-        f"ikcompiler {meta['ikcompiler']} at {meta['commit']}, EAIK {meta['eaik']}. "
+        f"ikcompiler {meta['ikcompiler']} at {meta['commit']}, EAIK {meta['eaik']}; C compiler "
+        f"{meta.get('cc') or 'none'}, native batches in {meta.get('native_threads', '?')} threads. "
         f"1-min load average at the start: {_fmt(meta['load_average'], '.2f')}.",
         "",
         "## Speed",
         "",
-        "Ours is each module's default path: `path` fast (straight-line arithmetic, targets near a "
-        "degenerate geometry deferred to the reference runtime) or reference (the plan interpreted by "
-        "`subproblems.plan_runtime`; the module has no fast path). Ratios are ours / EAIK in time per "
-        "pose (above 1x: we are slower). Batch: ours is numpy in one thread; EAIK's "
-        f"`calculate_IK_batched` runs {opts.threads} worker threads.",
+        "Ours is each module's default path: `path` native (the fast chain compiled to C, built with the "
+        "system C compiler on first use and cached; targets it cannot settle go to the Python path in "
+        "the same call), fast (the same straight-line arithmetic in Python, targets near a degenerate "
+        "geometry deferred to the reference runtime) or reference (the plan interpreted by "
+        "`subproblems.plan_runtime`; the module has no fast path). Compile ms is the Python "
+        "`compile_robot` alone; C build ms the one-off build and load of the native chain (first "
+        "`_native_chain()` call, into an empty cache made for this run), done before any timing. Ratios "
+        "are ours / EAIK in time per pose (above 1x: we are slower). Batch: the native path runs "
+        f"{meta.get('native_threads', '?')} C threads (`subproblems.native.threads()`), targets it hands "
+        "to the Python path run in numpy in the calling thread; the fast and reference paths run numpy "
+        f"in one thread; EAIK's `calculate_IK_batched` runs {opts.threads} worker threads.",
         "",
-        "| robot | joints | method | path | compile ms | EAIK build us | ratio | solve us | EAIK us | ratio "
-        "| batch poses/s | EAIK poses/s | ratio |",
-        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| robot | joints | method | path | compile ms | C build ms | EAIK build us | ratio | solve us "
+        "| EAIK us | ratio | batch poses/s | EAIK poses/s | ratio |",
+        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         e = r.get("eaik") or {}
         if "error" in r and "method" not in r:
-            out.append(f"| {r['robot']} | {r.get('joints', '?')} | failed: {r['error']} ||||||||||")
+            out.append(f"| {r['robot']} | {r.get('joints', '?')} | failed: {r['error']} |||||||||||")
             continue
         comp = r.get("compile_s")
+        build = r.get("native_build_s")
         joints = r["joints"] + (f" (free {', '.join(r['free'])})" if r.get("free") else "")
         batch = f"{_fmt(r.get('batch_pps'), ',.0f')}" + (
             f" ({r['batch_n']} poses)" if r.get("batch_n", opts.batch) < opts.batch else ""
@@ -702,9 +830,10 @@ def render_markdown(rows, profile, meta, opts) -> str:
                     r.get("method", "-"),
                     r.get("path", "-"),
                     _fmt(comp * 1e3 if comp is not None else None, ".0f"),
+                    _fmt(build * 1e3 if build is not None else None, ",.0f"),
                     _fmt(e.get("build_us"), ".1f"),
                     _ratio(comp * 1e6 if comp is not None else None, e.get("build_us")),
-                    _fmt(r.get("single_us"), ".0f"),
+                    _fmt(r.get("single_us"), ".1f" if (r.get("single_us") or 100) < 100 else ".0f"),
                     _fmt(e.get("single_us"), ".1f"),
                     _ratio(r.get("single_us"), e.get("single_us")),
                     batch,
@@ -714,45 +843,95 @@ def render_markdown(rows, profile, meta, opts) -> str:
             )
             + " |"
         )
-    fast_rows = [r for r in rows if r.get("path") == "fast"]
+    fast_rows = [r for r in rows if r.get("path") in ("native", "fast")]
+    native_rows = [r for r in fast_rows if r["path"] == "native"]
     ref_rows = [r["robot"] for r in rows if r.get("path") == "reference"]
+
+    def cut(res, key, n):  # a figure, with its pose count when the budget cut the phase short
+        x = res.get("single_us" if key == "single" else "batch_pps")
+        spec = (".1f" if (x or 100) < 100 else ".0f") if key == "single" else ",.0f"
+        return _fmt(x, spec) + (f" ({res[f'{key}_n']} poses)" if res.get(f"{key}_n", n) < n else "")
+
     out += [
         "",
-        "## Fast path vs reference runtime",
+        "## Native, Python fast path and reference runtime",
         "",
-        "The same module and poses with `FAST_PATH = False`. Speed-up: reference / fast in time per pose. "
-        "Deferred: fraction of the batch poses (in brackets: of the single poses) the fast path hands to "
-        "the reference runtime. Disagree: poses where the exact solution sets of the two paths differ "
-        f"(rows matched both ways within {SPLIT_TOL:g}: two copies of one tangent root can lie that far "
-        "apart), single / batch; self-motion poses (either path flags a continuum) are left out, since "
-        "each path returns its own representative of the family (their count is in the JSON).",
+        "The same module and poses on each path: native (the default where the module has it), the "
+        "Python fast path (`NATIVE = False`) and the reference runtime (`FAST_PATH = False`); a module "
+        "without a C chain has its Python fast path as default (native columns empty). Speed-ups: "
+        "other path / default path in time per pose (single: ratio of medians over the poses both "
+        "timed; batch: ratio of throughputs).",
         "",
-        "| robot | deferred | solve us | reference us | speed-up | batch poses/s | reference poses/s "
-        "| speed-up | disagree |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| robot | path | solve us native | Python fast | reference | speed-up vs Python fast "
+        "| vs reference | batch poses/s native | Python fast | reference | speed-up vs Python fast "
+        "| vs reference |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in fast_rows:
-        ref = r.get("reference") or {}
-        rb = _fmt(ref.get("batch_pps"), ",.0f") + (
-            f" ({ref['batch_n']} poses)" if ref.get("batch_n", r["batch_n"]) < r["batch_n"] else ""
+        ref, py = r.get("reference") or {}, r.get("python_fast") or {}
+        nat = r["path"] == "native"
+        n1, nb = r["single_n"], r["batch_n"]
+        out.append(
+            "| "
+            + " | ".join(
+                [
+                    r["robot"],
+                    r["path"] if nat else f"fast ({r.get('native_reason', 'no C chain')})",
+                    _fmt(r.get("single_us"), ".1f") if nat else "-",
+                    cut(py, "single", n1),
+                    cut(ref, "single", n1),
+                    _ratio(py.get("single_speedup"), 1.0) if nat else "-",
+                    _ratio(ref.get("single_speedup"), 1.0),
+                    _fmt(r.get("batch_pps"), ",.0f") if nat else "-",
+                    cut(py, "batch", nb),
+                    cut(ref, "batch", nb),
+                    _ratio(py.get("batch_speedup"), 1.0) if nat else "-",
+                    _ratio(ref.get("batch_speedup"), 1.0),
+                ]
+            )
+            + " |"
         )
-        rs = _fmt(ref.get("single_us"), ".0f") + (
-            f" ({ref['single_n']} poses)" if ref.get("single_n", r["single_n"]) < r["single_n"] else ""
+    out += [
+        "",
+        "Handed on and agreement. Native to Python: fraction of the batch poses (in brackets: of the "
+        "single poses) the native backend hands to the Python path (batch: `_native_chain().many` codes "
+        "below 0; single: `_native_chain().one` gives None). Python fast to reference: the same for the "
+        "Python fast path and the reference runtime (batch: the route of `subproblems.fast.finish_many`; "
+        "single: the scalar `_fast_one` gives up, which it also does on near misses the batch path "
+        "settles with Newton steps). Disagree: poses where the exact solution sets of two paths differ "
+        f"(rows matched both ways within {SPLIT_TOL:g}: two copies of one tangent root can lie that far "
+        "apart), single / batch, native vs Python fast path and default path vs reference runtime; "
+        "self-motion poses (either path flags a continuum) are left out, since each path returns its "
+        "own representative of the family (their count is in the JSON). Max distance: the largest "
+        "joint-space distance between matched rows of native and Python fast path (single and batch).",
+        "",
+        "| robot | native to Python | Python fast to reference | disagree native / Python fast "
+        "| max distance | disagree vs reference | self-motion poses left out vs reference |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+
+    def handed(res):  # batch (single) fractions handed on
+        batch, single = res.get("deferred_fraction"), res.get("deferred_single_fraction")
+        return f"{_fmt(batch, '.1%')} ({_fmt(single, '.1%')})"
+
+    for r in fast_rows:
+        ref, py, nv = r.get("reference") or {}, r.get("python_fast") or {}, r.get("native") or {}
+        nat = r["path"] == "native"
+        dist = max(
+            py.get("single_disagree_max_distance") or 0.0, py.get("batch_disagree_max_distance") or 0.0
         )
         out.append(
             "| "
             + " | ".join(
                 [
                     r["robot"],
-                    f"{_fmt(r.get('deferred_fraction'), '.1%')}"
-                    f" ({_fmt(r.get('deferred_single_fraction'), '.1%')})",
-                    _fmt(r.get("single_us"), ".1f"),
-                    rs,
-                    _ratio(ref.get("single_speedup"), 1.0),
-                    _fmt(r.get("batch_pps"), ",.0f"),
-                    rb,
-                    _ratio(ref.get("batch_speedup"), 1.0),
+                    handed(nv) if nat else "-",
+                    handed(py),
+                    f"{py.get('single_disagree', '-')} / {py.get('batch_disagree', '-')}" if nat else "-",
+                    _fmt(dist, ".1e") if nat else "-",
                     f"{ref.get('single_disagree', '-')} / {ref.get('batch_disagree', '-')}",
+                    f"{ref.get('single_disagree_self_motion', '-')} / "
+                    f"{ref.get('batch_disagree_self_motion', '-')}",
                 ]
             )
             + " |"
@@ -841,24 +1020,94 @@ def render_markdown(rows, profile, meta, opts) -> str:
             lo, mid, hi = (_ratio(x, 1.0) for x in (min(vals), _median(vals), max(vals)))
             return f"median {mid} (range {lo}-{hi})"
 
+        paths = {}
+        for r in both:
+            paths[r.get("path", "-")] = paths.get(r.get("path", "-"), 0) + 1
         out.append(
-            f"- Summary over the {len(both)} robots EAIK solves: single-pose time ours/EAIK "
-            f"{spread('single_us', 'single_us')}; batch time per pose "
-            f"{spread('batch_pps', 'batch_pps', invert=True)}; compile time vs EAIK's constructor "
-            f"{spread('compile_s', 'build_us', scale=1e6)}."
+            f"- Summary over the {len(both)} robots EAIK solves (ours on the default path: "
+            + ", ".join(f"{k} {v}" for k, v in sorted(paths.items()))
+            + f"): single-pose time ours/EAIK {spread('single_us', 'single_us')}; batch time per pose "
+            f"{spread('batch_pps', 'batch_pps', invert=True)} (ours native: "
+            f"{meta.get('native_threads', '?')} C threads, EAIK {opts.threads} threads); compile time vs "
+            f"EAIK's constructor {spread('compile_s', 'build_us', scale=1e6)} (the Python compile; the "
+            "one-off C build comes on top, see below)."
+        )
+
+    def spread_of(vals, fmt=None):
+        vals = [v for v in vals if v is not None and math.isfinite(v)]
+        if not vals:
+            return "-"
+        lo, mid, hi = (fmt(x) if fmt else _ratio(x, 1.0) for x in (min(vals), _median(vals), max(vals)))
+        return f"median {mid} (range {lo}-{hi})"
+
+    def pct(x):
+        return _fmt(x, ".1%")
+
+    if native_rows:
+        py = [r.get("python_fast") or {} for r in native_rows]
+        ref = [r.get("reference") or {} for r in native_rows]
+        nv = [r.get("native") or {} for r in native_rows]
+        most = max(native_rows, key=lambda r: (r.get("native") or {}).get("deferred_fraction") or 0.0)
+        out.append(
+            f"- Native backend over the {len(native_rows)} robots that have it: speed-up over the Python "
+            f"fast path single-pose {spread_of([p.get('single_speedup') for p in py])}, batch "
+            f"{spread_of([p.get('batch_speedup') for p in py])}; over the reference runtime single-pose "
+            f"{spread_of([x.get('single_speedup') for x in ref])}, batch "
+            f"{spread_of([x.get('batch_speedup') for x in ref])}. One-off C build "
+            f"{spread_of([r.get('native_build_s') for r in native_rows], lambda x: f'{x * 1e3:,.0f} ms')}. "
+            f"Poses handed to the Python path: batch "
+            f"{spread_of([x.get('deferred_fraction') for x in nv], pct)}, single "
+            f"{spread_of([x.get('deferred_single_fraction') for x in nv], pct)}"
+            + (f" (most: {most['robot']})" if (most.get("native") or {}).get("deferred_fraction") else "")
+            + "; "
+            f"poses native calls invalid: {sum(x.get('invalid') or 0 for x in nv)}."
+        )
+        slower = [r for r in native_rows if ((r.get("python_fast") or {}).get("batch_speedup") or 2.0) < 1.0]
+        if slower:
+            out.append(
+                "- Native batch throughput below the Python fast path's: "
+                + ", ".join(
+                    f"{r['robot']} ({_ratio(r['python_fast']['batch_speedup'], 1.0)}; it hands "
+                    f"{pct((r.get('native') or {}).get('deferred_fraction'))} of the batch poses to the "
+                    f"Python path, which sends {pct(r['python_fast'].get('deferred_fraction'))} of all the "
+                    "poses on to the reference runtime)"
+                    for r in slower
+                )
+                + "."
+            )
+    others = [r for r in fast_rows if r["path"] == "fast"]
+    if others:
+        out.append(
+            "- Python fast path as default (no native backend): "
+            + ", ".join(f"{r['robot']} ({r.get('native_reason', '-')})" for r in others)
+            + "; speed-up over the reference runtime single-pose "
+            f"{spread_of([(r.get('reference') or {}).get('single_speedup') for r in others])}, batch "
+            f"{spread_of([(r.get('reference') or {}).get('batch_speedup') for r in others])}."
         )
     if fast_rows:
-
-        def fast_spread(key):
-            vals = [r["reference"][key] for r in fast_rows if (r.get("reference") or {}).get(key)]
-            if not vals:
-                return "-"
-            lo, mid, hi = (_ratio(x, 1.0) for x in (min(vals), _median(vals), max(vals)))
-            return f"median {mid} (range {lo}-{hi})"
-
         out.append(
-            f"- Fast path over the {len(fast_rows)} robots that have one: single-pose speed-up over the "
-            f"reference runtime {fast_spread('single_speedup')}, batch {fast_spread('batch_speedup')}."
+            f"- Python fast path over the reference runtime, the {len(fast_rows)} robots that have one "
+            "(ratio of the two speed-ups above for native modules): single-pose "
+            + spread_of(
+                [
+                    (r.get("reference") or {}).get("single_speedup")
+                    / ((r.get("python_fast") or {}).get("single_speedup") or 1.0)
+                    if (r.get("reference") or {}).get("single_speedup")
+                    else None
+                    for r in fast_rows
+                ]
+            )
+            + ", batch "
+            + spread_of(
+                [
+                    (r.get("reference") or {}).get("batch_speedup")
+                    / ((r.get("python_fast") or {}).get("batch_speedup") or 1.0)
+                    if (r.get("reference") or {}).get("batch_speedup")
+                    else None
+                    for r in fast_rows
+                ]
+            )
+            + " (what the default path gave before the native backend)."
         )
     out.append(
         f"- Poses: FK of `sample_configurations` (seed {SEED_SINGLE} single, {SEED_BATCH} batch); "
@@ -868,32 +1117,52 @@ def render_markdown(rows, profile, meta, opts) -> str:
         "the same pose sets (its batch the full set) and one value of each free joint for all poses."
     )
     out.append(
-        "- Ours is the module as compiled: its default path (`FAST_PATH` True where the plan has a fast "
-        "path). The reference figures time the same module with `FAST_PATH = False` on the same poses, "
-        "as two more phases under the same budget (the first poses of each set when it cuts them "
-        "short: pose counts in brackets). The single-pose speed-up is the ratio of medians over the poses "
-        "both paths timed; the batch speed-up the ratio of throughputs. Accuracy and the EAIK ratios "
-        "are of the default path."
+        "- Ours is the module as compiled: its default path (`NATIVE` and `FAST_PATH` True where the "
+        "module has a C chain and a fast path). The Python fast path and reference figures time the "
+        "same module with `NATIVE = False` and with `FAST_PATH = False` on the same poses, as more "
+        "phases under the same budget (the first poses of each set when it cuts them short: pose counts "
+        "in brackets). Accuracy and the EAIK ratios are of the default path. Batch threads: the native "
+        f"path {meta.get('native_threads', '?')} C threads, EAIK {opts.threads} threads; the Python paths "
+        "one thread (numpy)."
     )
     out.append(
-        "- Deferred fractions are counted untimed, by running the module's own first stage: for the batch "
-        "poses `_fast_chain` on the array backend (`subproblems.fast.ARRAY`) then "
-        "`subproblems.fast.finish_many` with the module's settings, whose route marks the targets "
-        "`solve_batch` hands to the reference runtime; for the single poses, whether the scalar fast "
-        "path (`_fast_one`) gives up on the target (it also gives up on near misses, which the batch "
-        "path settles with Newton steps). A deferred pose costs the fast attempt "
-        "plus a reference solve, so the fast path's median hides it but its batch throughput does not. "
-        "The sampled joint values include special angles (each revolute value with probability 0.25), "
-        "so a few percent of the poses sit on degenerate geometry (a wrist at 0, aligned axes)."
+        "- Handed-on fractions are counted untimed, by running the module's own first stage. A pose the "
+        "native backend hands on costs the C attempt plus the Python path (which may in turn defer it to "
+        "the reference runtime); one the Python fast path defers costs the fast attempt plus a reference "
+        "solve: the medians hide them but batch throughput does not. The sampled joint values include "
+        "special angles (each revolute value with probability 0.25), so a few percent of the poses sit on "
+        "degenerate geometry (a wrist at 0, aligned axes)."
     )
+    pairs = (
+        ("python_fast", "disagree", "native and the Python fast path"),
+        ("reference", "disagree", "the default path and the reference runtime"),
+        ("reference", "python_disagree", "the Python fast path and the reference runtime"),
+    )
+
+    def python_as_default(res, kind):  # the Python fast path disagrees with the reference on the same poses
+        return bool(res.get(f"{kind}_disagree")) and all(
+            res.get(f"{kind}_python_disagree{x}") == res.get(f"{kind}_disagree{x}")
+            for x in ("", "_poses", "_examples")
+        )
+
     for r in fast_rows:
-        ref = r.get("reference") or {}
-        for kind in ("single", "batch"):
-            if ref.get(f"{kind}_disagree"):
-                ex = ", ".join(str(e["pose"]) for e in ref[f"{kind}_disagree_examples"])
+        for part, key, what in pairs:
+            res = r.get(part) or {}
+            for kind in ("single", "batch"):
+                if not res.get(f"{kind}_{key}"):
+                    continue
+                same = part == "reference" and python_as_default(res, kind)
+                if same and key == "python_disagree":
+                    continue  # said on the default path's line
+                ex = ", ".join(str(e["pose"]) for e in res[f"{kind}_{key}_examples"])
                 out.append(
-                    f"- {r['robot']}: the paths disagree on {ref[f'{kind}_disagree']} {kind} pose(s) "
-                    f"(first: {ex}; joint vectors in the JSON)."
+                    f"- {r['robot']}: {what} disagree on {res[f'{kind}_{key}']} of "
+                    f"{res[f'{kind}_{key}_poses']} {kind} pose(s) (first: {ex}; joint vectors in the JSON)"
+                    + (
+                        "; so do the Python fast path and the reference runtime, on the same poses."
+                        if same
+                        else "."
+                    )
                 )
     out.append(
         "- EAIK is built from our chain's home twists: H = axis directions, P = differences of axis "
@@ -916,7 +1185,8 @@ def render_markdown(rows, profile, meta, opts) -> str:
             f"cProfile of the default path over {profile['calls']} `solve` calls ({profile['poses']} poses "
             f"x {profile['rounds']}"
             + (
-                f"; {profile['deferred_poses']} of the poses deferred to the reference runtime"
+                f"; {profile['deferred_poses']} of the poses handed to the "
+                + ("Python path" if profile["path"] == "native" else "reference runtime")
                 if profile.get("deferred_poses") is not None
                 else ""
             )
@@ -925,7 +1195,9 @@ def render_markdown(rows, profile, meta, opts) -> str:
             f"{profile['function_calls_per_solve']:.0f} function calls per solve. Own time: "
             + ", ".join(f"{k} {v:.0%}" for k, v in profile["own_time_shares"].items())
             + ". The profiler adds a cost to every function call, so the shares lean toward functions "
-            "called many times per solve (the small kernels of `subproblems/fast.py`).",
+            "called many times per solve (the small kernels of `subproblems/fast.py` on the Python path); "
+            "a ctypes call is not a profiled function, so the time spent in C counts as own time of its "
+            "caller (the `NativeChain` method in `subproblems/native.py`).",
             "",
             "Project functions by cumulative time (per solve):",
             "",
@@ -967,7 +1239,12 @@ def parse_args(argv=None):
     p.add_argument("--batch", type=int, help="poses in the batch call (10000; --quick 1000)")
     p.add_argument("--compiles", type=int, help="compiles per robot, median (3; --quick 1)")
     p.add_argument("--budget", type=float, help="seconds per robot and timing phase (8; --quick 2)")
-    p.add_argument("--threads", type=int, default=os.cpu_count() or 1, help="EAIK batch threads")
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="EAIK batch threads (ours: IKC_THREADS, default the usable cores)",
+    )
     p.add_argument("--quick", action="store_true", help="smaller defaults (see above) for a smoke run")
     p.add_argument("--no-eaik", action="store_true", help="skip EAIK")
     p.add_argument("--profile-robot", help="robot to profile (default: a closed-form one benchmarked)")
@@ -987,6 +1264,16 @@ def main(argv=None) -> int:
     if opts.eaik_worker:
         _eaik_worker(*opts.eaik_worker)
         return 0
+    # An empty native cache for this run: every robot's C chain is really built (and the build timed).
+    cache = tempfile.mkdtemp(prefix="ikc_bench_cache_")
+    os.environ["IKC_CACHE"] = cache
+    try:
+        return _bench_all(opts)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+
+
+def _bench_all(opts) -> int:
     from ikcompiler.inputs.zoo import zoo_names
 
     names = opts.robots or zoo_names()
@@ -1008,6 +1295,14 @@ def main(argv=None) -> int:
             f" compile {_fmt(row.get('compile_s'), '.3f')} s"
             f"  solve {_fmt(row.get('single_us'), '.1f')} us  batch {_fmt(row.get('batch_pps'), ',.0f')}/s"
             + (
+                f"  C build {_fmt(row['native_build_s'] * 1e3, ',.0f')} ms"
+                f" [python fast {_fmt(py.get('single_us'), '.0f')} us {_fmt(py.get('batch_pps'), ',.0f')}/s,"
+                f" x{_fmt(py.get('single_speedup'), '.3g')}/x{_fmt(py.get('batch_speedup'), '.3g')},"
+                f" disagree {py.get('single_disagree')}/{py.get('batch_disagree')}]"
+                if row.get("path") == "native" and (py := row.get("python_fast"))
+                else ""
+            )
+            + (
                 f"  [ref {_fmt(ref.get('single_us'), '.0f')} us {_fmt(ref.get('batch_pps'), ',.0f')}/s,"
                 f" x{_fmt(ref.get('single_speedup'), '.3g')}/x{_fmt(ref.get('batch_speedup'), '.3g')},"
                 f" deferred {_fmt(row.get('deferred_fraction'), '.1%')},"
@@ -1025,7 +1320,7 @@ def main(argv=None) -> int:
     target = opts.profile_robot
     if target is None:
         closed = [r for r in rows if r.get("method") == "closed-form"]
-        closed = [r for r in closed if r.get("path") == "fast"] or closed  # the default path, fast
+        closed = [r for r in closed if r.get("path") in ("native", "fast")] or closed  # a fast default
         if closed:
             target = max(closed, key=lambda r: (r["robot"] == "puma560", r["dof"] == 6, r["dof"]))["robot"]
     if target is not None:
