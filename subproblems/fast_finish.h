@@ -57,6 +57,10 @@ typedef struct {
     /* snapped plans (a calibrated robot): the chain runs on the snapped robot and every leaf gets
      * this many Newton steps on the true robot before the finish; 0 otherwise */
     int polish;
+    /* the plan's alternative chain (NULL if none), for targets where the chain above meets a
+     * degenerate geometry it cannot settle: it solves the joints in another order */
+    ikc_chain_fn chain_alt;
+    int leaves_alt;
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
@@ -389,12 +393,12 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
  * representative completes (an interval narrower than the grid: a stretched arm at a wrist lock) get
  * Newton steps from their best representative, as the reference runtime pulls its representatives
  * onto the family.  Count or IKC_PYTHON. */
-static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
-                      double *res, int *ls, int *cont) {
-    const int L = rb->leaves, dof = rb->dof;
+static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
+                            const double *fr, int limits, double *q, double *res, int *ls, int *cont) {
+    const int dof = rb->dof;
     double Q[L * dof], E[L];
     int F[L];
-    int n = rb->chain(g, fr, 0.0, Q, E, F);
+    int n = chain(g, fr, 0.0, Q, E, F);
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
@@ -408,7 +412,7 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
-        int n2 = rb->chain(g, fr, rep, Q2, E2, F2);
+        int n2 = chain(g, fr, rep, Q2, E2, F2);
         if (n2 != n) return IKC_PYTHON;
         for (int j = 0; j < n; j++) {
             if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
@@ -438,6 +442,15 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
     }
     k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     return k == IKC_FAMILY_MISS ? IKC_PYTHON : k;
+}
+
+/* The chain, then (where it cannot settle the target) the alternative chain. */
+static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
+                      double *res, int *ls, int *cont) {
+    int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont);
+    if (k == IKC_PYTHON && rb->chain_alt)
+        k = ikc_settle_chain(rb, rb->chain_alt, rb->leaves_alt, g, fr, limits, q, res, ls, cont);
+    return k;
 }
 
 #define IKC_SEED_ERROR 1.0  /* grid minima missing by more than this (relative) are not seeds */

@@ -190,30 +190,49 @@ def _array(values, fmt) -> str:
     return "{" + ", ".join(fmt(v) for v in values) + "}"
 
 
-def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
-                   tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0,
-                   polish: int = 0) -> str | None:
-    """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
-
-    ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
-    ``free`` the positions of the free joints among them; ``twists`` (all joints, mimic ones too),
-    ``home`` (4x4) and ``A``, ``b`` (all joint values = A q + b) describe the true robot for the
-    Newton steps of the finish.  ``search`` joints gridded over ``grid`` values each (a search plan:
-    the chain takes their values after the free ones).  ``polish``: Newton steps on the true robot for
-    every leaf of a snapped plan (the chain itself runs on the snapped robot).
-    """
-    if target not in TARGET_CODES:
-        return None
+def _translate(python_source: str, name: str, c_name: str, dof: int):
+    """(C lines of function ``name`` of ``python_source`` as ``c_name``, its leaf count), or None."""
     tree = ast.parse(python_source)
-    fn = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "_fast_chain"), None)
+    fn = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == name), None)
     if fn is None:
         return None
-    dof = len(kinds)
     tr = _Translator(dof)
     try:
         tr.statements(fn.body)
     except Untranslatable:
         return None
+    head = [
+        f"static int {c_name}(const double *goal, const double *fr, double rep, double *Q, double *E,",
+        "                     int *F) {",
+        "    int n = 0;",
+        "    (void)fr;",
+        "    (void)rep;",
+    ]
+    lines = head + [w for line in tr.lines for w in _wrap(line)] + ["    return n;", "}", ""]
+    return lines, tr.leaves
+
+
+def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
+                   tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0,
+                   polish: int = 0, alternative: str | None = None) -> str | None:
+    """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
+
+    ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
+    ``free`` the positions of the free joints among them; ``twists`` (all joints, mimic ones too),
+    ``home`` (4x4) and ``A``, ``b`` (all joint values = A q + b) describe the true robot for the
+    Newton steps of the finish.  ``alternative``: the source of ``_fast_chain`` for the plan's
+    alternative chain (the C finish runs it where the chain cannot settle a target), or None.
+    ``search`` joints gridded over ``grid`` values each (a search plan:
+    the chain takes their values after the free ones).  ``polish``: Newton steps on the true robot for
+    every leaf of a snapped plan (the chain itself runs on the snapped robot).
+    """
+    if target not in TARGET_CODES:
+        return None
+    dof = len(kinds)
+    main = _translate(python_source, "_fast_chain", "ikc_chain", dof)
+    if main is None:
+        return None
+    alt = _translate(alternative, "_fast_chain", "ikc_chain_alt", dof) if alternative else None
     nall = len(twists)
     flat_home = [home[i][j] for i in range(3) for j in range(3)] + [home[i][3] for i in range(3)]
     robot = [
@@ -225,26 +244,18 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         f"static const double ikc_home_[12] = {_array(flat_home, _number)};",
         f"static const double ikc_A_[{nall * dof}] = {_array([x for row in A for x in row], _number)};",
         f"static const double ikc_b_[{nall}] = {_array(b, _number)};",
-        f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {tr.leaves}, {slots},",
+        f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {main[1]}, {slots},",
         f"    {TARGET_CODES[target]},",
         f"    ikc_revolute_, ikc_lower_, ikc_upper_, {_number(scale)}, {_number(tol)}, ikc_chain,",
         f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid},",
-        f"    {polish}}};",
+        f"    {polish}, {'ikc_chain_alt' if alt else 'NULL'}, {alt[1] if alt else 0}}};",
     ]
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
         " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
-        "static int ikc_chain(const double *goal, const double *fr, double rep, double *Q, double *E,",
-        "                     int *F) {",
-        "    int n = 0;",
-        "    (void)fr;",
-        "    (void)rep;",
     ]
-    body = [w for line in tr.lines for w in _wrap(line)]
+    body = main[0] + (alt[0] if alt else [])
     tail = [
-        "    return n;",
-        "}",
-        "",
         *[w for line in robot for w in _wrap(line)],
         "",
         "int ikc_solve_one(const double *T, const double *fr, int limits, double *q, double *res, int *ls,",

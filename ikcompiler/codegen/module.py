@@ -7,6 +7,7 @@ text: numbers are printed with ``repr`` and nothing depends on time or environme
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -158,7 +159,14 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     native = None
     if fast is not None:
         kinds = "".join(output.joints[i].kind for i in output.independent)
-        native = chain_c_source(fast, kinds=kinds, lower=output.lower, upper=output.upper, free=free_idx,
+        alternative = None
+        if plan.alternative and not plan.search:
+            alternative = fast_chain_source(
+                dataclasses.replace(plan, steps=plan.alternative), chain, independent=output.independent,
+                free_joints=[output.independent[k] for k in free_idx], scale=scale,
+            )
+        native = chain_c_source(fast, alternative=alternative, kinds=kinds, lower=output.lower,
+                                upper=output.upper, free=free_idx,
                                 target=plan.target, scale=scale, tol=tol, slots=slots, twists=chain.twists,
                                 home=np.asarray(chain.home, float), A=A, b=b, search=len(plan.search),
                                 grid=plan.grid, polish=10 if plan.snapped else 0)
@@ -381,7 +389,10 @@ def _native_batch(Ts, free, limits):
     if python.any():  # targets the C finish cannot settle alone (or invalid: _targets raises there)
         idx = np.nonzero(python)[0]
         goals, Td = _targets(raw[idx])
-        for whole, part in zip(parts, _solve_chunk(goals, Td, init[idx], limits)):
+        # the C did the fast path's work already: what is left is for the reference runtime (a search
+        # plan keeps its own Python search, which the reference runtime would redo much slower)
+        settle = _solve_chunk if _SEARCH else _reference_chunk
+        for whole, part in zip(parts, settle(goals, Td, init[idx], limits)):
             whole[idx] = part
     return parts
 
