@@ -191,18 +191,24 @@ class NativeChain:
         self._cont = np.zeros(slots, dtype=np.intc)
         self._addr = [a.ctypes.data for a in (self._T, self._F, self._q, self._res, self._ls, self._cont)]
 
+    def _staged(self, T, free) -> bool:
+        """Copy one target and its free values into the buffers (the caller holds the lock).  False
+        unless they are exactly the target's shape and one value per free joint: anything else (which
+        numpy would broadcast into the buffers) goes the Python way, which raises the documented error."""
+        if len(free) != self.nfree or self._np.shape(T) != self._T.shape:
+            return False
+        try:
+            self._T[...] = T
+            if self.nfree:
+                self._F[...] = free
+        except (ValueError, TypeError):
+            return False
+        return True
+
     def one(self, T, free, limits: bool):
         """``(q, residual, ls, continuum)`` of one target, or None for the Python path."""
-        # exactly the target's shape and one value per free joint: anything else (which numpy would
-        # broadcast into the buffers) goes the Python way, which raises the documented error
-        if len(free) != self.nfree or self._np.shape(T) != self._T.shape:
-            return None
         with self._lock:
-            try:
-                self._T[...] = T
-                if self.nfree:
-                    self._F[...] = free
-            except (ValueError, TypeError):
+            if not self._staged(T, free):
                 return None
             aT, aF, aq, ares, als, acont = self._addr
             k = self._one(aT, aF, 1 if limits else 0, aq, ares, als, acont)
@@ -212,14 +218,8 @@ class NativeChain:
 
     def exact(self, T, free, limits: bool):
         """The exact solutions (k, dof) of one target, or None for the Python path (``solve``)."""
-        if len(free) != self.nfree or self._np.shape(T) != self._T.shape:
-            return None
         with self._lock:
-            try:
-                self._T[...] = T
-                if self.nfree:
-                    self._F[...] = free
-            except (ValueError, TypeError):
+            if not self._staged(T, free):
                 return None
             aT, aF, aq = self._addr[:3]
             k = self._exact(aT, aF, 1 if limits else 0, aq)
