@@ -112,8 +112,12 @@ def build(source: str, *, include_kernels: bool = True) -> Path | None:
         # Another process may build the same library at the same time: copy next to the target, then
         # rename (atomic on one file system), so nobody loads a half-written file.
         partial = directory / f".{target.name}.{os.getpid()}"
-        shutil.copyfile(lib, partial)
-        os.replace(partial, target)
+        try:
+            shutil.copyfile(lib, partial)
+            os.replace(partial, target)
+        except OSError as exc:
+            last_error = f"cannot write the C build to {directory} ({exc}); set IKC_CACHE to a writable one"
+            return None
     return target
 
 
