@@ -415,3 +415,45 @@ def test_native_source_lines_fit_ruff():
         assert module._NATIVE_SOURCE and '"""' not in module._NATIVE_SOURCE
         long = [line for line in module._NATIVE_SOURCE.splitlines() if len(line) > 110]
         assert not long, (module.__name__, long[:3])
+
+
+# --- 8. what the C finish settles beyond the Python fast path ------------------------------------------
+
+
+def _exact_rows(module, T, found):
+    q, residual, ls, continuum = found
+    for row in q[~ls]:
+        assert np.abs(module.fk(row) - T).max() <= module.TOLERANCE * max(1.0, module.SCALE), (row, T)
+    return q[~ls], continuum[~ls]
+
+
+def test_alternative_chain_settles_in_c():
+    # arm4dof with the shoulder at 0 puts the elbow-wrist point on the waist axis: the chain's first
+    # step (S2-RR waist, shoulder) defers, the Python fast path hands the pose to the reference runtime;
+    # the C runs the plan's alternative chain and finds the sampled vector itself
+    module, _, _ = _compiled("arm4dof")
+    q = np.array([0.7009, 0.0, -1.6688, math.pi])
+    T = module.fk(q)
+    leaves = module._fast_chain(fast.SCALAR, fast.goal_entries(T, module.TARGET), ())
+    assert any(leaf[-1] & fast.DEFER for leaf in leaves)
+    found = module._native_chain().one(T, (), True)
+    assert found is not None
+    rows, _ = _exact_rows(module, T, found)
+    assert (_same(rows, q, module.JOINT_TYPES) <= 1e-9).any(), rows
+
+
+@pytest.mark.parametrize("q1, q4, q6", [(2.3228, -2.4637, 1.6936), (1.0, 2.0, -1.0), (-2.0, 0.5, 2.5)])
+def test_shoulder_and_wrist_self_motion_settles_in_c(q1, q4, q6):
+    # prob with the wrist centre on the first axis (a shoulder self-motion) and the wrist locked (q5 = 0):
+    # two families at once, each step's representative moved on its own (rep x 1, -2, ...), until one
+    # lies inside the joint limits; the result is exact and flagged a continuum
+    module, _, _ = _compiled("prob")
+    q = np.array([q1, -math.pi / 2, math.pi / 2, q4, 0.0, q6])
+    T = module.fk(q)
+    leaves = module._fast_chain(fast.SCALAR, fast.goal_entries(T, module.TARGET), ())
+    assert all(leaf[-1] & fast.FAMILY for leaf in leaves)
+    found = module._native_chain().one(T, (), True)
+    assert found is not None
+    rows, continuum = _exact_rows(module, T, found)
+    assert len(rows) and continuum.all()
+    assert ((rows >= module.LOWER - 1e-7) & (rows <= module.UPPER + 1e-7)).all()
