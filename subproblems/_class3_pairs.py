@@ -25,6 +25,16 @@ Then every root gives ``x`` by back-substitution (Cramer, or the better-conditio
 its residual is at most ``EXACT_TOL`` times the problem scale (so eigenvalue noise, near-double roots
 and spurious roots never come back as solutions); duplicates (1e-7) are removed.
 
+Multiple roots: a root of multiplicity ~4 of ``F`` (e.g. parallel axes, ``p_1 = q_1`` on the first
+axis and ``th_2 = pi``: equation 1 does not depend on ``x`` and is tangent there) is split by roundoff
+into a cluster of roots ~1e-4 apart, each a candidate.  The equations are nearly flat there (rank-
+deficient Jacobian): Gauss-Newton with LM's damping stalls ~1e-2 away, so the candidates are then
+polished by plain Newton (best point kept), which converges linearly to the roundoff floor; exact rows
+within ``MERGE_TOL`` of each other *and* within ``MERGE_SPREAD`` times their root-position uncertainty
+(residual over the Jacobian's smallest singular value) are one root: their Newton-polished mean
+replaces them if it is exact.  Distinct simple roots closer than ``MERGE_TOL`` are each fixed by their
+Jacobian to far better than their distance and stay apart.
+
 Special geometry (points at the origin, on an axis or at an intersection of the axes, equal pairs):
 
 * an eliminant of lower degree (roots at infinity, e.g. parallel axes) is deflated, never nudged
@@ -61,6 +71,8 @@ M_FLOOR = 1e-13  # tensor entries below this times the problem's size are roundo
 FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
 LM_ITERS = 40
 NEWTON_ITERS = 24
+MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
+MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
 
 
 # --------------------------------------------------------------------------------- parametrisation
@@ -429,6 +441,129 @@ def _lm(pb: Pair, x, y, iters: int, damping0: float):
     return x, y, cost
 
 
+def _newton(pb: Pair, x, y, iters: int):
+    """Plain Newton on the two equations from (N, C) points; returns the best point seen (x, y, r, J).
+
+    Near a multiple root (the Jacobian nearly singular) Levenberg-Marquardt stalls ~1e-2 from the
+    root: its damping swamps the small singular value, and a step that raises the cost on the way
+    (Newton's path to a multiple root does) is rejected.  Plain Newton (the pseudo-inverse step along
+    the gradient when the Jacobian is singular) converges linearly there, down to the roundoff floor;
+    every step is taken and the point of least cost is returned, so a point never gets worse.
+    """
+    r, J = pb.residual(x, y)
+    cost = np.sum(r * r, axis=-1)
+    bx, by, br, bJ, bc = x, y, r, J, cost
+    for _ in range(iters):
+        a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
+        det = a * d - b * c
+        T = a * a + b * b + c * c + d * d
+        reg = np.abs(det) > 1e-14 * T
+        sdet = np.where(reg, det, 1.0)
+        dx = np.where(
+            reg, -(d * r[..., 0] - b * r[..., 1]) / sdet, -(a * r[..., 0] + c * r[..., 1]) / (T + TINY)
+        )
+        dy = np.where(
+            reg, -(a * r[..., 1] - c * r[..., 0]) / sdet, -(b * r[..., 0] + d * r[..., 1]) / (T + TINY)
+        )
+        x = x + _cap(pb.kinds[0], dx, pb.scale)
+        y = y + _cap(pb.kinds[1], dy, pb.scale)
+        x, y = np.where(np.isfinite(x), x, bx), np.where(np.isfinite(y), y, by)
+        r, J = pb.residual(x, y)
+        with np.errstate(over="ignore", invalid="ignore"):
+            cost = np.sum(r * r, axis=-1)
+        better = np.isfinite(cost) & (cost < bc)
+        bx, by, bc = np.where(better, x, bx), np.where(better, y, by), np.where(better, cost, bc)
+        br = np.where(better[..., None], r, br)
+        bJ = np.where(better[..., None, None], J, bJ)
+    return bx, by, br, bJ
+
+
+def _distance(kx, ky, X1, Y1, X2, Y2):
+    """Joint-value distance (angles modulo 2 pi, prismatic values relative to max(1, |value|))."""
+    dx, dy = X1 - X2, Y1 - Y2
+    dx = wrap_batch(dx) if kx == "R" else dx / np.maximum(1.0, np.abs(X2))
+    dy = wrap_batch(dy) if ky == "R" else dy / np.maximum(1.0, np.abs(Y2))
+    return np.maximum(np.abs(dx), np.abs(dy))
+
+
+def _merge_clusters(pb: Pair, X, Y, exact, res, r, J):
+    """Merge exact rows that are one multiple root split by roundoff (module docstring).
+
+    Two exact rows are the same root when they are within ``MERGE_TOL`` of each other *and* the
+    equations hold at their midpoint to ``MERGE_SPREAD`` times the smaller of their residuals (at
+    least the roundoff floor): at a multiple root the equations are flat across the cluster; two
+    distinct roots, however close, leave a residual of order curvature x distance^2 between them
+    (distinct roots ~1e-6 apart or more stay apart), and a row that only meets the tolerance (the
+    residual between a close pair) links neither.  A group's representative is its mean,
+    Newton-polished, or the member of smallest residual if that is not larger; kept only if it
+    satisfies the equations, otherwise the rows are left as they are.  Returns X, Y, res and the rows
+    dropped (merged into another).
+    """
+    kx, ky = pb.kinds
+    n, C = X.shape
+    if C < 2 or not exact.any():
+        return X, Y, res, np.zeros((n, C), dtype=bool)
+    dist = _distance(kx, ky, X[:, :, None], Y[:, :, None], X[:, None, :], Y[:, None, :])
+    link = exact[:, :, None] & exact[:, None, :] & (dist <= MERGE_TOL)
+    link &= ~np.eye(C, dtype=bool)[None]
+    if not link.any():
+        return X, Y, res, np.zeros((n, C), dtype=bool)
+    # one root when the equations hold at the midpoint to the rows' own roundoff floor (two distinct
+    # roots, however close, leave a residual of order curvature x distance^2 between them)
+    idx = np.nonzero(link.any(axis=(1, 2)))[0]
+    sub = pb.subset(idx)
+    Xs, Ys = X[idx], Y[idx]
+    ox = Xs[:, None, :] - Xs[:, :, None]
+    oy = Ys[:, None, :] - Ys[:, :, None]
+    if kx == "R":
+        ox = wrap_batch(ox)
+    if ky == "R":
+        oy = wrap_batch(oy)
+    mx = (Xs[:, :, None] + 0.5 * ox).reshape(len(idx), -1)
+    my = (Ys[:, :, None] + 0.5 * oy).reshape(len(idx), -1)
+    mr, _ = sub.residual(mx, my)
+    mid = np.abs(mr).max(axis=-1).reshape(len(idx), C, C)
+    floor = np.maximum(
+        np.minimum(res[idx][:, :, None], res[idx][:, None, :]), 1e-15 * sub.scale[:, None, None]
+    )
+    link[idx] &= mid <= MERGE_SPREAD * floor
+    link |= np.eye(C, dtype=bool)[None]
+    for _ in range(int(np.ceil(np.log2(C))) + 1):  # transitive closure
+        link = link | np.einsum("nij,njk->nik", link.astype(np.int8), link.astype(np.int8)).astype(bool)
+    leader = np.argmax(link, axis=2)  # the first row of each row's group
+    members = link.sum(axis=2)
+    is_leader = (leader == np.arange(C)[None]) & (members > 1) & exact
+    if not is_leader.any():
+        return X, Y, res, np.zeros((n, C), dtype=bool)
+    # group means relative to the leader (angles unwrapped about it)
+    LX = np.take_along_axis(X, leader, axis=1)
+    LY = np.take_along_axis(Y, leader, axis=1)
+    ox, oy = X - LX, Y - LY
+    if kx == "R":
+        ox = wrap_batch(ox)
+    if ky == "R":
+        oy = wrap_batch(oy)
+    w = link.astype(float)
+    MX = LX + np.einsum("nij,nj->ni", w, ox) / members
+    MY = LY + np.einsum("nij,nj->ni", w, oy) / members
+    MX, MY, mr, _ = _newton(pb, _wrap(kx, MX), _wrap(ky, MY), NEWTON_ITERS)
+    MX, MY = _wrap(kx, MX), _wrap(ky, MY)
+    mres = np.abs(mr).max(axis=-1)
+    # a member with a residual no larger than the polished mean's represents the group instead (the
+    # equations are flat across the cluster: the residual is the only evidence of where the root is)
+    Rg = np.where(link, res[:, None, :], np.inf)
+    bi = np.argmin(Rg, axis=2)
+    bres = np.take_along_axis(res, bi, axis=1)
+    use = bres <= mres
+    MX = np.where(use, np.take_along_axis(X, bi, axis=1), MX)
+    MY = np.where(use, np.take_along_axis(Y, bi, axis=1), MY)
+    mres = np.where(use, bres, mres)
+    ok = is_leader & (mres <= EXACT_TOL * pb.scale[:, None])
+    X, Y, res = np.where(ok, MX, X), np.where(ok, MY, Y), np.where(ok, mres, res)
+    merged_into = np.take_along_axis(ok, leader, axis=1) & ~ok & (leader != np.arange(C)[None])
+    return X, Y, res, merged_into
+
+
 def _wrap(kind, v):
     return wrap_batch(v) if kind == "R" else v
 
@@ -490,14 +625,19 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     V = np.arange(width)[None, :] < cnt[:, None]
     X, Y = np.where(V, X, 0.0), np.where(V, Y, 0.0)
     X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
+    # undamped Newton: LM's damping stalls ~1e-2 from a multiple root (rank-deficient Jacobian)
+    X, Y, _, _ = _newton(pb, X, Y, NEWTON_ITERS)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
     # a value the equations do not constrain at the other one (a continuum through this point)
     X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
-    r, _ = pb.residual(X, Y)
+    r, J = pb.residual(X, Y)
     res = np.abs(r).max(axis=-1)
     tol = EXACT_TOL * pb.scale[:, None]
     exact = V & (res <= tol)
+    # a multiple root of the eliminant split by roundoff into several nearby roots: one row
+    X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res, r, J)
+    exact &= ~merged
     # duplicates: a candidate close to an earlier exact one
     dx = X[:, :, None] - X[:, None, :]
     dy = Y[:, :, None] - Y[:, None, :]
@@ -547,6 +687,10 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
         keep[idx] = False
         keep[idx, 0] = True
         LS[idx, 0] = ~fexact[rows, best]
+    # more exact rows than slots (a row that only meets the tolerance between two close roots): the
+    # K of smallest residual stay
+    rank = np.argsort(np.argsort(np.where(keep, res, np.inf), axis=1, kind="stable"), axis=1)
+    keep &= rank < K
     # pack into K slots, sorted by x then y
     key = np.where(keep, X, np.inf)
     key2 = np.where(keep, Y, np.inf)

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from subproblems import codes, max_solutions, solve, solve_batch
 from subproblems.screw import prismatic_twist, revolute_twist
-from tests.strategies import joint_values, twist_lists
+from tests.strategies import contains_solution, joint_values, twist_lists
 
 from ._checks3 import check_instance, fk_point, random_twists
 
@@ -254,6 +254,134 @@ def test_pair_continuum_cases():
     D = np.array([np.linalg.norm(fk_point([t1, t2], [0.5, -1.0], P[k]) - Q[k]) for k in range(2)])
     r = solve("S3-TT", [t1, t2], p=P, q=Q, d=D)
     assert r.continuum and not r.ls.any() and r.residual.max() < 1e-9
+
+
+def _pair_instance(code, tw, th, P, Q):
+    tw, P, Q = np.array(tw), np.array(P), np.array(Q)
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    return tw, {"p": P, "q": Q, "d": D}
+
+
+def _min_gap(Q, kinds):
+    """Smallest joint-value distance between two rows (angles modulo 2 pi)."""
+    gaps = [
+        max(
+            abs(math.remainder(a - b, 2 * math.pi)) if k == "R" else abs(a - b)
+            for k, a, b in zip(kinds, r, s)
+        )
+        for i, r in enumerate(Q)
+        for s in Q[:i]
+    ]
+    return min(gaps, default=math.inf)
+
+
+# drawn instances (thorough-profile style) at roots of multiplicity ~4 of the eliminant: parallel axes,
+# th_2 = pi (the point at its largest distance from the other axis: the equations are tangent there)
+_MULTIPLE_ROOTS = {
+    # p_1 = q_1 = the origin, on axis 1: equation 1 is independent of th_1, F is a square with a double
+    # root at th_2 = pi; at bc06aaf (before the merge) the eight candidates stalled ~1e-2 away
+    # (Levenberg-Marquardt's damping), none was exact, and the drawn solution was lost
+    "lost": (
+        [
+            [0.0, 0.0, 0.0, -0.39839104481058246, 0.8653991266329428, 0.3039225675030934],
+            [
+                0.9273115322503649,
+                0.9635408799982439,
+                -1.528069566017882,
+                -0.39839104481058246,
+                0.8653991266329428,
+                0.3039225675030934,
+            ],
+        ],
+        [0.0, math.pi],
+        [[0.0, 0.0, 0.0], [-2.0, -0.4, -1.8]],
+        [[0.0, 0.0, 0.0], [0.6, -1.4, -0.5]],
+    ),
+    # p_1 = p_2: two exact rows 1.5e-6 apart, one root split in two
+    "cluster": (
+        [
+            [
+                0.4205799687283314,
+                1.0003634777368415,
+                -0.45329331467227896,
+                -0.7491347333202377,
+                0.014871845641332886,
+                -0.6622506923668987,
+            ],
+            [
+                -0.14380775127949103,
+                -0.2692165578183885,
+                0.15662895563227525,
+                0.7491347333202377,
+                -0.014871845641332886,
+                0.6622506923668987,
+            ],
+        ],
+        [0.8997642972258149, math.pi],
+        [[-0.23460023879302938, -0.600431879776756, -1.5427500513621468]] * 2,
+        [[0.0, 0.0, 0.0], [1.82, -1.04, 0.79]],
+    ),
+    # q_1 = q_2 at a point the axes leave: a split root 1.5e-7 apart next to a genuine pair 4.5e-4 apart
+    "cluster and pair": (
+        [
+            [
+                0.7696814441877597,
+                -0.5807580819305578,
+                -2.102895979561664,
+                0.7484844358854488,
+                0.6566547881597645,
+                0.09260420305848083,
+            ],
+            [
+                0.46680580171779423,
+                -0.5429883996576959,
+                0.07730810424571016,
+                -0.7484844358854488,
+                -0.6566547881597645,
+                -0.09260420305848083,
+            ],
+        ],
+        [-2.5293700510431054, 0.15025496620603862],
+        [[-0.71, -1.57, 0.33], [0.0, 0.0, 0.0]],
+        [[1.9, -0.97, 0.43]] * 2,
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(_MULTIPLE_ROOTS))
+def test_pair_multiple_root_one_row(name):
+    # the eliminant's multiple root split by roundoff comes back as one row (Newton-polished mean of
+    # the cluster), the drawn values among the rows; both failed before the merge (see the dict)
+    tw, inputs = _pair_instance("S3-RR", *_MULTIPLE_ROOTS[name])
+    r = check_instance("S3-RR", "RR", tw, inputs, _MULTIPLE_ROOTS[name][1])
+    assert not r.continuum and not r.ls.any()
+    assert _min_gap(r.q, "RR") > 1e-5, r.q
+
+
+def test_pair_distinct_nearby_roots_stay_apart():
+    # genuine roots closer than the merge tolerance (1e-3): each is fixed by its Jacobian to ~1e-11 or
+    # better, far below their distance, so neither is merged into the other
+    tw, inputs = _pair_instance("S3-RR", *_MULTIPLE_ROOTS["cluster and pair"])
+    r = solve("S3-RR", tw, **inputs)
+    x = np.sort(r.q[:, 0])
+    assert len(r.q) == 4 and np.allclose(x[:2], [-2.9994683087, -2.9990224028], atol=1e-9), r.q
+    # S3-RT with p_1 = q_1 = q_2 = the origin: two well-conditioned roots 3.5e-4 apart
+    tw = [
+        [
+            0.789748964574648,
+            0.2627091717511874,
+            -0.6740737302592767,
+            0.22359916815846312,
+            0.7905745260676312,
+            0.5700836173157265,
+        ],
+        [-0.22359916815846312, -0.7905745260676312, -0.5700836173157265, 0.0, 0.0, 0.0],
+    ]
+    th = [-0.00034220099942272597, 0.0]
+    tw, inputs = _pair_instance("S3-RT", tw, th, [[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]], [[0.0, 0.0, 0.0]] * 2)
+    r = check_instance("S3-RT", "RT", tw, inputs, th)
+    assert len(r.q) == 2 and 3e-4 < _min_gap(r.q, "RT") < 1e-3, r.q
+    assert contains_solution(r.q, [-0.00010867233581546287, 0.0003475338012957881], "RT", 1e-12), r.q
 
 
 @pytest.mark.parametrize("code", PAIRS)
