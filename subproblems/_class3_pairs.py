@@ -30,10 +30,11 @@ axis and ``th_2 = pi``: equation 1 does not depend on ``x`` and is tangent there
 into a cluster of roots ~1e-4 apart, each a candidate.  The equations are nearly flat there (rank-
 deficient Jacobian): Gauss-Newton with LM's damping stalls ~1e-2 away, so the candidates are then
 polished by plain Newton (best point kept), which converges linearly to the roundoff floor; exact rows
-within ``MERGE_TOL`` of each other *and* within ``MERGE_SPREAD`` times their root-position uncertainty
-(residual over the Jacobian's smallest singular value) are one root: their Newton-polished mean
-replaces them if it is exact.  Distinct simple roots closer than ``MERGE_TOL`` are each fixed by their
-Jacobian to far better than their distance and stay apart.
+within ``MERGE_TOL`` of each other whose midpoint satisfies the equations to ``MERGE_SPREAD`` times
+their own residual are one root: their Newton-polished mean (or the member of smallest residual)
+replaces them if it is exact.  Distinct roots closer than ``MERGE_TOL`` leave a residual of order
+curvature x distance^2 between them and stay apart.  More exact rows than slots: the ``K`` of
+smallest residual stay.
 
 Special geometry (points at the origin, on an axis or at an intersection of the axes, equal pairs):
 
@@ -486,7 +487,7 @@ def _distance(kx, ky, X1, Y1, X2, Y2):
     return np.maximum(np.abs(dx), np.abs(dy))
 
 
-def _merge_clusters(pb: Pair, X, Y, exact, res, r, J):
+def _merge_clusters(pb: Pair, X, Y, exact, res):
     """Merge exact rows that are one multiple root split by roundoff (module docstring).
 
     Two exact rows are the same root when they are within ``MERGE_TOL`` of each other *and* the
@@ -631,12 +632,12 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     # a value the equations do not constrain at the other one (a continuum through this point)
     X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
-    r, J = pb.residual(X, Y)
+    r, _ = pb.residual(X, Y)
     res = np.abs(r).max(axis=-1)
     tol = EXACT_TOL * pb.scale[:, None]
     exact = V & (res <= tol)
     # a multiple root of the eliminant split by roundoff into several nearby roots: one row
-    X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res, r, J)
+    X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res)
     exact &= ~merged
     # duplicates: a candidate close to an earlier exact one
     dx = X[:, :, None] - X[:, None, :]

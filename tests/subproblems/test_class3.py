@@ -171,9 +171,10 @@ def _general_points(draw):
 
 _MULTIPLE_ROOT_GAP = pytest.mark.xfail(
     strict=False,
-    reason="known gap (thorough profile only): roots of multiplicity ~4 (e.g. S3-RR with parallel axes, "
-    "th = (pi/2, 0)) come back as a cluster of rows ~1e-4 around the root, each within the 1e-9 residual "
-    "tolerance; the cluster is neither merged nor polished onto the root",
+    reason="known gap (thorough profile only): instances ill-conditioned in their data (a point ~1e-8 "
+    "from an axis, an axis ~1e-5 from a point's plane: a value fixed only to ~1e-4 by the 1e-9 "
+    "tolerance, a near-continuum) return an exact row that is not the drawn one; the clusters of "
+    "multiple roots are merged (test_pair_multiple_root_one_row)",
 )
 
 
