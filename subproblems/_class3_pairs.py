@@ -505,7 +505,8 @@ def _merge_clusters(pb: Pair, X, Y, exact, res):
     if C < 2 or not exact.any():
         return X, Y, res, np.zeros((n, C), dtype=bool)
     dist = _distance(kx, ky, X[:, :, None], Y[:, :, None], X[:, None, :], Y[:, None, :])
-    link = exact[:, :, None] & exact[:, None, :] & (dist <= MERGE_TOL)
+    # (duplicates within DEDUP_TOL are removed later anyway: they alone never start a group)
+    link = exact[:, :, None] & exact[:, None, :] & (dist <= MERGE_TOL) & (dist > DEDUP_TOL)
     link &= ~np.eye(C, dtype=bool)[None]
     if not link.any():
         return X, Y, res, np.zeros((n, C), dtype=bool)
@@ -627,7 +628,11 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     X, Y = np.where(V, X, 0.0), np.where(V, Y, 0.0)
     X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
     # undamped Newton: LM's damping stalls ~1e-2 from a multiple root (rank-deficient Jacobian)
-    X, Y, _, _ = _newton(pb, X, Y, NEWTON_ITERS)
+    # (only instances with a candidate LM left above the roundoff floor: converged ones need none)
+    slow = np.nonzero(np.any(V & (cost > (1e-13 * pb.scale[:, None]) ** 2), axis=1))[0]
+    if len(slow):
+        NX, NY, _, _ = _newton(pb.subset(slow), X[slow], Y[slow], NEWTON_ITERS)
+        X[slow], Y[slow] = NX, NY
     X, Y = _wrap(kx, X), _wrap(ky, Y)
     # a value the equations do not constrain at the other one (a continuum through this point)
     X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
