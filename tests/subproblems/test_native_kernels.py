@@ -32,7 +32,7 @@ from hypothesis import strategies as st
 from subproblems import fast, native
 from subproblems.screw import rotation_exp
 from tests.strategies import SPECIAL_ANGLES, angle_distance, joint_values, unit_vectors
-from tests.subproblems.test_fast_kernels import SPECS, RngSource, _corners, instances
+from tests.subproblems.test_fast_kernels import SPECS, RngSource, _across, _corners, _unit, instances
 
 EXAMPLES = settings().max_examples
 AGREE = 1e-12
@@ -139,17 +139,6 @@ def differences(name, args):
 
 # ---------------------------------------------------------------------------------------------------
 # raw instances: every argument fresh or tied to an earlier one
-
-
-def _unit(v) -> np.ndarray:
-    return v / np.linalg.norm(v)
-
-
-def _across(w, u) -> np.ndarray:
-    x = u - (u @ w) * w
-    if np.linalg.norm(x) < 1e-3:
-        x = np.cross(w, [1.0, 0.0, 0.0]) if abs(w[0]) < 0.9 else np.cross(w, [0.0, 1.0, 0.0])
-    return _unit(x)
 
 
 _coord = st.one_of(st.just(0.0), st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False))
