@@ -187,7 +187,8 @@ class NativeChain:
         self.leaves_fn.restype = I
         # one target: buffers reused under a lock (the call and the copies out are one critical section)
         self._lock = threading.Lock()
-        self._T = np.zeros(_TARGET_SHAPES[target])
+        self.target_shape = _TARGET_SHAPES[target]  # one raw target: (4, 4), (3, 3) or (3,)
+        self._T = np.zeros(self.target_shape)
         self._F = np.zeros(max(nfree, 1))
         self._q = np.zeros((slots, dof))
         self._res = np.zeros(slots)

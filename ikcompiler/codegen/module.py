@@ -379,7 +379,7 @@ def _native_batch(Ts, free, limits):
     if native is None:
         return None
     Ts = np.asarray(Ts, dtype=float)
-    shape = {"pose": (4, 4), "position": (3,), "orientation": (3, 3)}[TARGET]
+    shape = native.target_shape
     if Ts.ndim < len(shape) or Ts.shape[Ts.ndim - len(shape):] != shape:
         return None
     raw = Ts.reshape((-1,) + shape)
