@@ -15,7 +15,10 @@ checked against the contract of issue 3 / DESIGN.md section 4:
   ``1e-9`` times the instance's size (its largest length, floored at 1; radians for ``O-*``);
 * ``lost``: not a continuum and the drawn joint values are not among the rows to ``1e-9`` (angles
   wrapped, translations relative to the size); ``lost6`` / ``lost3``: not even to ``1e-6`` / ``1e-3``;
-* ``false-ls``: a reachable instance answered only by rows flagged ``ls``.
+* ``false-ls``: a reachable instance answered only by rows flagged ``ls``;
+* ``batch``: ``solve_batch`` over the family's ``n`` instances disagrees with ``solve`` on this one (a row of
+  either path without a row of the other within ``1e-6``, or different ``ls`` / ``continuum`` flags), or
+  returned a non-finite value.
 
 Families: ``general`` (random axes and points), ``lattice`` (axis directions along the coordinate
 axes and their 45-degree diagonals, points on a half-unit lattice: exact intersections, parallels,
@@ -43,11 +46,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from subproblems import codes, solve  # noqa: E402
+from subproblems import codes, solve, solve_batch  # noqa: E402
 
 FAMILIES = ("general", "lattice", "related", "near")
 SPECIAL = (0.0, math.pi / 2, -math.pi / 2, math.pi)
-COLUMNS = ("raise", "nan", "bad", "lost", "lost6", "lost3", "false-ls")
+COLUMNS = ("raise", "nan", "bad", "lost", "lost6", "lost3", "false-ls", "batch")
 _DIAG = [np.array(v, float) / np.linalg.norm(v) for v in ([1, 1, 0], [1, 0, 1], [0, 1, 1], [1, -1, 0])]
 _LATTICE_DIRS = [s * e for e in np.eye(3) for s in (1.0, -1.0)] + _DIAG
 
@@ -261,15 +264,15 @@ def distance_to_drawn(kinds, rows, th, size):
 
 
 def check(code, tw, inputs, th, reachable):
-    """The failure labels of one instance (empty when it passes) and whether it was a continuum."""
+    """The failure labels of one instance (empty when it passes) and the scalar result (None if it raised)."""
     kinds = code.split("-", 1)[1]
     try:
         r = solve(code, tw, **inputs)
     except Exception as exc:  # noqa: BLE001 - an audit records every failure kind
-        return [f"raise:{type(exc).__name__}: {exc}"], False
+        return [f"raise:{type(exc).__name__}: {exc}"], None
     fails = []
     if not (np.all(np.isfinite(r.q)) and np.all(np.isfinite(r.residual))):
-        return ["nan"], r.continuum
+        return ["nan"], r
     size = size_of(tw, inputs)
     exact = ~r.ls
     for row, ex in zip(r.q, exact):
@@ -282,7 +285,44 @@ def check(code, tw, inputs, th, reachable):
         if not r.continuum:
             dist = distance_to_drawn(kinds, r.q.copy(), th, size)
             fails += [lab for lab, tol in (("lost", 1e-9), ("lost6", 1e-6), ("lost3", 1e-3)) if dist > tol]
-    return fails, r.continuum
+    return fails, r
+
+
+def _rows_match(kinds, A, B, size):
+    """Every row of A has a row of B within 1e-6 (joint distance), with the same ls flag."""
+    (qa, la), (qb, lb) = A, B
+    for row, flag in zip(qa, la):
+        near = [distance_to_drawn(kinds, qb[j : j + 1].copy(), row, size) <= 1e-6 for j in range(len(qb))]
+        if not any(n and lb[j] == flag for j, n in enumerate(near)):
+            return False
+    return True
+
+
+def batch_disagreements(code, insts, results):
+    """Indices of instances where ``solve_batch`` over all of ``insts`` disagrees with the scalar results."""
+    kinds = code.split("-", 1)[1]
+    tws = np.array([t for t, *_ in insts])
+    arrays = {k: np.array([inp[k] for _, inp, *_ in insts]) for k in insts[0][1]}
+    try:
+        b = solve_batch(code, tws, **arrays)
+    except Exception:  # noqa: BLE001
+        return set(range(len(insts)))
+    out = set()
+    for i, ((tw, inputs, *_), r) in enumerate(zip(insts, results)):
+        if r is None:
+            continue
+        v = b.valid[i]
+        qb, lb = b.q[i][v], b.ls[i][v]
+        if not np.all(np.isfinite(b.q[i])) or bool(b.continuum[i]) != r.continuum:
+            out.add(i)
+            continue
+        size = size_of(tw, inputs)
+        if not (
+            _rows_match(kinds, (r.q, r.ls), (qb, lb), size)
+            and _rows_match(kinds, (qb, lb), (r.q, r.ls), size)
+        ):
+            out.add(i)
+    return out
 
 
 def _jsonable(x):
@@ -315,10 +355,12 @@ def main(argv=None):
         for fam in fams:
             rng = np.random.default_rng([args.seed, ci, FAMILIES.index(fam)])
             count, cont = Counter(), 0
-            for i in range(args.n):
-                tw, inputs, th, reachable = draw_instance(rng, code, fam)
-                fails, is_cont = check(code, tw, inputs, th, reachable)
-                cont += is_cont
+            insts = [draw_instance(rng, code, fam) for _ in range(args.n)]
+            checked = [check(code, *inst) for inst in insts]
+            differ = batch_disagreements(code, insts, [r for _, r in checked])
+            for i, ((tw, inputs, th, reachable), (fails, r)) in enumerate(zip(insts, checked)):
+                fails = fails + (["batch"] if i in differ else [])
+                cont += bool(r is not None and r.continuum)
                 labels = {f.split(":")[0] for f in fails}
                 count.update(labels)
                 if fails and dump:
