@@ -25,6 +25,16 @@ Then every root gives ``x`` by back-substitution (Cramer, or the better-conditio
 its residual is at most ``EXACT_TOL`` times the problem scale (so eigenvalue noise, near-double roots
 and spurious roots never come back as solutions); duplicates (1e-7) are removed.
 
+Units: every instance is solved in units of a power of two near its scale (:meth:`Pair.normalised`),
+so every tolerance below is relative and the eliminant's coefficients in a prismatic value do not
+span ``scale^8``; scaling an instance by a power of two scales its prismatic values exactly.
+
+Tangencies: at a double root of the system (the two curves touch, the Jacobian is singular there)
+the equations are flat to second order, so roundoff leaves the polished row anywhere within
+~sqrt(eps) of it (two rows, or one ~3e-8 off).  A row whose Jacobian is nearly singular is moved onto
+the point where, in addition, ``det J = 0`` (Gauss-Newton on the three equations), if the equations
+hold there to ``MERGE_SPREAD`` times its own residual; two rows of one split tangency then coincide.
+
 Multiple roots: a root of multiplicity ~4 of ``F`` (e.g. parallel axes, ``p_1 = q_1`` on the first
 axis and ``th_2 = pi``: equation 1 does not depend on ``x`` and is tangent there) is split by roundoff
 into a cluster of roots ~1e-4 apart, each a candidate.  The equations are nearly flat there (rank-
@@ -74,6 +84,9 @@ LM_ITERS = 40
 NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
+FOLD_SV = 1e-6  # |det J| / |J|^2 under which an exact row may be a tangency split by roundoff
+FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
+FOLD_ITERS = 8
 
 
 # --------------------------------------------------------------------------------- parametrisation
@@ -183,6 +196,24 @@ class Pair:
     def subset(self, idx) -> Pair:
         return Pair(self.family, self.kinds, self.tw[idx], self.P[idx], self.R[idx], self.D[idx])
 
+    def normalised(self):
+        """The same instances in units of a power of two near their scale, and those units (N,).
+
+        Every length is divided by the unit (exactly: a power of two), so the solver sees problems of
+        size ~1 whatever the user's units: its tolerances and the eliminant's coefficient thresholds are
+        then relative (the eliminant's coefficients in a prismatic value span ``scale^8`` otherwise,
+        and a leading coefficient ~1e-24 of the largest at scale 1e3 was dropped as a root at
+        infinity).  Prismatic values of the result are in the unit: multiply them back.
+        """
+        unit = np.exp2(np.round(np.log2(self.scale)))
+        u = unit[:, None, None]
+        tw = self.tw.copy()
+        for j, kind in enumerate(self.kinds):
+            if kind == "R":  # v = -w x r: a length; a prismatic direction is not (its value is)
+                tw[:, j, :3] /= unit[:, None]
+        R = self.R / u if self.family == "S3" else self.R  # q points, or plane normals (directions)
+        return Pair(self.family, self.kinds, tw, self.P / u, R, self.D / unit[:, None]), unit
+
     def tensor(self):
         f = s3_tensor if self.family == "S3" else h_tensor
         return f(self.kinds, self.tw, self.P, self.R, self.D)
@@ -221,7 +252,8 @@ class Pair:
             hn = np.linalg.norm(self.R, axis=-1)
             safe = np.where(hn == 0, 1.0, hn)[:, None, :, None]
             u = self.R[:, None] / safe
-            r = np.sum(u * X, axis=-1) - self.D[:, None] / safe[..., 0]
+            # h . X - d before the division: no rounding of h / |h| and d / |h| in the difference
+            r = (np.sum(self.R[:, None] * X, axis=-1) - self.D[:, None]) / safe[..., 0]
             r = np.where(hn[:, None] == 0, -self.D[:, None], r)
         J = np.stack([np.sum(u * dXx, axis=-1), np.sum(u * dXy, axis=-1)], axis=-1)
         return r, J
@@ -566,6 +598,59 @@ def _merge_clusters(pb: Pair, X, Y, exact, res):
     return X, Y, res, merged_into
 
 
+def _fold_equations(pb: Pair, x, y):
+    """The two equations and the Jacobian's determinant (over its size: a length), (N, C, 3)."""
+    r, J = pb.residual(x, y)
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    size = np.sqrt(np.sum(J * J, axis=(-2, -1)))
+    return np.concatenate([r, (det / (size + TINY))[..., None]], axis=-1)
+
+
+def _refine_folds(pb: Pair, X, Y, exact, res, J):
+    """Exact rows near a tangency moved onto the tangent point (see the module docstring).
+
+    At a double root of the system (the two curves touch: a singular Jacobian there) the equations are
+    flat to second order, so every point within ~sqrt(eps) of it meets them to roundoff and Newton
+    stops anywhere in that band.  The tangent point is where, in addition, the Jacobian is singular:
+    Gauss-Newton on the three equations (both residuals and det J) pins it to roundoff.  A row whose
+    Jacobian is nearly singular moves there if the equations still hold at that point to
+    ``MERGE_SPREAD`` times its own residual (two distinct close roots leave curvature x distance^2
+    between them, and their rows stay); rows of one split tangency land on the same point and are
+    then duplicates.
+    """
+    kx, ky = pb.kinds
+    size2 = np.sum(J * J, axis=(-2, -1))
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    near = exact & (np.abs(det) <= FOLD_SV * size2)
+    idx = np.nonzero(near.any(axis=1))[0]
+    if not len(idx):
+        return X, Y, res
+    sub = pb.subset(idx)
+    x, y = X[idx], Y[idx]
+    for _ in range(FOLD_ITERS):
+        G = _fold_equations(sub, x, y)
+        Gx, Gy = _fold_equations(sub, x + FOLD_STEP, y), _fold_equations(sub, x, y + FOLD_STEP)
+        A = np.stack([Gx - G, Gy - G], axis=-1) / FOLD_STEP  # (n, C, 3, 2) forward differences
+        AtA = np.einsum("...ki,...kj->...ij", A, A)
+        AtG = np.einsum("...ki,...k->...i", A, G)
+        a, b, c = AtA[..., 0, 0], AtA[..., 0, 1], AtA[..., 1, 1]
+        d = a * c - b * b
+        ok = np.isfinite(d) & (np.abs(d) > 1e-14 * (a * c + TINY))
+        d = np.where(ok, d, 1.0)
+        dx = np.where(ok, -(c * AtG[..., 0] - b * AtG[..., 1]) / d, 0.0)
+        dy = np.where(ok, -(a * AtG[..., 1] - b * AtG[..., 0]) / d, 0.0)
+        x, y = x + _cap(kx, dx, sub.scale), y + _cap(ky, dy, sub.scale)
+    x, y = _wrap(kx, x), _wrap(ky, y)
+    r, _ = sub.residual(x, y)
+    fres = np.abs(r).max(axis=-1)
+    moved = _distance(kx, ky, x, y, X[idx], Y[idx])
+    floor = np.maximum(res[idx], 1e-15 * sub.scale[:, None])
+    take = near[idx] & (fres <= MERGE_SPREAD * floor) & (moved <= MERGE_TOL) & np.isfinite(x + y)
+    X[idx], Y[idx] = np.where(take, x, X[idx]), np.where(take, y, Y[idx])
+    res[idx] = np.where(take, fres, res[idx])
+    return X, Y, res
+
+
 def _wrap(kind, v):
     return wrap_batch(v) if kind == "R" else v
 
@@ -577,7 +662,20 @@ def _starts(kind, scale):
 
 
 def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
-    """All solutions of N instances (see the module docstring); ``K`` solution slots."""
+    """All solutions of N instances (see the module docstring); ``K`` solution slots.
+
+    Solved in units of the instance's scale (:meth:`Pair.normalised`), so that scaling an instance's
+    lengths by a power of two scales its prismatic values exactly and changes nothing else.
+    """
+    pb, unit = pb.normalised()
+    out = _solve_normalised(code, pb, K)
+    for j, kind in enumerate(pb.kinds):
+        if kind == "T":
+            out.q[:, :, j] *= unit[:, None]
+    return out
+
+
+def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     kx, ky = pb.kinds
     n = len(pb.D)
     M = pb.tensor()
@@ -637,10 +735,12 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     # a value the equations do not constrain at the other one (a continuum through this point)
     X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
-    r, _ = pb.residual(X, Y)
+    r, J = pb.residual(X, Y)
     res = np.abs(r).max(axis=-1)
     tol = EXACT_TOL * pb.scale[:, None]
     exact = V & (res <= tol)
+    # a tangency (double root of the system) found ~sqrt(eps) off by roundoff: the tangent point itself
+    X, Y, res = _refine_folds(pb, X, Y, exact & ~xfree & ~yfree, res, J)
     # a multiple root of the eliminant split by roundoff into several nearby roots: one row
     X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res)
     exact &= ~merged
