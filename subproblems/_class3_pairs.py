@@ -85,8 +85,10 @@ NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
 FOLD_SV = 1e-6  # |det J| / |J|^2 under which an exact row may be a tangency split by roundoff
+FOLD_FLAT = 1e-5  # |J| / scale under which the Jacobian vanishes at a tangency (both equations stationary)
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
 FOLD_ITERS = 8
+RANK_TOL = 1e-12  # H-TT: singular values below this times the largest are roundoff (a singular system)
 
 
 # --------------------------------------------------------------------------------- parametrisation
@@ -598,12 +600,20 @@ def _merge_clusters(pb: Pair, X, Y, exact, res):
     return X, Y, res, merged_into
 
 
-def _fold_equations(pb: Pair, x, y):
-    """The two equations and the Jacobian's determinant (over its size: a length), (N, C, 3)."""
+def _fold_equations(pb: Pair, x, y, flat):
+    """The two equations and what vanishes at a tangency, (N, C, 6).
+
+    Where the Jacobian has rank one there, its determinant (over its size: a length); where it
+    vanishes altogether (``flat``: both equations stationary, e.g. both points at their farthest from
+    the axes), its four entries (the determinant is then of second order and pins nothing).
+    """
     r, J = pb.residual(x, y)
     det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
     size = np.sqrt(np.sum(J * J, axis=(-2, -1)))
-    return np.concatenate([r, (det / (size + TINY))[..., None]], axis=-1)
+    rank1 = np.zeros(J.shape[:-2] + (4,))
+    rank1[..., 0] = det / (size + TINY)
+    extra = np.where(flat[..., None], J.reshape(J.shape[:-2] + (4,)), rank1)
+    return np.concatenate([r, extra], axis=-1)
 
 
 def _refine_folds(pb: Pair, X, Y, exact, res, J):
@@ -612,25 +622,27 @@ def _refine_folds(pb: Pair, X, Y, exact, res, J):
     At a double root of the system (the two curves touch: a singular Jacobian there) the equations are
     flat to second order, so every point within ~sqrt(eps) of it meets them to roundoff and Newton
     stops anywhere in that band.  The tangent point is where, in addition, the Jacobian is singular:
-    Gauss-Newton on the three equations (both residuals and det J) pins it to roundoff.  A row whose
-    Jacobian is nearly singular moves there if the equations still hold at that point to
-    ``MERGE_SPREAD`` times its own residual (two distinct close roots leave curvature x distance^2
-    between them, and their rows stay); rows of one split tangency land on the same point and are
-    then duplicates.
+    Gauss-Newton on the equations and ``det J`` (or all of ``J`` where it nearly vanishes) pins it to
+    roundoff.  A row whose Jacobian is nearly singular (against the problem's natural size: in the
+    normalised problem, 1) moves there if the equations still hold at that point to ``MERGE_SPREAD``
+    times its own residual (two distinct close roots leave curvature x distance^2 between them, and
+    their rows stay); rows of one split tangency land on the same point and are then duplicates.
     """
     kx, ky = pb.kinds
     size2 = np.sum(J * J, axis=(-2, -1))
     det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
-    near = exact & (np.abs(det) <= FOLD_SV * size2)
+    natural2 = np.maximum(size2, pb.scale[:, None] ** 2)
+    near = exact & (np.abs(det) <= FOLD_SV * natural2)
     idx = np.nonzero(near.any(axis=1))[0]
     if not len(idx):
         return X, Y, res
     sub = pb.subset(idx)
+    flat = size2[idx] <= (FOLD_FLAT * sub.scale[:, None]) ** 2
     x, y = X[idx], Y[idx]
     for _ in range(FOLD_ITERS):
-        G = _fold_equations(sub, x, y)
-        Gx, Gy = _fold_equations(sub, x + FOLD_STEP, y), _fold_equations(sub, x, y + FOLD_STEP)
-        A = np.stack([Gx - G, Gy - G], axis=-1) / FOLD_STEP  # (n, C, 3, 2) forward differences
+        G = _fold_equations(sub, x, y, flat)
+        Gx, Gy = _fold_equations(sub, x + FOLD_STEP, y, flat), _fold_equations(sub, x, y + FOLD_STEP, flat)
+        A = np.stack([Gx - G, Gy - G], axis=-1) / FOLD_STEP  # (n, C, 6, 2) forward differences
         AtA = np.einsum("...ki,...kj->...ij", A, A)
         AtG = np.einsum("...ki,...k->...i", A, G)
         a, b, c = AtA[..., 0, 0], AtA[..., 0, 1], AtA[..., 1, 1]
@@ -668,11 +680,54 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     lengths by a power of two scales its prismatic values exactly and changes nothing else.
     """
     pb, unit = pb.normalised()
-    out = _solve_normalised(code, pb, K)
+    out = _solve_linear(code, pb) if pb.family == "H" and pb.kinds == "TT" else _solve_normalised(code, pb, K)
     for j, kind in enumerate(pb.kinds):
         if kind == "T":
             out.q[:, :, j] *= unit[:, None]
     return out
+
+
+def _solve_linear(code: str, pb: Pair) -> BatchResult:
+    """H-TT: two plane equations linear in both prismatic values, ``A (x, y) = b``.
+
+    Nonsingular (``sigma_2`` above ``RANK_TOL`` of the directions' size): the one solution, never a
+    continuum.  Singular to roundoff: a continuum, represented by the minimum-norm solution when it
+    holds; otherwise by the untruncated solve when that holds (the roundoff-sized singular value then
+    carries the right-hand side: the float data's own solution, judged against its travel);
+    otherwise the minimum-norm least-squares point, flagged ``ls``.
+    """
+    n = len(pb.D)
+    hn = np.linalg.norm(pb.R, axis=2)
+    safe = np.where(hn == 0.0, 1.0, hn)
+    V = pb.tw[:, :, :3]  # (N, 2 joints, 3)
+    vn = np.linalg.norm(V, axis=2)
+    A = np.einsum("nkx,njx->nkj", pb.R, V) / safe[..., None]
+    b = (pb.D - np.sum(pb.R * pb.P, axis=2)) / safe
+    U, S, Wt = np.linalg.svd(A)
+    Ub = np.einsum("nki,nk->ni", U, b)  # U^T b
+    nonzero = S > RANK_TOL * np.maximum(vn.max(axis=1), TINY)[:, None]
+
+    def back(keep):
+        with np.errstate(over="ignore", invalid="ignore"):
+            inv = np.where(keep, 1.0 / np.where(keep, S, 1.0), 0.0)
+            q = np.einsum("nij,ni->nj", Wt, inv * Ub)
+        return np.where(np.isfinite(q), q, 0.0)
+
+    full, least = back(S > 0), back(nonzero)
+
+    def exact(q):
+        # relative to the travel too: the moved point's size bounds the roundoff of h . X - d (data of
+        # size ~0 with a travel of 1e3 evaluate to ~1e-13, not to the data's own size)
+        r, _ = pb.residual(q[:, None, 0], q[:, None, 1])
+        tol = EXACT_TOL * np.maximum(pb.scale, np.sum(vn * np.abs(q), axis=1))
+        return np.abs(r[:, 0]).max(axis=-1) <= tol
+
+    least_ok, full_ok = exact(least), exact(full)
+    singular = ~nonzero[:, 1]
+    use_full = ~singular | (~least_ok & full_ok)
+    q = np.where(use_full[:, None], full, least)
+    ls = np.where(use_full, ~full_ok, ~least_ok)
+    return BatchResult(code, q[:, None, :], np.ones((n, 1), dtype=bool), ls[:, None], singular)
 
 
 def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
