@@ -13,11 +13,16 @@ Every class I type is solved the same way (seed 003 section 2; DESIGN.md rule 2)
    along ``b``) is a trigonometric polynomial of degree <= 2 in ``tau``, recovered exactly from five
    samples; its roots are the candidates (complex ones projected onto the unit circle: least-squares
    candidates).  If it vanishes identically the family is a true continuum: ``tau = 0``.  Three parallel
-   axes (planar 3R) are solved as the planar two-link problem for a point on axis 3.
+   axes (planar 3R) are solved as the planar two-link problem for a point on axis 3.  Axes parallel only
+   to within :data:`NEAR_TOL` (or axes 1 and 3 lined up to within ``GIMBAL_TOL``) also get these
+   candidates from the nearby degenerate geometry, polished: there the rotation alone determines the
+   angles only to ~1e-16 / |w_i x w_j|, the translation still determines them well.
 3. **Verification.**  Every candidate is measured against the whole equation (6 equations, <= 3
    unknowns: the rest of the equations is checked, not assumed); near-exact ones get a few Gauss-Newton
    steps; exact ones (residual <= ``EXACT_TOL`` times the problem scale) are kept and deduplicated; if
-   none is exact the best candidate alone is returned, flagged ``ls``.
+   none is exact the best candidate alone is returned, flagged ``ls``.  A continuum representative that
+   is exact is kept first: a family that holds to the tolerance (e.g. axes coincident to 1e-11) is
+   flagged ``continuum`` even when the translation's tiny variation along it has isolated roots.
 
 Continuum representatives: the first joint of a parallel revolute pair is 0 (``t1 = 0`` at a gimbal
 lock), the minimum-norm prismatic values for dependent directions.
@@ -31,6 +36,7 @@ import numpy as np
 
 from subproblems.core import BatchResult, Solution
 from subproblems.rotation import (
+    GIMBAL_TOL,
     PAR_TOL,
     _angle_about,
     _angle_r,
@@ -49,6 +55,10 @@ DEDUP_TOL = 1e-6
 RANK_TOL = 1e-9
 #: Lengths under this (relative) count as zero (a point on an axis, coincident axes).
 FREE_TOL = 1e-10
+#: Revolute axes parallel within this (``|w_i x w_j|``) also get candidates from the parallel geometry.
+NEAR_TOL = 1e-6
+#: Those candidates are polished when their residual is below this (relative).
+NEAR_POLISH_TOL = 1e-3
 
 TWO_PI = 2.0 * math.pi
 _TAU5 = TWO_PI * np.arange(5) / 5.0
@@ -213,7 +223,7 @@ def _planar_candidates(twists, T, scale):
     q = T[:3, :3] @ r3 + T[:3, 3]
     q = q - w * float(w @ q)
     tol = 1e-9 * scale
-    rho2, D, rho1 = np.linalg.norm(r3 - r2), np.linalg.norm(r2 - r1), np.linalg.norm(q - r1)
+    rho2, D = np.linalg.norm(r3 - r2), np.linalg.norm(r2 - r1)
     out = []
 
     def add(t1, t2, fixed):
@@ -226,14 +236,92 @@ def _planar_candidates(twists, T, scale):
         t2, _ = _angle_about(w, r3 - r2, q - r2, scale)
         add(0.0, s2 * t2, (0,))
     else:
-        e = (r2 - r1) / D
-        ap = (D * D + rho1 * rho1 - rho2 * rho2) / (2.0 * D)
-        h = math.sqrt(max(0.0, rho1 * rho1 - ap * ap))
-        for sg in (h, -h) if h > 0 else (0.0,):
-            x = r1 + ap * e + sg * np.cross(w, e)
-            t2, _ = _angle_about(w, r3 - r2, x - r2, scale)
-            t1, free = _angle_about(w, x - r1, q - r1, scale)
+        for u in _elbow_links(w, r1, r2, q, rho2):
+            t2, _ = _angle_about(w, r3 - r2, u, scale)
+            t1, free = _angle_about(w, (r2 - r1) + u, q - r1, scale)
             add(t1, s2 * t2, (0,) if free else ())
+    return out
+
+
+def _elbow_links(w, r1, r2, q, rho2) -> list[np.ndarray]:
+    """The second link ``u`` (length ``rho2``, perpendicular to ``w``) with ``|r2 - r1 + u| = |q - r1|``.
+
+    The angle ``a`` of ``u`` from ``e = (r2 - r1) / D`` has ``2 D rho2 cos a = |q - r1|^2 - D^2 - rho2^2``,
+    with ``|q - r1|^2 - D^2 = (q - r2) . (q + r2 - 2 r1)`` formed without cancellation: a short second
+    link (nearly coincident axes 2 and 3) keeps its angle to the data's conditioning, where the
+    intersection of the two circles loses it entirely.  ``|cos a| = 1`` within a few ulps is the
+    stretched or folded elbow: one link, not two ``sqrt(eps)`` apart.  Out of reach: clamped (least
+    squares).
+    """
+    d = r2 - r1
+    D = float(np.linalg.norm(d))
+    e = d / D
+    c = (float((q - r2) @ (q + r2 - 2.0 * r1)) - rho2 * rho2) / (2.0 * D * rho2)
+    if abs(c) >= 1.0 - 8.0 * np.finfo(float).eps:
+        return [rho2 * math.copysign(1.0, c) * e]
+    sa = math.sqrt(1.0 - c * c)
+    return [rho2 * (c * e + sg * np.cross(w, e)) for sg in (sa, -sa)]
+
+
+def _near_families(ws, R) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Representatives and directions ``(th, n)`` of the orientation families of the nearby degenerate
+    geometry: revolute axes parallel within :data:`NEAR_TOL` (but not within ``PAR_TOL``), axes 1 and 3
+    lined up within ``GIMBAL_TOL``.
+
+    There the rotation alone fixes the angles only up to ~1e-16 / |w_i x w_j| (its isolated solutions
+    slide along the nearby family), while the translation still fixes them well: the true solutions lie
+    within ~|w_i x w_j| of the family, where the translation picks them (then Gauss-Newton finishes).
+    """
+    out = []
+    k = len(ws)
+    if k == 2 and _cross(ws[0], ws[1]) <= NEAR_TOL:
+        s = _sign(ws[0] @ ws[1])
+        out.append((np.array([0.0, s * _angle_r(ws[0], R)[0]]), np.array([1.0, -s])))
+    if k != 3:
+        return out
+    w1, w2, w3 = ws
+    if _cross(w1, w2) <= NEAR_TOL:
+        ((th, _, _),) = rotation_families([w1, w3], R)
+        s = _sign(w1 @ w2)
+        out.append((np.array([0.0, s * th[0], th[1]]), np.array([1.0, -s, 0.0])))
+    if _cross(w2, w3) <= NEAR_TOL:
+        ((th, _, _),) = rotation_families([w1, w2], R)
+        s = _sign(w2 @ w3)
+        out.append((np.array([th[0], 0.0, s * th[1]]), np.array([0.0, 1.0, -s])))
+    Rw3 = R @ w3
+    if _cross(w1, Rw3) <= GIMBAL_TOL:
+        ((th, _, _),) = rotation_families([w2, w3], R)
+        out.append((np.array([0.0, th[0], th[1]]), np.array([1.0, 0.0, -_sign(w1 @ Rw3)])))
+    return out
+
+
+def _cross(a, b) -> float:
+    return float(np.linalg.norm(np.cross(a, b)))
+
+
+def _sign(x) -> float:
+    return 1.0 if x > 0 else -1.0
+
+
+def _near_candidates(kinds, twists, T, scale, ir, ws, found=()):
+    """Candidates from the nearby degenerate geometry (:func:`_near_families` other than the families
+    ``found`` already, three axes nearly parallel: the planar problem), polished here: they miss by up
+    to ~|w_i x w_j| times the scale."""
+    m = len(kinds)
+    raw = []
+    if len(ir) == 3 and max(_cross(ws[0], w) for w in ws[1:]) <= NEAR_TOL:
+        raw += _planar_candidates(twists, T, scale)
+    for th, n in _near_families(ws, T[:3, :3]):
+        if any(np.array_equal(n, f) for f in found):
+            continue
+        q0, nfull = np.zeros(m), np.zeros(m)
+        q0[ir], nfull[ir] = th, n
+        raw += _family_candidates(twists, kinds, q0, nfull, T, scale)
+    out = []
+    for q, cont, fixed in raw:
+        if residual(twists, q, T) <= NEAR_POLISH_TOL * scale:
+            q = polish(twists, q, T, scale, fixed, iters=10)
+        out.append((q, cont, fixed))
     return out
 
 
@@ -245,7 +333,8 @@ def candidates(kinds: str, twists, T, scale):
     if len(ir) == 3 and all(np.linalg.norm(np.cross(ws[0], w)) <= PAR_TOL for w in ws[1:]):
         return _planar_candidates(twists, T, scale)
     out = []
-    for th, n, dim in rotation_families(ws, T[:3, :3]):
+    families = rotation_families(ws, T[:3, :3])
+    for th, n, dim in families:
         q0 = np.zeros(m)
         q0[ir] = th
         if dim == 0:
@@ -255,6 +344,8 @@ def candidates(kinds: str, twists, T, scale):
             nfull = np.zeros(m)
             nfull[ir] = n
             out += _family_candidates(twists, kinds, q0, nfull, T, scale)
+    found = [n for _, n, dim in families if dim == 1]
+    out += _near_candidates(kinds, twists, T, scale, ir, ws, found)
     return out
 
 
@@ -316,7 +407,9 @@ def finalize(kinds: str, twists, T, cands, scale, max_count: int = 0) -> list[So
         scored.append((residual(twists, q, T), q, bool(cont)))
     if not scored:
         return [Solution(tuple(0.0 for _ in kinds), ls=True)]
-    exact = sorted((s for s in scored if s[0] <= EXACT_TOL * scale), key=lambda s: s[0])
+    # a continuum representative first: when a family holds to the tolerance, its flag must survive the
+    # cut to max_count below even if isolated roots on it have smaller residuals
+    exact = sorted((s for s in scored if s[0] <= EXACT_TOL * scale), key=lambda s: (not s[2], s[0]))
     if not exact:
         err, q, cont = min(scored, key=lambda s: s[0])
         return [Solution(tuple(float(a) for a in q), ls=True, continuum=cont)]
@@ -413,11 +506,25 @@ def _polish_batch(tw, Q, T, scale, iters: int = 5) -> np.ndarray:
     return Q
 
 
+def _near_degenerate_batch(W, R) -> np.ndarray:
+    """(N,) instances whose scalar path adds :func:`_near_candidates` (nearly parallel revolute axes,
+    nearly lined-up axes 1 and 3 of three)."""
+    N, k = W.shape[:2]
+    near = np.zeros(N, bool)
+    for i in range(k - 1):
+        near |= np.linalg.norm(np.cross(W[:, i], W[:, i + 1]), axis=-1) <= NEAR_TOL
+    if k == 3:
+        Rw3 = np.einsum("nij,nj->ni", R, W[:, 2])
+        near |= np.linalg.norm(np.cross(W[:, 0], Rw3), axis=-1) <= GIMBAL_TOL
+    return near
+
+
 def batch_class1(code: str, twists, T) -> BatchResult:
     """N instances at once: twists (N, m, 6), targets (N, 4, 4); slots ``max_solutions(code)``.
 
     Instances whose orientation has a continuum family (parallel revolute axes, gimbal lock, three
-    parallel axes) or whose prismatic directions are dependent are the degenerate ones: they go
+    parallel axes), whose axes are near such geometry (:func:`_near_degenerate_batch`) or whose
+    prismatic directions are dependent are the degenerate ones: they go
     through the scalar path (a loop over those instances only); every other instance is solved
     without a Python loop: orientation candidates (vectorised ``O-*``), prismatic values by batched
     least squares, batched Gauss-Newton polish, verification and deduplication.
@@ -439,7 +546,7 @@ def batch_class1(code: str, twists, T) -> BatchResult:
     Kr = TH.shape[1]
     Q = np.zeros((N, Kr, m))
     Q[..., ir] = TH
-    degenerate = dim > 0
+    degenerate = (dim > 0) | _near_degenerate_batch(W, R)
     if ip:
         a, B = _affine_batch(tw, kinds, Q)
         sv = np.linalg.svd(B, compute_uv=False)

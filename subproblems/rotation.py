@@ -29,7 +29,10 @@ How each is solved and what is returned in degenerate cases:
 * ``O-RRR``: ``w1^T exp([w2]t2) w3 = w1^T R w3`` gives ``t2`` (two roots), ``t1`` rotates ``exp([w2]t2) w3``
   onto ``R w3`` about ``w1``, ``t3`` is ``O-R`` on the rest; near a gimbal lock or nearly parallel
   consecutive axes also ``t1`` first and Gauss-Newton restarts (see :func:`_general_rrr_b`; the scalar
-  path runs the vectorised one on one instance).  Degenerate cases, all ``continuum``:
+  path runs the vectorised one on one instance).  A double root (``|w1^T R w3 - alpha|`` equal to the
+  amplitude within a few ulps: a singular configuration such as ``t2 = +-pi/2`` on lattice axes) is
+  solved at its tangent point, accurate to roundoff, not as two roots ``sqrt(eps)`` apart.  Degenerate
+  cases, all ``continuum``:
   ``w1 || w2``: ``t1 = 0`` (``w1 || w2 || w3``: ``t1 = t2 = 0``); ``w2 || w3``: ``t2 = 0``; gimbal lock
   (``exp([w2]t2) w3 = +-w1``, i.e. ``R w3 = +-w1``, e.g. ``t2 = 0`` of ZYZ Euler angles): ``t1 = 0``.
   Unreachable ``R`` (possible unless the axes allow every rotation): the root of the clamped equation,
@@ -99,6 +102,12 @@ GN_ITERS = 12
 NEAR_PAR = 1e-6
 #: ``O-RRR``: two exact, distinct first candidates with a Jacobian determinant at least this are final.
 WELL_COND = 1e-3
+
+#: ``rho cos(t - psi) = rhs`` with ``|rhs| / rho`` this many ulps from 1 is a double root (a tangency).
+TANGENT_ULPS = 8.0
+
+#: Residual (radians) under which a tangent point is preferred to other candidates (roundoff floor).
+TANGENT_FLOOR = 1e-14
 
 _TWO_PI = 2.0 * math.pi
 _SQRT8 = math.sqrt(8.0)
@@ -558,6 +567,20 @@ def _polish_b(W, R, TH, fixed, iters: int = 4) -> np.ndarray:
     return TH
 
 
+def _half_split(rhs, rho):
+    """Half the angle between the two roots of ``rho cos(t - psi) = rhs``, and where they are a double root.
+
+    ``|rhs| >= rho`` up to the roundoff of the coefficients (a few ulps of ``rho``) is a tangency: the
+    half split is exactly 0 or pi, so both roots are the tangent point itself (accurate to roundoff),
+    not ``+- sqrt(2 * roundoff)`` from it (accurate to ``sqrt(eps)`` only).  Beyond it the root is
+    clamped (least squares); ``rho = 0`` gives 0.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # rho subnormal or 0
+        c = np.where(rho > 0, rhs / np.where(rho > 0, rho, 1.0), 0.0)
+    tangent = (rho > 0) & (np.abs(c) >= 1.0 - TANGENT_ULPS * np.finfo(float).eps)
+    return np.where(tangent, np.where(c > 0, 0.0, math.pi), np.arccos(np.clip(c, -1.0, 1.0))), tangent
+
+
 def _general_rrr_b(W, R, Rw3) -> np.ndarray:
     """(N, 2, 3): the two isolated candidates of ``O-RRR`` from both eliminations, polished.
 
@@ -587,9 +610,8 @@ def _general_rrr_b(W, R, Rw3) -> np.ndarray:
     delta = _dot(w1, Rw3)
     rho = np.hypot(beta, gamma)
     psi = np.arctan2(gamma, beta)
-    with np.errstate(over="ignore"):  # rho subnormal
-        c = np.where(rho > 0, np.clip((delta - alpha) / np.where(rho > 0, rho, 1.0), -1.0, 1.0), 0.0)
-    t2 = psi[:, None] + np.array([1.0, -1.0]) * np.arccos(c)[:, None]  # (N, 2)
+    half2, tangent = _half_split(delta - alpha, rho)
+    t2 = psi[:, None] + np.array([1.0, -1.0]) * half2[:, None]  # (N, 2)
     W2 = np.repeat(W[:, None], 2, 1)
     t1, _ = _angle_about_b(W2[:, :, 0], _mv(rexp_batch(W2[:, :, 1], t2), w3[:, None]), Rw3[:, None])
     E12 = rexp_batch(W2[:, :, 0], t1) @ rexp_batch(W2[:, :, 1], t2)
@@ -613,9 +635,7 @@ def _general_rrr_b(W, R, Rw3) -> np.ndarray:
     A1 = _dot(v2, bb)
     B1 = -_dot(v2, np.cross(v1, bb))
     C1 = _dot(v2, v3) - _dot(v2, u_par)
-    r1 = np.hypot(A1, B1)
-    with np.errstate(over="ignore"):
-        d1 = np.where(r1 > 0, np.arccos(np.clip(C1 / np.where(r1 > 0, r1, 1.0), -1.0, 1.0)), 0.0)
+    d1, _ = _half_split(C1, np.hypot(A1, B1))
     t1b = np.arctan2(B1, A1)[:, None] + np.array([1.0, -1.0]) * d1[:, None]
     V2 = np.repeat(Ws[:, None], 2, 1)
     zb = _mv(rexp_batch(V2[:, :, 0], -t1b), Rw3s[:, None])
@@ -646,9 +666,13 @@ def _general_rrr_b(W, R, Rw3) -> np.ndarray:
     Serr = np.where(Sok, rotation_error_batch(product_batch(Wm, S), Rs[:, None]), np.inf)
     Call = np.concatenate([C[idx], S], 1)
     eall = np.concatenate([err[idx], Serr], 1)
-    # the best candidate and the best one farther than DEDUP_TOL from it (or it again)
+    # the best candidate and the best one farther than DEDUP_TOL from it (or it again); a double root
+    # of the t2 equation at the roundoff floor wins: its tangent point is accurate to roundoff, the
+    # other candidates there (same residual floor) only to sqrt(eps)
     ar = np.arange(n)
-    i0 = np.argmin(eall, axis=1)
+    at_tangent = np.zeros(eall.shape, bool)
+    at_tangent[:, :2] = tangent[idx, None] & (err[idx] <= TANGENT_FLOOR)
+    i0 = np.argmin(np.where(at_tangent, 0.0, eall), axis=1)
     first = Call[ar, i0]
     dist = np.max(np.abs(_wrap_b(Call - first[:, None])), axis=-1)
     e2 = np.where(dist > DEDUP_TOL, eall, np.inf)
