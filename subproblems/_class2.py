@@ -9,7 +9,10 @@ Every class II solver works the same way, in two stages:
 2. **Verification.**  :func:`finalize` polishes each candidate with a few Gauss-Newton steps on the
    *original* equation, measures its residual ``|| prod exp(xi_i th_i) p - q ||``, keeps the exact ones
    (residual <= ``EXACT_TOL`` times the problem scale), removes duplicates (angles modulo 2 pi) and,
-   when none is exact, returns the best least-squares candidate flagged ``ls``.
+   when none is exact, returns the best least-squares candidate flagged ``ls``.  An exact row on a
+   curve of exact solutions (found by :func:`on_continuum_rows`: a walk along the null direction of a
+   singular Jacobian) flags the instance ``continuum``; that row is then one representative of the
+   curve, returned with every other exact row (isolated solutions, other branches).
 
 So a wrong solution can never be returned as exact, and the least-squares answer of an unreachable
 instance is a local minimiser of the residual.  :func:`finalize_batch` does the same for N instances
@@ -63,6 +66,13 @@ TANGENT_TOL = 1e-3
 #: configuration the roots are located only to ~sqrt(eps), and a free joint can hide behind that.
 NEAR_FREE_TOL = 1e-4
 
+#: An exact row whose Jacobian, columns scaled to unit length, has a singular value below this is
+#: probed for a curve of solutions through it: see :func:`on_continuum_rows`.
+SINGULAR_TOL = 1e-8
+#: The probe's steps along the curve (radians; prismatic values relative to the scale) and their number.
+PROBE_STEP = 0.5
+PROBE_STEPS = 2
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -82,6 +92,42 @@ def problem_scale(twists, p, q) -> float:
         if xi[3:].any():
             s = max(s, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
     return s
+
+
+def length_scale(twists, p, q) -> float:
+    """The instance's own length: max(|p|, |q|, distance of each revolute axis from the origin), or 1
+    when all vanish.  Unlike :func:`problem_scale` not floored at 1: candidate constructions run on the
+    instance divided by it, so that their relative tolerances mean the same at every scale."""
+    L = max(float(np.linalg.norm(p)), float(np.linalg.norm(q)))
+    for xi in np.asarray(twists, dtype=float):
+        if xi[3:].any():
+            L = max(L, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
+    return L if L > 0.0 and math.isfinite(L) else 1.0
+
+
+def normalized(twists, p, q):
+    """``(twists, p, q, L)`` of the same instance in units of its length ``L`` (:func:`length_scale`):
+    angles are unchanged, translations divided by ``L``."""
+    L = length_scale(twists, p, q)
+    tw = np.array(twists, dtype=float)
+    rev = tw[:, 3:].any(axis=1)
+    tw[rev, :3] /= L
+    return tw, np.asarray(p, dtype=float) / L, np.asarray(q, dtype=float) / L, L
+
+
+def length_scale_batch(tw, p, q) -> np.ndarray:
+    ap = np.linalg.norm(np.cross(tw[..., 3:], tw[..., :3]), axis=-1)
+    L = np.maximum(np.maximum(np.linalg.norm(p, axis=-1), np.linalg.norm(q, axis=-1)), ap.max(axis=-1))
+    return np.where((L > 0.0) & np.isfinite(L), L, 1.0)
+
+
+def normalized_batch(tw, p, q):
+    """Vectorised :func:`normalized` over a leading axis N."""
+    L = length_scale_batch(tw, p, q)
+    tw = np.array(tw, dtype=float)
+    rev = tw[..., 3:].any(axis=-1)
+    tw[..., :3] = np.where(rev[..., None], tw[..., :3] / L[:, None, None], tw[..., :3])
+    return tw, p / L[:, None], q / L[:, None], L
 
 
 def wrap(a: float) -> float:
@@ -204,6 +250,7 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         (r + roundoff(kinds, th), th, free or has_free_joint(twists, p, th, scale)) for r, th, free in rows
     ]
     exact = [s for s in scored if s[0] <= EXACT_TOL * scale]
+    exact = _mark_continuum_rows(kinds, twists, p, q, exact, scale)
     if not exact:
         r, th, free = min(scored, key=lambda s: s[0])
         return [Solution(tuple(float(a) for a in th), ls=True, continuum=continuum or free)]
@@ -238,6 +285,25 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         del kept[j]  # kept is sorted by residual: j has the larger one
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
+
+
+def _mark_continuum_rows(kinds: str, twists, p, q, exact, scale: float) -> list:
+    """Scalar use of :func:`on_continuum_rows`: the exact ``(residual, th, free)`` rows, with ``free``
+    set on those that lie on a continuum."""
+    probe = [i for i, s in enumerate(exact) if not s[2]]
+    if not probe:
+        return exact
+    M = len(probe)
+    TH = np.array([exact[i][1] for i in probe])
+    TW = np.broadcast_to(twists, (M,) + twists.shape)
+    on = on_continuum_rows(
+        kinds, TW, np.broadcast_to(p, (M, 3)), np.broadcast_to(q, (M, 3)), TH, np.full(M, scale)
+    )
+    exact = list(exact)
+    for i, c in zip(probe, on):
+        if c:
+            exact[i] = (exact[i][0], exact[i][1], True)
+    return exact
 
 
 def _snapped_rows(kinds: str, twists, p, q, rows, scale: float) -> list:
@@ -504,6 +570,77 @@ def point_chain_rows(kinds: str, tw, th, p, jac: bool = True):
     return x, np.stack(cols, axis=-1), dist
 
 
+@np.errstate(all="ignore")
+def on_continuum_rows(kinds: str, tw, p, q, th, scale) -> np.ndarray:
+    """Mask (M,) of the exact rows ``th`` (M, m) that lie on a curve of exact solutions (a continuum).
+
+    Joints with a short lever arm (their point within ``NEAR_FREE_TOL`` of their axis: free joints and
+    their neighbourhood, see :func:`snap_free_rows`) stay fixed.  Rows whose Jacobian over the other
+    joints, columns scaled to unit length, is singular (:data:`SINGULAR_TOL`) are probed: from the
+    row, both ways, :data:`PROBE_STEPS` steps of :data:`PROBE_STEP` along the null direction, each
+    followed by Gauss-Newton in the directions across it; every step exact means a continuum through
+    the row (coincident axes, a translation along a revolute axis, ...: relations the constructions'
+    own free-joint tests need not see).  A tangency (a double root, also singular) fails: across its
+    null direction the residual grows as the square of the step.
+    """
+    M, m = th.shape
+    out = np.zeros(M, dtype=bool)
+    if M == 0 or m < 2:
+        return out
+    _, J, _ = point_chain_rows(kinds, tw, th, p)
+    cs = np.where(np.array([k == "R" for k in kinds]), 1.0, scale[:, None])  # prismatic per unit scale
+    norms = np.linalg.norm(J, axis=1) * cs
+    long = norms > NEAR_FREE_TOL * scale[:, None]
+    patterns = {tuple(row) for row in long}
+    for pat in patterns:
+        cols = np.flatnonzero(pat)
+        if cols.size < 2:
+            continue
+        rows = np.flatnonzero((long == np.array(pat)).all(axis=1))
+        Ju = J[rows][:, :, cols] / norms[rows][:, None, cols] * cs[rows][:, None, cols]
+        Su = np.linalg.svd(Ju, compute_uv=False)
+        rows = rows[np.isfinite(Su).all(-1) & (Su[:, -1] <= SINGULAR_TOL)]
+        if rows.size:
+            out[rows] = _walk_is_exact(kinds, tw[rows], p[rows], q[rows], th[rows], scale[rows], cols)
+    return out
+
+
+def _walk_is_exact(kinds, T, P, Qr, th, sc, cols) -> np.ndarray:
+    """:func:`on_continuum_rows` on rows with a singular Jacobian over joints ``cols``: the walk."""
+    cs = np.where(np.array([kinds[j] == "R" for j in cols]), 1.0, sc[:, None])  # (k, c)
+    ok = np.ones(len(th), dtype=bool)
+    for sign in (1.0, -1.0):
+        t, prev = th.copy(), None
+        for _ in range(PROBE_STEPS):
+            _, J, _ = point_chain_rows(kinds, T, t, P)
+            Vt = np.linalg.svd(J[:, :, cols] * cs[:, None, :])[2]
+            null, across = Vt[:, -1, :], Vt[:, :-1, :]  # scaled coordinates of the joints cols
+            if prev is None:
+                null = sign * null
+            else:  # keep walking the same way along the curve
+                null = np.where((_dot(null, prev) < 0)[:, None], -null, null)
+            prev = null
+            t[:, cols] += PROBE_STEP * null * cs
+            t, r = _correct_across(kinds, T, P, Qr, t, across, cs, cols)
+            ok &= r <= EXACT_TOL * sc
+    return ok
+
+
+def _correct_across(kinds, T, P, Qr, t, across, cs, cols, iters: int = 8):
+    """Gauss-Newton on rows ``t`` moving joints ``cols`` only along ``across`` (k, c - 1, c; scaled)."""
+    m1 = across.shape[1]
+    for _ in range(iters):
+        x, J, _ = point_chain_rows(kinds, T, t, P)
+        Jb = (J[:, :, cols] * cs[:, None, :]) @ np.swapaxes(across, -1, -2)  # (k, 3, c - 1)
+        A = np.swapaxes(Jb, -1, -2) @ Jb
+        mu = 1e-14 * (np.trace(A, axis1=-2, axis2=-1) + 1e-300)
+        rhs = np.einsum("kji,kj->ki", Jb, x - Qr)[..., None]
+        d = -np.linalg.solve(A + mu[:, None, None] * np.eye(m1), rhs)[..., 0]
+        t[:, cols] += (np.where(np.isfinite(d), d, 0.0)[:, None, :] @ across)[:, 0, :] * cs
+    x, _, _ = point_chain_rows(kinds, T, t, P, jac=False)
+    return t, np.linalg.norm(x - Qr, axis=-1)
+
+
 def snap_free_rows(kinds: str, tw, p, q, th, dist, scale, iters: int = 8):
     """Rows (M, m) moved so that the point of their nearest revolute joint lies on its axis.
 
@@ -749,6 +886,11 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     Cand[ni, ci] = th
     res = np.full((N, C), np.inf)
     res[ni, ci] = r + ROUNDOFF * np.abs(np.where(rev, 0.0, th)).sum(axis=-1)
+    exact_row = res[ni, ci] <= EXACT_TOL * S
+    probe = np.flatnonzero(exact_row & ~free_row & ~cand_free[ni, ci])
+    if probe.size:
+        on = on_continuum_rows(kinds, TW[probe], P[probe], Qr[probe], th[probe], S[probe])
+        free_row[probe[on]] = True
     cfree = cand_free.copy()
     cfree[ni, ci] |= free_row
     exact = res <= EXACT_TOL * scale[:, None]

@@ -35,6 +35,14 @@ Degenerate cases and what is returned:
 * ``th_3`` free (``M = 0``: ``p`` on axis 3, axes 2 and 3 coincident): ``th_3 = 0``, ``continuum``;
 * ``th_2`` free (the intermediate point on axis 2): ``th_2 = 0``, ``continuum``.
 
+* any other curve of solutions through a row found (axes 1 and 3 one line with ``th_2 = 0``: only
+  ``th_1 + th_3`` counts; S2-RTR with the translation along coincident axes 1 and 3): that row is
+  the representative, ``continuum`` (the finalizer's probe, ``_class2.on_continuum_rows``).
+
+The candidates are computed on the instance divided by its own length (``_class2.normalized``), so
+that the elimination's relative tests mean the same at scale 1e-3 as at scale 1; the verification
+runs on the instance as given.
+
 Vectorised path (``rrr_batch``): the same elimination for all instances at once, with fixed slots:
 four for the quartic's roots, four for the rank-1 construction, four for a free ``th_3``, and a
 second group of eight for the representatives of a free ``th_1`` (used, as in the scalar path, only
@@ -68,6 +76,8 @@ from subproblems._class2 import (
     finalize,
     finalize_batch,
     lin_roots_nan_batch,
+    normalized,
+    normalized_batch,
     problem_scale,
     problem_scale_batch,
     quadratic_form_to_fourier,
@@ -146,10 +156,11 @@ def pair_candidates(M, E0, Ec, Es, ref: float):
 
 
 def _solve(code, twists, p, q, build):
-    scale = problem_scale(twists, p, q)
-    x1, x2, x3 = twists
-    c0, cc, cs = circle_of(x1, q)  # y = c0 + cc cos th1 - cs sin th1
-    e0, ec, es = circle_of(x3, p)  # z = e0 + ec cos th3 + es sin th3
+    tw_n, p_n, q_n, L = normalized(twists, p, q)  # candidates from the instance at unit length
+    scale = problem_scale(tw_n, p_n, q_n)
+    x1, x2, x3 = tw_n
+    c0, cc, cs = circle_of(x1, q_n)  # y = c0 + cc cos th1 - cs sin th1
+    e0, ec, es = circle_of(x3, p_n)  # z = e0 + ec cos th3 + es sin th3
     M, E0, Ec, Es = build(x2, c0, cc, -cs, e0, ec, es, scale)
     groups, free1, free3 = pair_candidates(M, E0, Ec, Es, scale)
     cont = free1 or free3
@@ -162,7 +173,7 @@ def _solve(code, twists, p, q, build):
             if code == "S2-RRR":
                 th2, free = rotation_angle(x2, z, y, scale)
             else:
-                th2, free = float(x2[:3] @ (y - z)), False
+                th2, free = float(x2[:3] @ (y - z)) * L, False
             cands.append(((a, th2, b), free))
         sols = finalize(code, twists, p, q, cands, continuum=cont)
         if not all(s.ls for s in sols):
@@ -288,26 +299,27 @@ def pair_candidates_batch(M, E0, Ec, Es, ref):
     return g0, g1, free_a, bfree
 
 
-def _triples_batch(code, x2, c0, cc, cs, e0, ec, es, pairs, scale):
+def _triples_batch(code, x2, c0, cc, cs, e0, ec, es, pairs, scale, L):
     a, b = pairs[..., 0], pairs[..., 1]
     y = c0[:, None] + cc[:, None] * np.cos(a)[..., None] - cs[:, None] * np.sin(a)[..., None]
     z = e0[:, None] + ec[:, None] * np.cos(b)[..., None] + es[:, None] * np.sin(b)[..., None]
     if code == "S2-RRR":
         th2, free = rotation_angle_batch(x2[:, None], z, y, scale[:, None])
     else:
-        th2, free = _dot(x2[:, None, :3], y - z), np.zeros(a.shape, dtype=bool)
+        th2, free = _dot(x2[:, None, :3], y - z) * L[:, None], np.zeros(a.shape, dtype=bool)
     return np.stack([a, th2, b], -1), free
 
 
 def _solve_batch(code, tw, p, q, build) -> BatchResult:
-    scale = problem_scale_batch(tw, p, q)
-    x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
-    c0, cc, cs = circle_of_batch(x1, q)  # y = c0 + cc cos th1 - cs sin th1
-    e0, ec, es = circle_of_batch(x3, p)  # z = e0 + ec cos th3 + es sin th3
+    tw_n, p_n, q_n, L = normalized_batch(tw, p, q)  # candidates from the instances at unit length
+    scale = problem_scale_batch(tw_n, p_n, q_n)
+    x1, x2, x3 = tw_n[:, 0], tw_n[:, 1], tw_n[:, 2]
+    c0, cc, cs = circle_of_batch(x1, q_n)  # y = c0 + cc cos th1 - cs sin th1
+    e0, ec, es = circle_of_batch(x3, p_n)  # z = e0 + ec cos th3 + es sin th3
     M, E0, Ec, Es = build(x2, c0, cc, -cs, e0, ec, es, scale)
     g0, g1, free1, free3 = pair_candidates_batch(M, E0, Ec, Es, scale)
     cont = free1 | free3
-    cand, free = _triples_batch(code, x2, c0, cc, cs, e0, ec, es, g0, scale)
+    cand, free = _triples_batch(code, x2, c0, cc, cs, e0, ec, es, g0, scale, L)
     r = finalize_batch(code, tw, p, q, cand, free, cont)
     # second group (representatives of a free th_1) where the first leaves no exact solution
     redo = np.flatnonzero(r.ls.any(axis=1) & np.isfinite(g1).all(-1).any(-1))
@@ -318,7 +330,7 @@ def _solve_batch(code, tw, p, q, build) -> BatchResult:
         return a[redo]
 
     cand1, free1_ = _triples_batch(
-        code, sub(x2), sub(c0), sub(cc), sub(cs), sub(e0), sub(ec), sub(es), sub(g1), sub(scale)
+        code, sub(x2), sub(c0), sub(cc), sub(cs), sub(e0), sub(ec), sub(es), sub(g1), sub(scale), sub(L)
     )
     r1 = finalize_batch(code, sub(tw), sub(p), sub(q), cand1, free1_, sub(cont))
     Q, valid, ls, cc_ = r.q.copy(), r.valid.copy(), r.ls.copy(), r.continuum.copy()
