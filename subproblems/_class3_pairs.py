@@ -84,6 +84,7 @@ LM_ITERS = 40
 NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
+ROUNDOFF = 1e-16  # the equations' evaluation roundoff, relative to the problem scale (~eps / 2)
 FOLD_SV = 1e-6  # |det J| / |J|^2 under which an exact row may be a tangency split by roundoff
 FOLD_FLAT = 1e-5  # |J| / scale under which the Jacobian vanishes at a tangency (both equations stationary)
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
@@ -560,7 +561,7 @@ def _merge_clusters(pb: Pair, X, Y, exact, res):
     mr, _ = sub.residual(mx, my)
     mid = np.abs(mr).max(axis=-1).reshape(len(idx), C, C)
     floor = np.maximum(
-        np.minimum(res[idx][:, :, None], res[idx][:, None, :]), 1e-15 * sub.scale[:, None, None]
+        np.minimum(res[idx][:, :, None], res[idx][:, None, :]), ROUNDOFF * sub.scale[:, None, None]
     )
     link[idx] &= mid <= MERGE_SPREAD * floor
     link |= np.eye(C, dtype=bool)[None]
@@ -656,7 +657,7 @@ def _refine_folds(pb: Pair, X, Y, exact, res, J):
     r, _ = sub.residual(x, y)
     fres = np.abs(r).max(axis=-1)
     moved = _distance(kx, ky, x, y, X[idx], Y[idx])
-    floor = np.maximum(res[idx], 1e-15 * sub.scale[:, None])
+    floor = np.maximum(res[idx], ROUNDOFF * sub.scale[:, None])
     take = near[idx] & (fres <= MERGE_SPREAD * floor) & (moved <= MERGE_TOL) & np.isfinite(x + y)
     X[idx], Y[idx] = np.where(take, x, X[idx]), np.where(take, y, Y[idx])
     res[idx] = np.where(take, fres, res[idx])
@@ -715,15 +716,16 @@ def _solve_linear(code: str, pb: Pair) -> BatchResult:
 
     full, least = back(S > 0), back(nonzero)
 
-    def exact(q):
-        # relative to the travel too: the moved point's size bounds the roundoff of h . X - d (data of
-        # size ~0 with a travel of 1e3 evaluate to ~1e-13, not to the data's own size)
-        r, _ = pb.residual(q[:, None, 0], q[:, None, 1])
-        tol = EXACT_TOL * np.maximum(pb.scale, np.sum(vn * np.abs(q), axis=1))
-        return np.abs(r[:, 0]).max(axis=-1) <= tol
-
-    least_ok, full_ok = exact(least), exact(full)
     singular = ~nonzero[:, 1]
+
+    def exact(q, travel):
+        # (travel: of a singular system, relative to the travel too: the moved point's size bounds
+        # the roundoff of h . X - d; data of size ~0 with a travel of 1e3 evaluate to ~1e-13)
+        r, _ = pb.residual(q[:, None, 0], q[:, None, 1])
+        size = np.where(travel, np.maximum(pb.scale, np.sum(vn * np.abs(q), axis=1)), pb.scale)
+        return np.abs(r[:, 0]).max(axis=-1) <= EXACT_TOL * size
+
+    least_ok, full_ok = exact(least, False), exact(full, singular)
     use_full = ~singular | (~least_ok & full_ok)
     q = np.where(use_full[:, None], full, least)
     ls = np.where(use_full, ~full_ok, ~least_ok)
@@ -765,7 +767,8 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     else:
         ok = (np.abs(z.imag) <= 0.05 * (pb.scale[:, None] + np.abs(z.real))) & np.isfinite(z.real)
         u = z.real
-    ok &= ~identically_zero[:, None]
+    # (an eliminant judged identically zero still gives candidates: if no point of the supposed
+    # continuum holds below, its exact candidates are the answer)
     u = np.where(ok, u, 0.0)
     E, V = _candidates(Mr, ke, ku, u)  # (N, 8, 3)
     V &= ok[..., None]
@@ -844,6 +847,12 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
         first_exact = np.argmax(fexact, axis=1)
         best = np.where(fexact.any(axis=1), first_exact, np.argmin(fcost, axis=1))
         rows = np.arange(len(idx))
+        # a near-continuum (the eliminant at roundoff relative to its terms) on which no start
+        # reaches an exact point, but with exact candidates: those are the solutions
+        found = fexact.any(axis=1)
+        isolated = ~found & keep[idx].any(axis=1)
+        cont[idx] &= ~isolated
+        idx, rows, best = idx[~isolated], rows[~isolated], best[~isolated]
         X[idx, 0], Y[idx, 0] = FX[rows, best], FY[rows, best]
         keep[idx] = False
         keep[idx, 0] = True
