@@ -42,6 +42,8 @@ FREE_TOL = 1e-10
 #: axis leaves that angle undetermined at the EXACT_TOL level (near a double root the polished point
 #: may stay ~sqrt(eps) off the axis): the instance is flagged continuum.
 FREE_POINT_TOL = 10 * EXACT_TOL
+#: Two exact rows closer than this are the same root found twice (not averaged into a cluster).
+SAME_TOL = 1e-12
 #: Relative size under which an eliminant coefficient counts as zero.
 COEF_TOL = 1e-12
 #: Floating-point error of evaluating a chain, per unit of translation (one eps): added to a row's
@@ -259,20 +261,28 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
     # cluster of tangent rows is represented by its centroid (the roots of a k-fold root straddle
     # it), or by a member with a free joint
     kept: list[list] = []
+
+    def join(k, s):  # s is one more root of k's cluster
+        if s[2] and not k[2]:
+            k[1], k[2] = s[1], True
+        elif not k[2]:
+            k[4], k[5] = k[4] + joint_offset(kinds, k[3], s[1]), k[5] + 1
+            cen = wrap_row(kinds, polish(twists, p, q, k[3] + k[4] / k[5], scale))
+            if residual(twists, p, q, cen) <= EXACT_TOL * scale:
+                k[1] = cen
+
     for s in exact:
-        if any(joint_distance(kinds, s[1], k[1]) <= DEDUP_TOL for k in kept):
+        dup = next((k for k in kept if joint_distance(kinds, s[1], k[1]) <= DEDUP_TOL), None)
+        if dup is not None:
+            # a double root split by roundoff (+-sqrt(eps)) is one of these: the centroid, not
+            # the first of the pair, is the tangent point
+            if joint_distance(kinds, s[1], dup[1]) > SAME_TOL:
+                join(dup, s)
             continue
         for k in kept:
-            if merge_tangent(kinds, twists, p, q, k[1], s[1], scale) is None:
-                continue
-            if s[2] and not k[2]:
-                k[1], k[2] = s[1], True
-            elif not k[2]:
-                k[4], k[5] = k[4] + joint_offset(kinds, k[3], s[1]), k[5] + 1
-                cen = wrap_row(kinds, polish(twists, p, q, k[3] + k[4] / k[5], scale))
-                if residual(twists, p, q, cen) <= EXACT_TOL * scale:
-                    k[1] = cen
-            break
+            if merge_tangent(kinds, twists, p, q, k[1], s[1], scale) is not None:
+                join(k, s)
+                break
         else:
             kept.append([s[0], s[1], s[2], s[1], np.zeros(len(kinds)), 1])
     kept = [(k[0], k[1], k[2]) for k in kept]
@@ -931,15 +941,19 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
             if not both.any():
                 continue
             d = jdist(Cand[:, i], Cand[:, j])
-            keep[:, j] &= ~(both & (d <= DEDUP_TOL))
+            dup = both & (d <= DEDUP_TOL)
+            split = np.flatnonzero(dup & (d > SAME_TOL))  # a double root split by roundoff, maybe
+            keep[:, j] &= ~dup
             near = np.flatnonzero(both & keep[:, j] & (d <= TANGENT_TOL))
-            if near.size == 0:
-                continue
-            a, b = Cand[near, i], Cand[near, j]
-            mid = a + offset(a, b) / 2
-            pm, rm = polished(near, mid)
-            moved = jdist(pm, np.where(rev, wrap_batch(mid), mid))
-            hit = near[(rm <= MERGE_TOL * scale[near]) & (moved <= 0.05 * d[near])]
+            hit = split
+            if near.size:
+                a, b = Cand[near, i], Cand[near, j]
+                mid = a + offset(a, b) / 2
+                pm, rm = polished(near, mid)
+                moved = jdist(pm, np.where(rev, wrap_batch(mid), mid))
+                hit = np.concatenate(
+                    [split, near[(rm <= MERGE_TOL * scale[near]) & (moved <= 0.05 * d[near])]]
+                )
             if hit.size == 0:
                 continue
             fi, fj = cfree[hit, i], cfree[hit, j]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from subproblems import solve, solve_batch
 from subproblems._class2 import on_continuum_rows, problem_scale
@@ -114,3 +115,46 @@ def test_continuum_probe_tells_a_curve_of_solutions_from_a_double_root():
     q = fk_point(tw, th, p)
     assert np.linalg.norm(q - [1.0, 0.0, 0.0]) < 1e-15
     assert not on_continuum_rows("RR", tw[None], p[None], q[None], th[None], np.ones(1)).any()
+
+
+# Exact tangencies (double roots) on the lattice: the two computed roots straddle the tangent point by
+# ~sqrt(eps); the finalizer kept the first of the pair (within DEDUP_TOL) instead of their centroid.
+_TANGENT = {
+    # S2-TTR: th_3 = -pi/2 came back -1.5707963121 (audit S2-TTR lattice #6)
+    "S2-TTR": (
+        [
+            [1.0, 0, 0, 0, 0, 0],
+            [0.7071067811865475, 0.7071067811865475, 0, 0, 0, 0],
+            [-1.0, 0, 0.5, 0, 1.0, 0],
+        ],
+        [1.0, -0.5, 1.0],
+        [1.0168289074386525, 0.3534322286554472, -math.pi / 2],
+    ),
+    # S2-RR: th_2 = pi came back 1.7e-8 off (audit n=300 seed 1, S2-RR lattice #27)
+    "S2-RR": (
+        [
+            [0.5, 0, 0.5, 0, -1.0, 0],
+            [
+                0.35355339059327373,
+                0.35355339059327373,
+                -0.35355339059327373,
+                0,
+                0.7071067811865475,
+                0.7071067811865475,
+            ],
+        ],
+        [-0.5, -0.5, 0.5],
+        [0.2229591457793645, math.pi],
+    ),
+}
+
+
+@pytest.mark.parametrize("code", sorted(_TANGENT))
+def test_exact_double_root_comes_back_as_the_tangent_point(code):
+    tw, p, th = (np.array(a, dtype=float) for a in _TANGENT[code])
+    q = fk_point(tw, th, p)
+    r, Qb, lsb, cont = _both(code, tw, p, q)
+    kinds = code.split("-")[1]
+    assert not r.continuum and not cont and not r.ls.any() and not lsb.any()
+    check_exact_rows(code, tw, p, q, r)
+    assert contains_solution(r.q, th, kinds, 1e-12) and contains_solution(Qb, th, kinds, 1e-12)
