@@ -33,21 +33,33 @@ from subproblems.core import BatchResult, Solution, register
 RANK_TOL = 1e-10
 
 
+@np.errstate(all="ignore")
+def _min_norm_lstsq(V, d):
+    """``V^+ d`` for a stack of ``V`` (N, 3, m), ``d`` (N, 3), and whether ``V`` is rank-deficient.
+
+    Through the SVD applied to ``d`` (``U^T d``, then divided by the singular values), not through
+    the explicit pseudo-inverse: with nearly parallel directions (singular values ~1e-9) the product
+    ``pinv(V) @ d`` loses ~1e-9 of ``|d|`` to cancellation and the exact solution looks unreachable.
+    """
+    U, S, Vt = np.linalg.svd(V, full_matrices=False)
+    keep = S > RANK_TOL * S[:, :1]
+    y = np.where(keep, np.einsum("nji,nj->ni", U, d) / np.where(keep, S, 1.0), 0.0)
+    return np.einsum("nji,nj->ni", Vt, y), ~keep.all(axis=-1)
+
+
 def _solve(code: str, twists, p, q) -> list[Solution]:
     V = np.asarray(twists, dtype=float)[:, :3].T
-    s = np.linalg.svd(V, compute_uv=False)
-    continuum = bool(s.min() <= RANK_TOL * s.max())
-    t = np.linalg.pinv(V, rcond=RANK_TOL) @ (q - p)
-    ls = float(np.linalg.norm(V @ t - (q - p))) > EXACT_TOL * problem_scale(twists, p, q)
+    d = np.asarray(q, dtype=float) - np.asarray(p, dtype=float)
+    t, cont = _min_norm_lstsq(V[None], d[None])
+    t, continuum = t[0], bool(cont[0])
+    ls = float(np.linalg.norm(V @ t - d)) > EXACT_TOL * problem_scale(twists, p, q)
     return [Solution(tuple(float(x) for x in t), ls=ls, continuum=continuum)]
 
 
 def _batch(code: str, tw, p, q) -> BatchResult:
     V = np.swapaxes(tw[..., :3], -1, -2)
-    s = np.linalg.svd(V, compute_uv=False)
-    continuum = s.min(axis=-1) <= RANK_TOL * s.max(axis=-1)
     d = q - p
-    t = np.einsum("nij,nj->ni", np.linalg.pinv(V, rcond=RANK_TOL), d)
+    t, continuum = _min_norm_lstsq(V, d)
     err = np.linalg.norm(np.einsum("nij,nj->ni", V, t) - d, axis=-1)
     ls = err > EXACT_TOL * problem_scale_batch(tw, p, q)
     n = len(t)

@@ -158,3 +158,22 @@ def test_exact_double_root_comes_back_as_the_tangent_point(code):
     assert not r.continuum and not cont and not r.ls.any() and not lsb.any()
     check_exact_rows(code, tw, p, q, r)
     assert contains_solution(r.q, th, kinds, 1e-12) and contains_solution(Qb, th, kinds, 1e-12)
+
+
+def test_s2_ttt_directions_4e10_from_parallel_solved_exactly():
+    """Directions 1 and 2 4e-10 apart (audit S2-TTT near #3, n=300 seed 1): the explicit pseudo-inverse
+    left a residual of 2e-8 and the reachable instance came back ls; the solve through the SVD
+    leaves ~eps.  The drawn values are determined only to ~cond * eps ~ 1e-7 by the float data."""
+    tw = np.zeros((3, 6))
+    tw[:, :3] = [
+        [0.19615169010817946, -0.675052784291457, -0.71121603812629],
+        [0.1961516909825861, -0.675052784499292, -0.7112160376878637],
+        [0.12503527040912887, -0.16151268140078143, -0.9789176854569773],
+    ]
+    th = np.array([0.0, -1.0245352417610305, -0.4969888287951316])
+    p = np.array([-1.0498676995951572, 1.4337421064834244, 1.4777796665183867])
+    q = fk_point(tw, th, p)
+    r, Qb, lsb, cont = _both("S2-TTT", tw, p, q)
+    assert not r.ls.any() and not lsb.any() and not r.continuum and not cont
+    check_exact_rows("S2-TTT", tw, p, q, r)
+    assert contains_solution(r.q, th, "TTT", 1e-6) and contains_solution(Qb, th, "TTT", 1e-6)
