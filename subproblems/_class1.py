@@ -55,10 +55,16 @@ DEDUP_TOL = 1e-6
 RANK_TOL = 1e-9
 #: Lengths under this (relative) count as zero (a point on an axis, coincident axes).
 FREE_TOL = 1e-10
-#: Revolute axes parallel within this (``|w_i x w_j|``) also get candidates from the parallel geometry.
+#: Revolute axes parallel within this (``|w_i x w_j|``) also get candidates from the parallel geometry;
+#: the batch path leaves them, and prismatic directions this close to dependent, to the scalar one.
 NEAR_TOL = 1e-6
 #: Those candidates are polished when their residual is below this (relative).
 NEAR_POLISH_TOL = 1e-3
+
+#: Roots of a family's trigonometric polynomial at most this far apart (radians) may be one double root,
+MERGE_SPAN = 1e-5
+#: merged when the polynomial at their midpoint is within this many ulps of its coefficients' size.
+DOUBLE_ROOT_ULPS = 64.0
 
 TWO_PI = 2.0 * math.pi
 _TAU5 = TWO_PI * np.arange(5) / 5.0
@@ -169,7 +175,33 @@ def trig_roots(co, tol: float = 1e-12) -> list[float] | None:
         if abs(a[1]) <= tol:
             return None if abs(a[2]) <= tol else []
         a = a[1:4]
-    return [float(np.angle(z)) for z in np.roots(a) if abs(z) > 0.0]
+    return _merge_double_roots(co, [float(np.angle(z)) for z in np.roots(a) if abs(z) > 0.0])
+
+
+def _trig_value(co, t: float) -> float:
+    f0, c1, s1, c2, s2 = (float(x) for x in co)
+    return f0 + c1 * math.cos(t) + s1 * math.sin(t) + c2 * math.cos(2 * t) + s2 * math.sin(2 * t)
+
+
+def _merge_double_roots(co, roots: list[float]) -> list[float]:
+    """Two roots that are one double root split by roundoff become their midpoint.
+
+    Roundoff of size ``e`` in the coefficients splits a double root into two roots ``~sqrt(e)`` apart
+    (real or a complex pair, projected): each is only ``sqrt(eps)`` accurate, their midpoint is accurate
+    to ``O(eps)``.  A pair is merged when the polynomial vanishes at the midpoint to the roundoff of
+    its coefficients (two distinct close roots leave a value ~ half split squared there).
+    """
+    floor = DOUBLE_ROOT_ULPS * np.finfo(float).eps * float(np.abs(co).sum())
+    out: list[float] = []
+    for t in roots:
+        for i, u in enumerate(out):
+            mid = u + 0.5 * math.remainder(t - u, TWO_PI)
+            if abs(math.remainder(t - u, TWO_PI)) <= MERGE_SPAN and abs(_trig_value(co, mid)) <= floor:
+                out[i] = mid
+                break
+        else:
+            out.append(t)
+    return out
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -550,7 +582,9 @@ def batch_class1(code: str, twists, T) -> BatchResult:
     if ip:
         a, B = _affine_batch(tw, kinds, Q)
         sv = np.linalg.svd(B, compute_uv=False)
-        dep = sv.min(-1) <= RANK_TOL * np.maximum(1.0, sv.max(-1))
+        # nearly dependent directions too: there the least-squares values are ~1/sigma_min^2 sensitive to
+        # the last bit of B, which the two paths compute differently (the scalar path answers for both)
+        dep = sv.min(-1) <= NEAR_TOL * np.maximum(1.0, sv.max(-1))
         degenerate |= (dep & cvalid).any(1)
         d = np.einsum("nkij,nkj->nki", np.linalg.pinv(B, rcond=RANK_TOL), pT[:, None] - a)
         Q[..., ip] = d
