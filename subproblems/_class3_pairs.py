@@ -81,6 +81,7 @@ ZERO_TOL = 1e-10  # |F| / reference below which the eliminant is identically zer
 M_FLOOR = 1e-13  # tensor entries below this times the problem's size are roundoff
 FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
 LM_ITERS = 40
+LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer
 NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
@@ -853,10 +854,17 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
         isolated = ~found & keep[idx].any(axis=1)
         cont[idx] &= ~isolated
         idx, rows, best = idx[~isolated], rows[~isolated], best[~isolated]
-        X[idx, 0], Y[idx, 0] = FX[rows, best], FY[rows, best]
+        bx, by, bexact = FX[rows, best], FY[rows, best], fexact[rows, best]
+        # a least-squares point converged further (LM_ITERS leave it ~1e-5 from the minimiser in a
+        # flat valley, where roundoff that differs between batch sizes then shows)
+        lsq = np.nonzero(~bexact)[0]
+        if len(lsq):
+            px, py, _ = _lm(sub.subset(rows[lsq]), bx[lsq, None], by[lsq, None], LS_POLISH_ITERS, 1e-6)
+            bx[lsq], by[lsq] = _wrap(kx, px[:, 0]), _wrap(ky, py[:, 0])
+        X[idx, 0], Y[idx, 0] = bx, by
         keep[idx] = False
         keep[idx, 0] = True
-        LS[idx, 0] = ~fexact[rows, best]
+        LS[idx, 0] = ~bexact
     # more exact rows than slots (a row that only meets the tolerance between two close roots): the
     # K of smallest residual stay
     rank = np.argsort(np.argsort(np.where(keep, res, np.inf), axis=1, kind="stable"), axis=1)

@@ -9,6 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from subproblems import solve
+from subproblems._class3_pairs import Pair
+
 from ._checks3 import check_instance, fk_point
 
 _NEAR = {
@@ -156,3 +159,38 @@ def test_near_degenerate_pair(name):
         inputs = {"p": P, "h": R, "d": np.array([R[k] @ X[k] for k in range(2)])}
     r = check_instance(code, code.split("-")[1], tw, inputs, case["th"])
     assert not r.ls.any(), r
+
+
+def test_least_squares_answer_is_converged():
+    # unreachable H-RR (audit seed 2, general #69): Levenberg-Marquardt's 40 iterations left the ls
+    # answer ~4e-6 from the minimiser in a flat valley, and solve_batch over 150 instances returned
+    # another point than solve (roundoff differs between batch sizes); now the gradient J^T r vanishes
+    # to ~1e-8 of |J| |r|
+    tw = np.array(
+        [
+            [
+                -0.38898922201269215,
+                0.43535545032747675,
+                0.12430609802164103,
+                0.6684432466827264,
+                0.68198951467874,
+            ]
+            + [-0.2967725186612002],
+            [0.7048466798032198, -0.7633771817420266, -0.05938971719791558, -0.6978689694459829]
+            + [-0.6159228275627644, -0.36553792138640173],
+        ]
+    )
+    P = np.array([[0.4027422888367955, 0.22494044308018535, 0.472489786478332]] * 2)
+    H = np.array(
+        [
+            [1.572959276228471, -1.2123369056708069, -0.23672419072696668],
+            [-0.6978689694459829, -0.6159228275627644, -0.36553792138640173],
+        ]
+    )
+    D = np.array([8.051650294647441, 6.1814146453657655])
+    r = solve("H-RR", tw, p=P, h=H, d=D)
+    assert r.ls.all() and len(r.q) == 1, r
+    pb = Pair("H", "RR", tw[None], P[None], H[None], D[None])
+    res, J = pb.residual(r.q[:, 0][None], r.q[:, 1][None])
+    grad = np.einsum("...ki,...k->...i", J, res)
+    assert np.abs(grad).max() <= 1e-7 * np.abs(J).max() * np.abs(res).max(), (r, grad)
