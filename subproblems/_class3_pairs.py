@@ -74,13 +74,15 @@ from __future__ import annotations
 import numpy as np
 
 from subproblems._class3 import EXACT_TOL, TINY, wrap_batch
-from subproblems.core import BatchResult, Solution
+from subproblems.core import BatchResult, Solution, solve_batch
 
 DEDUP_TOL = 1e-7
 ZERO_TOL = 1e-10  # |F| / reference below which the eliminant is identically zero
 M_FLOOR = 1e-13  # tensor entries below this times the problem's size are roundoff
 FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
 LM_ITERS = 40
+ZERO_DIST = 1e-12  # S3: a distance below this times the scale is a point coincidence (class II)
+APEX_TOL = 1e-6  # engine rows this close to a point-coincidence (d = 0) solution are that solution
 LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer
 NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
@@ -683,10 +685,53 @@ def solve_pairs(code: str, pb: Pair, K: int) -> BatchResult:
     """
     pb, unit = pb.normalised()
     out = _solve_linear(code, pb) if pb.family == "H" and pb.kinds == "TT" else _solve_normalised(code, pb, K)
+    out = _point_coincidences(pb, out, K)
     for j, kind in enumerate(pb.kinds):
         if kind == "T":
             out.q[:, :, j] *= unit[:, None]
     return out
+
+
+def _point_coincidences(pb: Pair, out: BatchResult, K: int) -> BatchResult:
+    """S3 pairs with a zero distance (to ``ZERO_DIST``): the point coincidence ``g p_k = q_k`` (class II).
+
+    ``|g p_k - q_k| = 0`` is a cone in the joint values, not a smooth equation: the polished rows of
+    the engine stop up to ~sqrt(eps) from its apex where the other equation is tangent there, and a
+    continuum judged from it can miss the point.  The class II solver of the same two joints gives
+    the apex points exactly; those satisfying the other equation replace the engine's rows near them
+    (or its ls / continuum answer when there are any).
+    """
+    # (a distance at roundoff of the scale: the same coincidence, evaluated by another forward kinematics)
+    zero = np.abs(pb.D) <= ZERO_DIST * pb.scale[:, None]
+    todo = np.nonzero(zero.any(axis=1))[0] if pb.family == "S3" else np.zeros(0, dtype=int)
+    if not len(todo):
+        return out
+    sub = pb.subset(todo)
+    k = np.argmax(zero[todo], axis=1)  # the first zero-distance equation
+    rows = np.arange(len(todo))
+    s2 = solve_batch("S2-" + pb.kinds, sub.tw, p=sub.P[rows, k], q=sub.R[rows, k])
+    r, _ = sub.residual(s2.q[..., 0], s2.q[..., 1])
+    good = s2.valid & ~s2.ls & ~s2.continuum[:, None]
+    good &= np.abs(r).max(axis=-1) <= EXACT_TOL * sub.scale[:, None]
+    has = good.any(axis=1)
+    if not has.any():
+        return out
+    todo, good, Sq = todo[has], good[has], s2.q[has]
+    kx, ky = pb.kinds
+    Q, valid = out.q[todo], out.valid[todo]
+    exact_old = valid & ~out.ls[todo] & ~out.continuum[todo, None]
+    near = _distance(kx, ky, Q[:, :, None, 0], Q[:, :, None, 1], Sq[:, None, :, 0], Sq[:, None, :, 1])
+    stays = exact_old & ~np.any((near <= APEX_TOL) & good[:, None, :], axis=2)
+    allq = np.concatenate([Sq, Q], axis=1)
+    keep = np.concatenate([good, stays], axis=1)
+    key = np.where(keep, allq[..., 0], np.inf)
+    order = np.lexsort((np.where(keep, allq[..., 1], np.inf), key), axis=1)[:, :K]
+    allq = np.take_along_axis(allq, order[..., None], axis=1)
+    keep = np.take_along_axis(keep, order, axis=1)
+    q, valid, ls, cont = out.q.copy(), out.valid.copy(), out.ls.copy(), out.continuum.copy()
+    q[todo] = np.where(keep[..., None], allq, 0.0)
+    valid[todo], ls[todo], cont[todo] = keep, False, False
+    return BatchResult(out.code, q, valid, ls, cont)
 
 
 def _solve_linear(code: str, pb: Pair) -> BatchResult:

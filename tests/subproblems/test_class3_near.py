@@ -11,6 +11,7 @@ import pytest
 
 from subproblems import solve
 from subproblems._class3_pairs import Pair
+from tests.strategies import contains_solution
 
 from ._checks3 import check_instance, fk_point
 
@@ -194,3 +195,44 @@ def test_least_squares_answer_is_converged():
     res, J = pb.residual(r.q[:, 0][None], r.q[:, 1][None])
     grad = np.einsum("...ki,...k->...i", J, res)
     assert np.abs(grad).max() <= 1e-7 * np.abs(J).max() * np.abs(res).max(), (r, grad)
+
+
+# zero distances (q_k = g p_k): the equation is a cone in the joint values, solved as the class II
+# coincidence; before, S3-RR came back 2e-8 off (the other equation tangent at the apex) and S3-TR
+# (both equations the same coincidence, a point at scale 1e3) was answered ls
+_COINCIDENCE = {
+    "S3-RR": {
+        "tw": [
+            [0.0, 0.0, -1.0, 0.0, 1.0, 0.0],
+            [-1.0606601717798212, 0.7071067811865475, -0.7071067811865475, 0.0, 0.7071067811865475]
+            + [0.7071067811865475],
+        ],
+        "th": [0.8061564138636679, 0.0],
+        "p": [[-1.0, 0.5, 0.5], [-1.0, 0.5, 0.5]],
+        "q2": [1.0, 0.5, -0.5],
+    },
+    "S3-TR": {
+        "tw": [
+            [-0.5282592168837573, -0.8185609381108798, 0.22561070536744393, 0.0, 0.0, 0.0],
+            [25.735413072035243, 46.24610974199211, 275.15408497407964, 0.5390453980832163]
+            + [-0.8374189250290129, 0.09033051980675828],
+        ],
+        "th": [-587.2489296826973, 0.6406550215026994],
+        "p": [[-926.0776286312417, 586.4792571847919, -44.89559952140265]] * 2,
+        "q2": None,
+    },
+}
+
+
+@pytest.mark.parametrize("code", list(_COINCIDENCE))
+@pytest.mark.parametrize("d0", [0.0, 1e-16])
+def test_zero_distance_is_a_point_coincidence(code, d0):
+    case = _COINCIDENCE[code]
+    tw, P, th = np.array(case["tw"]), np.array(case["p"]), case["th"]
+    q1 = fk_point(tw, th, P[0])
+    Q = np.array([q1, q1 if case["q2"] is None else case["q2"]])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    D[0] += d0 * np.abs(Q).max()  # a roundoff-sized distance (another forward kinematics) is the same
+    r = check_instance(code, code.split("-")[1], tw, {"p": P, "q": Q, "d": D}, th)
+    assert not r.ls.any() and not r.continuum, r
+    assert contains_solution(r.q, th, code.split("-")[1], 1e-12), (r.q, th)
