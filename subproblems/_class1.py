@@ -418,7 +418,7 @@ def polish(twists, q, T, scale, fixed=(), iters: int = 5) -> np.ndarray:
         e = _body_error(twists, q, T, scale)
         J = _body_jacobian(twists, q, scale)[:, free]
         q2 = q.copy()
-        q2[free] += np.linalg.lstsq(J, e, rcond=1e-10)[0]
+        q2[free] += np.linalg.lstsq(J, e, rcond=1e-14)[0]
         err2 = residual(twists, q2, T)
         if not err2 < err:
             break
@@ -443,7 +443,7 @@ def finalize(kinds: str, twists, T, cands, scale, max_count: int = 0) -> list[So
     # cut to max_count below even if isolated roots on it have smaller residuals
     exact = sorted((s for s in scored if s[0] <= EXACT_TOL * scale), key=lambda s: (not s[2], s[0]))
     if not exact:
-        err, q, cont = min(scored, key=lambda s: s[0])
+        err, q, cont = next(s for s in scored if s[0] <= _tie(min(s[0] for s in scored)))
         return [Solution(tuple(float(a) for a in q), ls=True, continuum=cont)]
     kept: list = []
     for s in exact:
@@ -454,6 +454,12 @@ def finalize(kinds: str, twists, T, cands, scale, max_count: int = 0) -> list[So
     kept = kept[:max_count] if max_count else kept
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in q), continuum=cont) for _, q, cont in kept]
+
+
+def _tie(best):
+    """Least-squares candidates with residuals within this of the best tie: the first one is returned,
+    so that both paths (whose residuals differ in the last bits) pick the same one."""
+    return best * (1.0 + 1e-9) + 1e-300
 
 
 def solve_class1(code: str, twists, T) -> list[Solution]:
@@ -606,7 +612,7 @@ def batch_class1(code: str, twists, T) -> BatchResult:
         )
         valid[:, 1] &= ~(valid[:, 0] & (diff.max(-1) <= DEDUP_TOL))
     none = ~exact.any(1)
-    best = np.argmin(err, axis=1)
+    best = np.argmax(err <= _tie(err.min(1))[:, None], axis=1)
     valid[np.arange(N), best] |= none
     ls = valid & ~exact
     Qo = np.zeros((N, K, m))

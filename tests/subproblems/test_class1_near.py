@@ -219,3 +219,34 @@ def test_s1_rtt_nearly_dependent_directions_unreachable_paths_agree():
         qb = b.q[i][b.valid[i]]
         assert r.ls.all() and b.ls[i][b.valid[i]].all() and len(qb) == len(r.q) == 1
         assert np.abs(qb - r.q).max() <= 1e-6, (r.q, qb)
+
+
+def test_s1_rrr_unreachable_tied_least_squares_paths_agree():
+    """Axes 1 and 3 coincident to 1e-10, target off the reachable set (the audit's instance: seed 3,
+    near family, #15): the two orientation sheets miss the translation equally (residuals 167.49...
+    equal to 2e-15 relative) and the paths, whose residuals differ in the last bits, returned
+    different least-squares rows.  Now both return the first of the tied ones."""
+    v = [
+        [347.31272057978464, -130.5202323103217, -77.40192514559317],
+        [439.05433601055984, -142.57419724337885, -10.399005332411335],
+        [347.31272056153944, -130.5202323177823, -77.40192519736415],
+    ]
+    w = [
+        [0.030542240458970745, 0.5687190989820914, -0.8219645722296944],
+        [-0.2419373174490003, -0.6957094754604403, -0.6763539459337401],
+        [0.030542240371215387, 0.5687190990229852, -0.8219645722046607],
+    ]
+    tw = np.hstack([v, w])
+    T = np.array(
+        [
+            [0.12057962954595972, 0.7146380430932893, 0.6890232364023388, 42.40953262140634],
+            [-0.8488255557184439, -0.2856763986075341, 0.4448417372930556, -943.9758729319486],
+            [0.5147385053576561, -0.6384993834315136, 0.5721562797520824, -75.32259563200526],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+    r = solve("S1-RRR", tw, T=T)
+    b = solve_batch("S1-RRR", tw[None], T=T[None])
+    qb = b.q[0][b.valid[0]]
+    assert r.ls.all() and b.ls[0][b.valid[0]].all() and len(qb) == len(r.q) == 1
+    assert contains_solution(qb, r.q[0], "RRR", 1e-6), (r.q, qb)
