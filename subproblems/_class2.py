@@ -991,3 +991,133 @@ def inverted_batch(tw) -> np.ndarray:
 
 def revert_batch(r: BatchResult, code: str) -> BatchResult:
     return BatchResult(code, r.q[..., ::-1].copy(), r.valid, r.ls, r.continuum, r.vectorised)
+
+
+# ----------------------------------------------------------------------------------------------------
+# one answer from both paths: least squares and the instances the batch path leaves to the scalar one
+# ----------------------------------------------------------------------------------------------------
+
+#: Least-squares refinement: Newton steps on the squared residual (gradient ``J^T f``, Hessian by central
+#: differences of the gradient) until a step is below this (radians; prismatic values relative).
+LS_STEP_TOL = 1e-13
+#: Two least-squares rows whose residuals differ by at most this times the scale are equally good: the
+#: lexicographically smaller one is returned (symmetric minima), so the answer does not depend on
+#: which path found which minimiser first.
+LS_TIE_TOL = 1e-12
+
+
+def _ls_gradient(twists, p, q, th):
+    x, J = chain_point_jac(twists, th, p)
+    return J.T @ (x - q), float(np.linalg.norm(x - q))
+
+
+def refine_ls(kinds: str, twists, p, q, th, scale: float, iters: int = 40) -> np.ndarray:
+    """A least-squares row moved to the minimiser of the residual it lies near.
+
+    Gauss-Newton (``polish``) converges only linearly when the residual does not vanish and stops
+    ~1e-5 short in flat valleys, so two paths starting from different points return different rows.
+    Newton on ``|f|^2 / 2`` with the Hessian's eigenvalues taken in absolute value (a descent step
+    even off the convex region) converges quadratically to the local minimiser.
+    """
+    th = wrap_row(kinds, th)
+    h = np.array([1e-6 if k == "R" else 1e-6 * scale for k in kinds])
+    g, r = _ls_gradient(twists, p, q, th)
+    for _ in range(iters):
+        H = np.column_stack(
+            [
+                (_ls_gradient(twists, p, q, th + h[j] * e)[0] - _ls_gradient(twists, p, q, th - h[j] * e)[0])
+                / (2 * h[j])
+                for j, e in enumerate(np.eye(len(kinds)))
+            ]
+        )
+        lam, V = np.linalg.eigh((H + H.T) / 2)
+        lam = np.maximum(np.abs(lam), 1e-12 * max(float(np.abs(lam).max()), 1e-300))
+        step = -V @ ((V.T @ g) / lam)
+        for _ in range(30):  # halve until the residual does not grow beyond roundoff
+            th2 = wrap_row(kinds, th + step)
+            g2, r2 = _ls_gradient(twists, p, q, th2)
+            if r2 <= r * (1 + 1e-14) + 1e-16 * scale:
+                break
+            step = step / 2
+        else:
+            break
+        th, g, r = th2, g2, r2
+        if joint_distance(kinds, th + step, th) <= LS_STEP_TOL:
+            break
+    return th
+
+
+def _best_ls(kinds: str, twists, p, q, rows, scale: float):
+    """The lowest-residual row among ``rows`` (each refined), ties broken lexicographically."""
+    refined = [refine_ls(kinds, twists, p, q, th, scale) for th in rows]
+    res = [residual(twists, p, q, th) + roundoff(kinds, th) for th in refined]
+    low = min(res)
+    ties = [i for i, r in enumerate(res) if r <= low + LS_TIE_TOL * scale]
+    i = min(ties, key=lambda k: tuple(np.round(refined[k], 9)))
+    return refined[i], res[i]
+
+
+_IN_SCALAR = [False]  # the scalar path's own call of the batch solver must not defer back to it
+
+
+def agreeing(code: str, batch_raw):
+    """Decorator of a class II scalar solver: one answer for both paths on least-squares instances.
+
+    When the scalar construction leaves no exact row, the batch solver's answer for the same instance
+    is taken too: its exact rows if it has any (verified, so the scalar path missed them), otherwise
+    both least-squares rows are refined (:func:`refine_ls`) and the better one is returned.  The batch
+    path hands its own least-squares instances to this function (:func:`defer_to_scalar`), so both
+    paths return the same row.
+    """
+
+    def deco(scalar):
+        def solve_one(twists, p, q):
+            sols = scalar(twists, p, q)
+            if not all(s.ls for s in sols) or _IN_SCALAR[0]:
+                return sols
+            return _ls_union(code, twists, p, q, sols, batch_raw)
+
+        solve_one.__doc__, solve_one.__name__ = scalar.__doc__, scalar.__name__
+        return solve_one
+
+    return deco
+
+
+def _ls_union(code: str, twists, p, q, sols, batch_raw) -> list[Solution]:
+    kinds = kinds_of(code)
+    twists = np.asarray(twists, dtype=float)
+    p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+    _IN_SCALAR[0] = True
+    try:
+        b = batch_raw(twists[None], p[None], q[None])
+    finally:
+        _IN_SCALAR[0] = False
+    v = b.valid[0]
+    cont_b = bool(b.continuum[0])
+    if (v & ~b.ls[0]).any() and np.all(np.isfinite(b.q[0][v])):
+        return [Solution(tuple(float(a) for a in row), continuum=cont_b) for row in b.q[0][v & ~b.ls[0]]]
+    scale = problem_scale(twists, p, q)
+    rows = [np.array(s.q, dtype=float) for s in sols] + [row for row in b.q[0][v] if np.all(np.isfinite(row))]
+    th, res = _best_ls(kinds, twists, p, q, rows, scale)
+    cont = any(s.continuum for s in sols) or has_free_joint(twists, p, th, scale)
+    return [Solution(tuple(float(a) for a in th), ls=res > EXACT_TOL * scale, continuum=cont)]
+
+
+def defer_to_scalar(code: str, r: BatchResult, tw, p, q, mask=None) -> BatchResult:
+    """The batch result with the instances of ``mask`` (default: those answered least-squares) solved
+    by the scalar path (a loop over those instances only)."""
+    from subproblems.core import solve
+
+    if _IN_SCALAR[0]:
+        return r
+    mask = r.ls.any(axis=1) if mask is None else mask
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return r
+    Q, valid, ls, cont = r.q.copy(), r.valid.copy(), r.ls.copy(), r.continuum.copy()
+    for i in idx:
+        s = solve(code, np.array(tw[i]), p=np.array(p[i]), q=np.array(q[i]))
+        k = min(len(s.q), Q.shape[1])
+        Q[i], valid[i], ls[i] = 0.0, False, False
+        Q[i, :k], valid[i, :k], ls[i, :k], cont[i] = s.q[:k], True, s.ls[:k], s.continuum
+    return BatchResult(code, Q, valid, ls, cont, r.vectorised)

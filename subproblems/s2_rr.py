@@ -47,8 +47,10 @@ import numpy as np
 
 from subproblems._class2 import (
     FREE_TOL,
+    agreeing,
     circle_of,
     circle_of_batch,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     lin_trig_roots_batch,
@@ -106,7 +108,8 @@ def rr_candidates(twists, p, q, scale: float) -> tuple[list, bool]:
     return out, False
 
 
-@register("S2-RR", 2, batch=lambda tw, p, q: solve_s2_rr_batch(tw, p, q))
+@register("S2-RR", 2, batch=lambda tw, p, q: defer_to_scalar("S2-RR", solve_s2_rr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RR", lambda tw, p, q: solve_s2_rr_batch(tw, p, q))
 def solve_s2_rr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 th_2) p = q`` (see the module docstring)."""
     scale = problem_scale(twists, p, q)

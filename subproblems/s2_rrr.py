@@ -71,8 +71,10 @@ import numpy as np
 from subproblems._class2 import (
     COEF_TOL,
     EXACT_TOL,
+    agreeing,
     circle_of,
     circle_of_batch,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     lin_roots_nan_batch,
@@ -348,13 +350,15 @@ def rtr_batch(tw, p, q) -> BatchResult:
     return _solve_batch("S2-RTR", tw, p, q, _rtr_system_batch)
 
 
-@register("S2-RRR", 4, batch=rrr_batch)
+@register("S2-RRR", 4, batch=lambda tw, p, q: defer_to_scalar("S2-RRR", rrr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RRR", rrr_batch)
 def solve_s2_rrr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 th_3) p = q`` (module docstring)."""
     return _solve("S2-RRR", twists, p, q, _rrr_system)
 
 
-@register("S2-RTR", 4, batch=rtr_batch)
+@register("S2-RTR", 4, batch=lambda tw, p, q: defer_to_scalar("S2-RTR", rtr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RTR", rtr_batch)
 def solve_s2_rtr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 t) exp(xi_3 th_3) p = q`` (module docstring)."""
     return _solve("S2-RTR", twists, p, q, _rtr_system)

@@ -58,8 +58,10 @@ import numpy as np
 from subproblems._class2 import (
     COEF_TOL,
     FREE_TOL,
+    agreeing,
     circle_of,
     circle_of_batch,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     inverted,
@@ -173,16 +175,22 @@ def solve_rrt(code, twists, p, q) -> list[Solution]:
     return sols
 
 
-@register("S2-RRT", 4, batch=lambda tw, p, q: rrt_batch(tw, p, q))
+@register("S2-RRT", 4, batch=lambda tw, p, q: defer_to_scalar("S2-RRT", rrt_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RRT", lambda tw, p, q: rrt_batch(tw, p, q))
 def solve_s2_rrt(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 t) p = q`` (module docstring)."""
     return solve_rrt("S2-RRT", twists, p, q)
 
 
-@register("S2-TRR", 4, batch=lambda tw, p, q: revert_batch(rrt_batch(inverted_batch(tw), q, p), "S2-TRR"))
+@register("S2-TRR", 4, batch=lambda tw, p, q: defer_to_scalar("S2-TRR", _trr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-TRR", lambda tw, p, q: _trr_batch(tw, p, q))
 def solve_s2_trr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 t) exp(xi_2 th_2) exp(xi_3 th_3) p = q``, by inversion to S2-RRT."""
     return revert(solve_rrt("S2-RRT", inverted(twists), q, p))
+
+
+def _trr_batch(tw, p, q) -> BatchResult:
+    return revert_batch(rrt_batch(inverted_batch(tw), q, p), "S2-TRR")
 
 
 def rrt_batch(tw, p, q) -> BatchResult:

@@ -38,6 +38,8 @@ import numpy as np
 
 from subproblems._class2 import (
     COEF_TOL,
+    agreeing,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     inverted,
@@ -96,7 +98,8 @@ def _tr_batch(tw, p, q) -> BatchResult:
     return finalize_batch("S2-TR", tw, p, q, cand, free)
 
 
-@register("S2-TR", 2, batch=_tr_batch)
+@register("S2-TR", 2, batch=lambda tw, p, q: defer_to_scalar("S2-TR", _tr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-TR", _tr_batch)
 def solve_s2_tr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 t) exp(xi_2 th) p = q`` (see the module docstring)."""
     return finalize("S2-TR", twists, p, q, tr_candidates(twists, p, q, problem_scale(twists, p, q)))
@@ -106,7 +109,8 @@ def _rt_batch(tw, p, q) -> BatchResult:
     return revert_batch(_tr_batch(inverted_batch(tw), q, p), "S2-RT")
 
 
-@register("S2-RT", 2, batch=_rt_batch)
+@register("S2-RT", 2, batch=lambda tw, p, q: defer_to_scalar("S2-RT", _rt_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RT", _rt_batch)
 def solve_s2_rt(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th) exp(xi_2 t) p = q``, by inversion to S2-TR."""
     return revert(solve_s2_tr(inverted(twists), q, p))

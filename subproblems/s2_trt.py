@@ -45,6 +45,8 @@ import numpy as np
 
 from subproblems._class2 import (
     COEF_TOL,
+    agreeing,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     problem_scale,
@@ -147,7 +149,8 @@ def trt_batch(tw, p, q) -> BatchResult:
     return finalize_batch("S2-TRT", tw, p, q, cand, cfree, planar | (flat & ~planar))
 
 
-@register("S2-TRT", 2, batch=trt_batch)
+@register("S2-TRT", 2, batch=lambda tw, p, q: defer_to_scalar("S2-TRT", trt_batch(tw, p, q), tw, p, q))
+@agreeing("S2-TRT", trt_batch)
 def solve_s2_trt(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 t_1) exp(xi_2 th) exp(xi_3 t_3) p = q`` (module docstring)."""
     cands, cont = trt_candidates(twists, p, q, problem_scale(twists, p, q))

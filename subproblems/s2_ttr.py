@@ -41,8 +41,10 @@ import numpy as np
 from subproblems._class2 import (
     COEF_TOL,
     EXACT_TOL,
+    agreeing,
     circle_of,
     circle_of_batch,
+    defer_to_scalar,
     finalize,
     finalize_batch,
     inverted,
@@ -129,14 +131,20 @@ def ttr_batch(tw, p, q) -> BatchResult:
     return finalize_batch("S2-TTR", tw, p, q, cand, cfree, cont)
 
 
-@register("S2-TTR", 2, batch=ttr_batch)
+def _rtt_batch(tw, p, q) -> BatchResult:
+    return revert_batch(ttr_batch(inverted_batch(tw), q, p), "S2-RTT")
+
+
+@register("S2-TTR", 2, batch=lambda tw, p, q: defer_to_scalar("S2-TTR", ttr_batch(tw, p, q), tw, p, q))
+@agreeing("S2-TTR", ttr_batch)
 def solve_s2_ttr(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 t_1) exp(xi_2 t_2) exp(xi_3 th) p = q`` (module docstring)."""
     cands, cont = ttr_candidates(twists, p, q, problem_scale(twists, p, q))
     return finalize("S2-TTR", twists, p, q, cands, continuum=cont)
 
 
-@register("S2-RTT", 2, batch=lambda tw, p, q: revert_batch(ttr_batch(inverted_batch(tw), q, p), "S2-RTT"))
+@register("S2-RTT", 2, batch=lambda tw, p, q: defer_to_scalar("S2-RTT", _rtt_batch(tw, p, q), tw, p, q))
+@agreeing("S2-RTT", lambda tw, p, q: _rtt_batch(tw, p, q))
 def solve_s2_rtt(twists, p, q) -> list[Solution]:
     """Every solution of ``exp(xi_1 th) exp(xi_2 t_2) exp(xi_3 t_3) p = q``, by inversion to S2-TTR."""
     return revert(solve_s2_ttr(inverted(twists), q, p))
