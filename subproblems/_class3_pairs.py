@@ -83,7 +83,8 @@ FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstra
 LM_ITERS = 40
 ZERO_DIST = 1e-12  # S3: a distance below this times the scale is a point coincidence (class II)
 APEX_TOL = 1e-6  # engine rows this close to a point-coincidence (d = 0) solution are that solution
-LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer
+RESEED_TOL = 1e-4  # stalled candidates missing by less than this, a value acting less (relative): _reseed
+LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer, at most (_polish_lsq)
 NEWTON_ITERS = 24
 MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
@@ -778,6 +779,101 @@ def _solve_linear(code: str, pb: Pair) -> BatchResult:
     return BatchResult(code, q[:, None, :], np.ones((n, 1), dtype=bool), ls[:, None], singular)
 
 
+def _polish_lsq(pb: Pair, x, y, chunk: int = 20):
+    """Least-squares points (N, 1) converged until the gradient ``J^T r`` stops falling (its roundoff
+    floor is ~1e-9 of ``|J| |r|``)."""
+    last = np.inf
+    for _ in range(LS_POLISH_ITERS // chunk):
+        x, y, _ = _lm(pb, x, y, chunk, 1e-6)
+        r, J = pb.residual(x, y)
+        grad = np.abs(np.einsum("...ki,...k->...i", J, r)).max(axis=-1)
+        grad = grad / (np.abs(J).max(axis=(-2, -1)) * np.abs(r).max(axis=-1) + TINY)
+        if np.all((grad <= 1e-9) | (grad > 0.5 * last)):
+            break
+        last = grad
+    return x, y
+
+
+def _polish(pb: Pair, X, Y, V):
+    """Candidates polished on the original equations: Gauss-Newton, then plain Newton where needed."""
+    X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
+    # undamped Newton: LM's damping stalls ~1e-2 from a multiple root (rank-deficient Jacobian)
+    # (only instances with a candidate LM left above the roundoff floor: converged ones need none)
+    slow = np.nonzero(np.any(V & (cost > (1e-13 * pb.scale[:, None]) ** 2), axis=1))[0]
+    if len(slow):
+        NX, NY, _, _ = _newton(pb.subset(slow), X[slow], Y[slow], NEWTON_ITERS)
+        X[slow], Y[slow] = NX, NY
+    return _wrap(pb.kinds[0], X), _wrap(pb.kinds[1], Y)
+
+
+def _reseed(pb: Pair, M, X, Y, V):
+    """Candidates where one value barely acts start again from the roots of one equation in one value.
+
+    A candidate from a multiple root of the eliminant has its kept value off by ~eps^(1/m) (1e-3 for a
+    cluster of six); where the other value is only weakly determined (a point 1e-8 from an axis
+    moves it by 1e-8 per radian) back-substitution gives it anywhere, and polishing then stalls at an
+    extremum of that equation or reaches only one of its roots.  From the polished values of each such
+    near miss or exact candidate, each equation is solved for one value with the other fixed: those
+    points are polished and added.
+    """
+    kx, ky = pb.kinds
+    r, J = pb.residual(X, Y)
+    res = np.abs(r).max(axis=-1) / pb.scale[:, None]
+    weak = np.linalg.norm(J, axis=-2).min(axis=-1) <= RESEED_TOL * pb.scale[:, None]  # a value barely acts
+    # (exact ones too: within the tolerance such a value is anywhere in a band, and every candidate
+    # may have gone to one root; a spurious root of the eliminant misses by much more)
+    stalled = V & (res <= RESEED_TOL) & weak
+    idx = np.nonzero(stalled.any(axis=1))[0]
+    if not len(idx):
+        return X, Y, V
+    sub, Ms = pb.subset(idx), M[idx]
+    cnt = stalled[idx].sum(axis=1)
+    order = np.argsort(~stalled[idx], axis=1, kind="stable")[:, : int(cnt.max())]
+    SX, SY = np.take_along_axis(X[idx], order, axis=1), np.take_along_axis(Y[idx], order, axis=1)
+    SV = np.arange(order.shape[1])[None, :] < cnt[:, None]
+    n, S = SX.shape
+    ex_x = _single_roots(kx, np.einsum("nsj,nkij->nski", _basis_values(ky, SY), Ms), sub.scale)
+    ex_y = _single_roots(ky, np.einsum("nsi,nkij->nskj", _basis_values(kx, SX), Ms), sub.scale)
+    rep = lambda a: np.repeat(a, 4, axis=1)  # noqa: E731 - one value fixed, four roots of the other
+    NX = np.concatenate([ex_x.reshape(n, -1), rep(SX)], axis=1)
+    NY = np.concatenate([rep(SY), ex_y.reshape(n, -1)], axis=1)
+    NV = np.concatenate([rep(SV), rep(SV)], axis=1)
+    NX, NY = _polish(sub, np.where(NV, NX, 0.0), np.where(NV, NY, 0.0), NV)
+    width = NX.shape[1]
+    pad = lambda a, fill: np.concatenate([a, np.full((a.shape[0], width), fill, dtype=a.dtype)], axis=1)  # noqa: E731
+    X, Y, V = pad(X, 0.0), pad(Y, 0.0), pad(V, False)
+    X[idx, -width:], Y[idx, -width:], V[idx, -width:] = NX, NY, NV
+    X[idx], Y[idx] = _weak_newton(sub, X[idx], Y[idx])
+    return X, Y, V
+
+
+def _weak_newton(pb: Pair, X, Y, iters: int = 6):
+    """Newton along the value that barely acts, on the equation it acts on most (the other fixed).
+
+    Where the Jacobian is singular otherwise (a zero distance makes an equation a cone, whose
+    gradient vanishes at its apex), Newton on both values stalls, and a row off by 1e-4 in the weak
+    value still meets the tolerance; one value at a time converges.  A step is kept if it lowers the
+    residual.
+    """
+    kx, ky = pb.kinds
+    for _ in range(iters):
+        r, J = pb.residual(X, Y)
+        res = np.abs(r).max(axis=-1)
+        col = np.abs(J)  # (n, C, 2 equations, 2 values)
+        j = np.argmin(col.max(axis=-2), axis=-1)  # the weaker value
+        Jj = np.take_along_axis(J, j[..., None, None], axis=-1)[..., 0]  # (n, C, 2)
+        k = np.argmax(np.abs(Jj), axis=-1)[..., None]
+        den = np.take_along_axis(Jj, k, axis=-1)[..., 0]
+        step = -np.take_along_axis(r, k, axis=-1)[..., 0] / np.where(den == 0, 1.0, den)
+        step = np.where(den == 0, 0.0, step)
+        NX = X + _cap(kx, np.where(j == 0, step, 0.0), pb.scale)
+        NY = Y + _cap(ky, np.where(j == 1, step, 0.0), pb.scale)
+        nr, _ = pb.residual(NX, NY)
+        better = np.abs(nr).max(axis=-1) < res
+        X, Y = np.where(better, NX, X), np.where(better, NY, Y)
+    return _wrap(kx, X), _wrap(ky, Y)
+
+
 def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     kx, ky = pb.kinds
     n = len(pb.D)
@@ -828,14 +924,8 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     X, Y = np.take_along_axis(X, order, axis=1), np.take_along_axis(Y, order, axis=1)
     V = np.arange(width)[None, :] < cnt[:, None]
     X, Y = np.where(V, X, 0.0), np.where(V, Y, 0.0)
-    X, Y, cost = _lm(pb, X, Y, NEWTON_ITERS, 1e-12)
-    # undamped Newton: LM's damping stalls ~1e-2 from a multiple root (rank-deficient Jacobian)
-    # (only instances with a candidate LM left above the roundoff floor: converged ones need none)
-    slow = np.nonzero(np.any(V & (cost > (1e-13 * pb.scale[:, None]) ** 2), axis=1))[0]
-    if len(slow):
-        NX, NY, _, _ = _newton(pb.subset(slow), X[slow], Y[slow], NEWTON_ITERS)
-        X[slow], Y[slow] = NX, NY
-    X, Y = _wrap(kx, X), _wrap(ky, Y)
+    X, Y = _polish(pb, X, Y, V)
+    X, Y, V = _reseed(pb, M, X, Y, V)
     # a value the equations do not constrain at the other one (a continuum through this point)
     X, Y, xfree, yfree = _snap_free(M, kx, ky, X, Y, pb.scale)
     X, Y = _wrap(kx, X), _wrap(ky, Y)
@@ -904,7 +994,7 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
         # flat valley, where roundoff that differs between batch sizes then shows)
         lsq = np.nonzero(~bexact)[0]
         if len(lsq):
-            px, py, _ = _lm(sub.subset(rows[lsq]), bx[lsq, None], by[lsq, None], LS_POLISH_ITERS, 1e-6)
+            px, py = _polish_lsq(sub.subset(rows[lsq]), bx[lsq, None], by[lsq, None])
             bx[lsq], by[lsq] = _wrap(kx, px[:, 0]), _wrap(ky, py[:, 0])
         X[idx, 0], Y[idx, 0] = bx, by
         keep[idx] = False

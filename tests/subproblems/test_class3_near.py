@@ -11,6 +11,7 @@ import pytest
 
 from subproblems import solve
 from subproblems._class3_pairs import Pair
+from subproblems.screw import revolute_twist
 from tests.strategies import contains_solution
 
 from ._checks3 import check_instance, fk_point
@@ -236,3 +237,21 @@ def test_zero_distance_is_a_point_coincidence(code, d0):
     r = check_instance(code, code.split("-")[1], tw, {"p": P, "q": Q, "d": D}, th)
     assert not r.ls.any() and not r.continuum, r
     assert contains_solution(r.q, th, code.split("-")[1], 1e-12), (r.q, th)
+
+
+def test_weakly_determined_value_from_a_multiple_root():
+    # thorough profile: p_1 = q_1 = the origin (on axis 1, d_1 = 0) makes the eliminant's root at
+    # th_2 = 0 a cluster of six, spread 4e-3; p_2 is 1e-8 from axis 1, so th_1 moves equation 2 by 1e-8
+    # per radian, back-substitution put it anywhere and polishing stalled at an extremum of equation 2:
+    # the root th_1 = 0 was lost (the other, -1.70, came back).  Stalled near misses now start again
+    # from equation 2 solved for th_1 at the polished th_2
+    tw = np.array(
+        [revolute_twist([5.0, 1.0, 2.0], [0.0, 0.0, 0.0]), revolute_twist([1.0, 0.0, 0.0], [0, 0, 1.0])]
+    )
+    th = np.array([0.0, 0.0])
+    P, Q = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1e-8]]), np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 1.0]])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    r = check_instance("S3-RR", "RR", tw, {"p": P, "q": Q, "d": D}, th)
+    assert len(r.q) == 2 and not r.ls.any() and not r.continuum, r
+    # th_1 = 0 is fixed by equation 2 only to ~eps / 6e-9 ~ 3e-8
+    assert contains_solution(r.q, th, "RR", 1e-7) and contains_solution(r.q, [-1.7023975858, 0.0], "RR", 1e-7)
