@@ -93,10 +93,18 @@ FOLD_SV = 1e-6  # |det J| / |J|^2 under which an exact row may be a tangency spl
 FOLD_FLAT = 1e-5  # |J| / scale under which the Jacobian vanishes at a tangency (both equations stationary)
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
 FOLD_ITERS = 8
+MIN_UNIT = 2.0**-500  # smallest unit of length an instance is solved in (Pair.normalised)
 RANK_TOL = 1e-12  # H-TT: singular values below this times the largest are roundoff (a singular system)
 
 
 # --------------------------------------------------------------------------------- parametrisation
+
+
+def _length(v):
+    """Euclidean length over the last axis without underflow (components ~1e-200 square to 0)."""
+    m = np.abs(v).max(axis=-1)
+    safe = np.where(m == 0, 1.0, m)
+    return m * np.linalg.norm(v / safe[..., None], axis=-1)
 
 
 def _rot(w, c, s, u):
@@ -190,14 +198,14 @@ class Pair:
         self.family, self.kinds = family, kinds
         self.tw, self.P, self.R, self.D = tw, P, R, D  # R: q points (S3) or normals h (H)
         n = len(D)
-        norms = [np.linalg.norm(P, axis=2).max(axis=1), np.abs(D).max(axis=1)]
+        norms = [_length(P).max(axis=1), np.abs(D).max(axis=1)]
         if family == "S3":
-            norms.append(np.linalg.norm(R, axis=2).max(axis=1))
+            norms.append(_length(R).max(axis=1))
         else:
-            hn = np.linalg.norm(R, axis=2)
+            hn = _length(R)
             norms.append((np.abs(D) / np.where(hn == 0, 1.0, hn)).max(axis=1))
         for j in range(2):
-            norms.append(np.linalg.norm(np.cross(tw[:, j, 3:], tw[:, j, :3]), axis=1))
+            norms.append(_length(np.cross(tw[:, j, 3:], tw[:, j, :3])))
         self.scale = np.maximum(np.maximum.reduce(norms), TINY) if n else np.zeros(0)
 
     def subset(self, idx) -> Pair:
@@ -212,14 +220,18 @@ class Pair:
         and a leading coefficient ~1e-24 of the largest at scale 1e3 was dropped as a root at
         infinity).  Prismatic values of the result are in the unit: multiply them back.
         """
-        unit = np.exp2(np.round(np.log2(self.scale)))
+        # (an instance of size below MIN_UNIT, ~1e-150, is all roundoff: it is solved as of size 1/2
+        # in units of MIN_UNIT, its lengths then ~0)
+        unit = np.exp2(np.maximum(np.round(np.log2(self.scale)), np.log2(MIN_UNIT)))
         u = unit[:, None, None]
         tw = self.tw.copy()
         for j, kind in enumerate(self.kinds):
             if kind == "R":  # v = -w x r: a length; a prismatic direction is not (its value is)
                 tw[:, j, :3] /= unit[:, None]
         R = self.R / u if self.family == "S3" else self.R  # q points, or plane normals (directions)
-        return Pair(self.family, self.kinds, tw, self.P / u, R, self.D / unit[:, None]), unit
+        out = Pair(self.family, self.kinds, tw, self.P / u, R, self.D / unit[:, None])
+        out.scale = np.maximum(out.scale, 0.5)
+        return out, unit
 
     def tensor(self):
         f = s3_tensor if self.family == "S3" else h_tensor
@@ -704,7 +716,9 @@ def _point_coincidences(pb: Pair, out: BatchResult, K: int) -> BatchResult:
     """
     # (a distance at roundoff of the scale: the same coincidence, evaluated by another forward kinematics)
     zero = np.abs(pb.D) <= ZERO_DIST * pb.scale[:, None]
-    todo = np.nonzero(zero.any(axis=1))[0] if pb.family == "S3" else np.zeros(0, dtype=int)
+    # (an exact continuum stays: the coincidence is then not isolated either)
+    todo = zero.any(axis=1) & ~(out.continuum & ~out.ls.any(axis=1))
+    todo = np.nonzero(todo)[0] if pb.family == "S3" else np.zeros(0, dtype=int)
     if not len(todo):
         return out
     sub = pb.subset(todo)
@@ -782,13 +796,16 @@ def _solve_linear(code: str, pb: Pair) -> BatchResult:
 def _polish_lsq(pb: Pair, x, y, chunk: int = 20):
     """Least-squares points (N, 1) converged until the gradient ``J^T r`` stops falling (its roundoff
     floor is ~1e-9 of ``|J| |r|``)."""
-    last = np.inf
+    last = np.full(x.shape, np.inf)
+    active = np.ones(x.shape, dtype=bool)  # (each point stops on its own: a batch answers as solve)
     for _ in range(LS_POLISH_ITERS // chunk):
-        x, y, _ = _lm(pb, x, y, chunk, 1e-6)
+        nx, ny, _ = _lm(pb, x, y, chunk, 1e-6)
+        x, y = np.where(active, nx, x), np.where(active, ny, y)
         r, J = pb.residual(x, y)
         grad = np.abs(np.einsum("...ki,...k->...i", J, r)).max(axis=-1)
         grad = grad / (np.abs(J).max(axis=(-2, -1)) * np.abs(r).max(axis=-1) + TINY)
-        if np.all((grad <= 1e-9) | (grad > 0.5 * last)):
+        active &= (grad > 1e-9) & (grad <= 0.5 * last)
+        if not active.any():
             break
         last = grad
     return x, y

@@ -255,3 +255,14 @@ def test_weakly_determined_value_from_a_multiple_root():
     assert len(r.q) == 2 and not r.ls.any() and not r.continuum, r
     # th_1 = 0 is fixed by equation 2 only to ~eps / 6e-9 ~ 3e-8
     assert contains_solution(r.q, th, "RR", 1e-7) and contains_solution(r.q, [-1.7023975858, 0.0], "RR", 1e-7)
+
+
+@pytest.mark.parametrize("tiny", [2.5e-213, 1e-300])
+def test_lengths_that_square_to_zero(tiny):
+    # thorough profile: a point (0, -1e-308, 2.5e-213): its length squared underflows, the scale came
+    # out as 0 and the normalised instance had entries ~1e175 (LinAlgError from the eigenvalues)
+    tw = np.array([[1.0, 0, 0, 0, 0, 0], [0.91287093, 0.18257419, 0.36514837, 0, 0, 0]])
+    P = np.array([[0.0, -1.11253693e-308, tiny], [0.0, 0.0, 0.0]])
+    Q, th = np.zeros((2, 3)), np.array([0.0, 0.0])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    check_instance("S3-TT", "TT", tw, {"p": P, "q": Q, "d": D}, th)
