@@ -165,7 +165,7 @@ def s3_tensor(kinds, tw, P, Q, D):
 def h_tensor(kinds, tw, P, H, D):
     """M (N, 2, 3, 3) of the H pair (normals divided by their length)."""
     kx, ky = kinds
-    hn = np.linalg.norm(H, axis=2)
+    hn = _length(H)
     safe = np.where(hn == 0.0, 1.0, hn)
     H = H / safe[..., None]
     D = np.where(hn == 0.0, D, D / safe)
@@ -268,7 +268,7 @@ class Pair:
             r = dist - self.D[:, None]
             u = diff / np.where(dist == 0, 1.0, dist)[..., None]
         else:
-            hn = np.linalg.norm(self.R, axis=-1)
+            hn = _length(self.R)
             safe = np.where(hn == 0, 1.0, hn)[:, None, :, None]
             u = self.R[:, None] / safe
             # h . X - d before the division: no rounding of h / |h| and d / |h| in the difference
@@ -759,7 +759,7 @@ def _solve_linear(code: str, pb: Pair) -> BatchResult:
     otherwise the minimum-norm least-squares point, flagged ``ls``.
     """
     n = len(pb.D)
-    hn = np.linalg.norm(pb.R, axis=2)
+    hn = _length(pb.R)
     safe = np.where(hn == 0.0, 1.0, hn)
     V = pb.tw[:, :, :3]  # (N, 2 joints, 3)
     vn = np.linalg.norm(V, axis=2)

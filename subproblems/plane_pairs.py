@@ -67,8 +67,10 @@ def pair_plane_residual(twists, qrow, p=None, h=None, d=None, **_) -> float:
     out = 0.0
     for k in range(2):
         x = g[:3, :3] @ P[k] + g[:3, 3]
-        hn = float(np.linalg.norm(H[k]))
-        out = max(out, abs(D[k]) if hn == 0 else abs(float(H[k] @ x) - D[k]) / hn)
+        m = float(np.abs(H[k]).max())  # (h / m: a normal ~1e-200 long does not square to 0)
+        hk, dk = (H[k] / m, D[k] / m) if m > 0 else (H[k], D[k])
+        hn = float(np.linalg.norm(hk))
+        out = max(out, abs(D[k]) if hn == 0 else abs(float(hk @ x) - dk) / hn)
     return out
 
 
