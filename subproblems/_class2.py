@@ -286,6 +286,7 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         else:
             kept.append([s[0], s[1], s[2], s[1], np.zeros(len(kinds)), 1])
     kept = [(k[0], k[1], k[2]) for k in kept]
+    kept = _tangent_points(kinds, twists, p, q, kept, scale)
     # Never return more rows than the type can have: merge the closest pairs.
     while len(kept) > max_solutions(code):
         i, j = min(
@@ -295,6 +296,78 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         del kept[j]  # kept is sorted by residual: j has the larger one
     kept.sort(key=lambda s: tuple(s[1]))
     return [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
+
+
+def _tangent_points(kinds: str, twists, p, q, kept, scale: float) -> list:
+    """Kept ``(residual, th, free)`` rows with a singular Jacobian moved to the tangent point
+    (:func:`refine_singular`), then deduplicated again (two rows of one multiple root meet there)."""
+    out: list = []
+    for r, th, free in kept:
+        if not free:
+            th = refine_singular(kinds, twists, p, q, th, scale)
+        if not any(joint_distance(kinds, th, k[1]) <= DEDUP_TOL for k in out):
+            out.append((r, th, free))
+    return out
+
+
+def _smallest_singular(twists, th, p):
+    """``(x, J, Jn, sigma_min of Jn, u, v)`` at ``th``; ``Jn`` has unit columns (None if one vanishes)."""
+    x, J = chain_point_jac(twists, th, p)
+    n = np.linalg.norm(J, axis=0)
+    if n.min() == 0.0:
+        return x, J, None, 0.0, None, None
+    Jn = J / n
+    U, S, Vt = np.linalg.svd(Jn, full_matrices=False)
+    return x, J, Jn, float(S[-1]), U[:, -1], Vt[-1]
+
+
+def refine_singular(kinds: str, twists, p, q, th, scale: float, iters: int = 10) -> np.ndarray:
+    """An exact row at a multiple root moved onto the root.
+
+    There the Jacobian is singular and the residual grows only quadratically (or slower) along its
+    null direction, so every point within ~1e-8 of the root is exact to roundoff and the
+    constructions return any of them.  The root is where, in addition, the Jacobian is singular:
+    Gauss-Newton on ``(f(th), scale * u^T Jn(th) v)`` (``u``, ``v`` the singular vectors of the smallest
+    singular value of the column-scaled Jacobian, held fixed per step) converges to it.  The moved row
+    is kept only if it stays exact to roundoff, lowers the singular value and moved less than
+    TANGENT_TOL; two distinct roots close together (no multiple root between them) fail that.
+    """
+    th = np.asarray(th, dtype=float)
+    x, J, Jn, sig0, u, v = _smallest_singular(twists, th, p)
+    if Jn is None or sig0 >= UNCERTAIN_SING_TOL:
+        return th
+    r0 = float(np.linalg.norm(x - q))
+    h = 1e-7
+    t = th.copy()
+    for _ in range(iters):
+        x, J, Jn, sig, u, v = _smallest_singular(twists, t, p)
+        if Jn is None:
+            return th
+        grad = []
+        for k in range(len(t)):
+            e = np.zeros(len(t))
+            e[k] = h
+            Jp = chain_point_jac(twists, t + e, p)[1]
+            Jm = chain_point_jac(twists, t - e, p)[1]
+            n = np.linalg.norm(J, axis=0)
+            grad.append(float(u @ ((Jp - Jm) / n) @ v) / (2 * h))
+        A = np.vstack([J, scale * np.array(grad)])
+        b = np.concatenate([x - q, [scale * sig]])
+        step = -np.linalg.lstsq(A, b, rcond=1e-12)[0]
+        t = t + step
+        if np.abs(step).max() <= 1e-15 * max(1.0, float(np.abs(t).max())):
+            break
+    t = wrap_row(kinds, t)
+    x, _, Jn, sig, _, _ = _smallest_singular(twists, t, p)
+    r = float(np.linalg.norm(x - q))
+    if (
+        np.all(np.isfinite(t))
+        and r <= max(r0, 1e-14 * scale)
+        and sig <= sig0
+        and joint_distance(kinds, t, th) <= TANGENT_TOL
+    ):
+        return t
+    return th
 
 
 def _mark_continuum_rows(kinds: str, twists, p, q, exact, scale: float) -> list:
@@ -1031,9 +1104,10 @@ def refine_ls(kinds: str, twists, p, q, th, scale: float, iters: int = 40) -> np
             ]
         )
         lam, V = np.linalg.eigh((H + H.T) / 2)
-        lam = np.maximum(np.abs(lam), 1e-12 * max(float(np.abs(lam).max()), 1e-300))
+        # a flat direction (a valley of minimisers) gets no step from the gradient's roundoff
+        lam = np.maximum(np.abs(lam), 1e-9 * max(float(np.abs(lam).max()), 1e-300))
         step = -V @ ((V.T @ g) / lam)
-        for _ in range(30):  # halve until the residual does not grow beyond roundoff
+        for _ in range(10):  # halve until the residual does not grow beyond roundoff
             th2 = wrap_row(kinds, th + step)
             g2, r2 = _ls_gradient(twists, p, q, th2)
             if r2 <= r * (1 + 1e-14) + 1e-16 * scale:
@@ -1041,8 +1115,10 @@ def refine_ls(kinds: str, twists, p, q, th, scale: float, iters: int = 40) -> np
             step = step / 2
         else:
             break
+        moved = joint_distance(kinds, th2, th)
+        stalled = moved <= 1e-8 and np.linalg.norm(g2) > 0.5 * np.linalg.norm(g)  # the gradient's noise
         th, g, r = th2, g2, r2
-        if joint_distance(kinds, th + step, th) <= LS_STEP_TOL:
+        if moved <= LS_STEP_TOL or stalled:
             break
     return th
 
@@ -1059,23 +1135,64 @@ def _best_ls(kinds: str, twists, p, q, rows, scale: float):
 
 _IN_SCALAR = [False]  # the scalar path's own call of the batch solver must not defer back to it
 
+#: An exact row is uncertain when its residual exceeds this times the scale (well-posed roots polish
+#: to ~1e-15: a larger residual means a valley of near-solutions, nearly degenerate geometry) ...
+UNCERTAIN_RES_TOL = 1e-12
+#: ... or when its Jacobian, columns scaled to unit length, has a singular value below this (a
+#: multiple root or a continuum, located only to ~sqrt(eps)).  The two paths' constructions then
+#: return different rows (each within EXACT_TOL), so both paths answer with the union of both.
+UNCERTAIN_SING_TOL = 1e-6
+
+
+def uncertain_rows(kinds: str, tw, p, q, th, scale) -> np.ndarray:
+    """Mask (M,) of exact rows ``th`` (M, m) whose location the constructions do not pin down."""
+    x, J, _ = point_chain_rows(kinds, tw, th, p)
+    res = np.linalg.norm(x - q, axis=-1)
+    n = np.linalg.norm(J, axis=1)
+    Jn = J / np.where(n > 0.0, n, 1.0)[:, None, :]
+    smin = np.linalg.svd(Jn, compute_uv=False)[:, -1]
+    return (res > UNCERTAIN_RES_TOL * scale) | (smin < UNCERTAIN_SING_TOL) | (n.min(axis=1) == 0.0)
+
+
+def uncertain_instance(kinds: str, tw, p, q, rows, scale: float) -> bool:
+    """True when the exact ``rows`` (k, m) of one instance need the other path's rows too: an
+    uncertain row, or two rows within TANGENT_TOL (a root split in two, or two roots run together)."""
+    rows = np.asarray(rows, dtype=float).reshape(-1, len(kinds))
+    k = len(rows)
+    if k == 0:
+        return False
+    for i in range(k):
+        for j in range(i + 1, k):
+            if joint_distance(kinds, rows[i], rows[j]) <= TANGENT_TOL:
+                return True
+    T = np.broadcast_to(tw, (k,) + np.shape(tw))
+    P, Qr = np.broadcast_to(p, (k, 3)), np.broadcast_to(q, (k, 3))
+    return bool(uncertain_rows(kinds, T, P, Qr, rows, np.full(k, scale)).any())
+
 
 def agreeing(code: str, batch_raw):
-    """Decorator of a class II scalar solver: one answer for both paths on least-squares instances.
+    """Decorator of a class II scalar solver: one answer for both paths where they can differ.
 
-    When the scalar construction leaves no exact row, the batch solver's answer for the same instance
-    is taken too: its exact rows if it has any (verified, so the scalar path missed them), otherwise
-    both least-squares rows are refined (:func:`refine_ls`) and the better one is returned.  The batch
-    path hands its own least-squares instances to this function (:func:`defer_to_scalar`), so both
-    paths return the same row.
+    When the scalar construction leaves no exact row, the instance is a continuum, or an exact row is
+    uncertain (:func:`uncertain_instance`), the batch solver's answer for the same instance is taken
+    too: the exact rows of both go through :func:`finalize` together (deduplicated, merged, probed);
+    without any, both least-squares rows are refined (:func:`refine_ls`) and the better one is
+    returned.  The batch path hands the same kinds of instances to this function
+    (:func:`defer_to_scalar`), so both paths return the same rows.
     """
 
     def deco(scalar):
         def solve_one(twists, p, q):
             sols = scalar(twists, p, q)
-            if not all(s.ls for s in sols) or _IN_SCALAR[0]:
-                return sols
-            return _ls_union(code, twists, p, q, sols, batch_raw)
+            if _IN_SCALAR[0] or any(s.continuum and not s.ls for s in sols):
+                return sols  # a continuum's representatives: the batch path defers it here
+            kinds = kinds_of(code)
+            exact = [s.q for s in sols if not s.ls]
+            if exact:
+                tw, pp, qq = (np.asarray(a, dtype=float) for a in (twists, p, q))
+                if not uncertain_instance(kinds, tw, pp, qq, exact, problem_scale(tw, pp, qq)):
+                    return sols
+            return _union(code, twists, p, q, sols, batch_raw)
 
         solve_one.__doc__, solve_one.__name__ = scalar.__doc__, scalar.__name__
         return solve_one
@@ -1083,7 +1200,7 @@ def agreeing(code: str, batch_raw):
     return deco
 
 
-def _ls_union(code: str, twists, p, q, sols, batch_raw) -> list[Solution]:
+def _union(code: str, twists, p, q, sols, batch_raw) -> list[Solution]:
     kinds = kinds_of(code)
     twists = np.asarray(twists, dtype=float)
     p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
@@ -1092,26 +1209,26 @@ def _ls_union(code: str, twists, p, q, sols, batch_raw) -> list[Solution]:
         b = batch_raw(twists[None], p[None], q[None])
     finally:
         _IN_SCALAR[0] = False
-    v = b.valid[0]
-    cont_b = bool(b.continuum[0])
-    if (v & ~b.ls[0]).any() and np.all(np.isfinite(b.q[0][v])):
-        return [Solution(tuple(float(a) for a in row), continuum=cont_b) for row in b.q[0][v & ~b.ls[0]]]
+    v = b.valid[0] & np.all(np.isfinite(b.q[0]), axis=-1)
+    cont = any(s.continuum for s in sols) or bool(b.continuum[0])
+    exact = [np.array(s.q, dtype=float) for s in sols if not s.ls] + list(b.q[0][v & ~b.ls[0]])
+    if exact:
+        return finalize(code, twists, p, q, [(row, False) for row in exact], continuum=cont)
     scale = problem_scale(twists, p, q)
-    rows = [np.array(s.q, dtype=float) for s in sols] + [row for row in b.q[0][v] if np.all(np.isfinite(row))]
+    rows = [np.array(s.q, dtype=float) for s in sols] + list(b.q[0][v])
     th, res = _best_ls(kinds, twists, p, q, rows, scale)
     cont = any(s.continuum for s in sols) or has_free_joint(twists, p, th, scale)
     return [Solution(tuple(float(a) for a in th), ls=res > EXACT_TOL * scale, continuum=cont)]
 
 
-def defer_to_scalar(code: str, r: BatchResult, tw, p, q, mask=None) -> BatchResult:
-    """The batch result with the instances of ``mask`` (default: those answered least-squares) solved
-    by the scalar path (a loop over those instances only)."""
+def defer_to_scalar(code: str, r: BatchResult, tw, p, q) -> BatchResult:
+    """The batch result with the instances the scalar path answers from both paths (least squares,
+    continuum, uncertain rows: see :func:`agreeing`) solved by it (a loop over those only)."""
     from subproblems.core import solve
 
     if _IN_SCALAR[0]:
         return r
-    mask = r.ls.any(axis=1) if mask is None else mask
-    idx = np.flatnonzero(mask)
+    idx = np.flatnonzero(_to_defer(kinds_of(code), r, tw, p, q))
     if idx.size == 0:
         return r
     Q, valid, ls, cont = r.q.copy(), r.valid.copy(), r.ls.copy(), r.continuum.copy()
@@ -1121,3 +1238,27 @@ def defer_to_scalar(code: str, r: BatchResult, tw, p, q, mask=None) -> BatchResu
         Q[i], valid[i], ls[i] = 0.0, False, False
         Q[i, :k], valid[i, :k], ls[i, :k], cont[i] = s.q[:k], True, s.ls[:k], s.continuum
     return BatchResult(code, Q, valid, ls, cont, r.vectorised)
+
+
+def _to_defer(kinds: str, r: BatchResult, tw, p, q) -> np.ndarray:
+    """(N,) instances answered least-squares, flagged continuum, or with an uncertain exact row or two
+    exact rows within TANGENT_TOL."""
+    out = r.ls.any(axis=1) | r.continuum
+    ex = r.valid & ~r.ls & ~out[:, None]
+    ni, ki = np.nonzero(ex)
+    if ni.size:
+        scale = problem_scale_batch(tw, p, q)
+        unc = uncertain_rows(kinds, tw[ni], p[ni], q[ni], r.q[ni, ki], scale[ni])
+        out[ni[unc]] = True
+    K = r.q.shape[1]
+    rev = np.array([k == "R" for k in kinds])
+    for i in range(K):
+        for j in range(i + 1, K):
+            d = np.abs(r.q[:, i] - r.q[:, j])
+            d = np.where(
+                rev,
+                np.abs(np.remainder(d + math.pi, TWO_PI) - math.pi),
+                d / np.maximum(1.0, np.abs(r.q[:, j])),
+            )
+            out |= ex[:, i] & ex[:, j] & (d.max(axis=-1) <= TANGENT_TOL)
+    return out

@@ -65,3 +65,39 @@ def test_least_squares_answer_is_the_same_minimiser_on_both_paths(code):
         x, J = chain_point_jac(tw, r.q[0], p)
         f = x - q
         assert np.linalg.norm(J.T @ f) <= 1e-9 * np.linalg.norm(J) * np.linalg.norm(f)
+
+
+def test_s2_trr_double_root_is_the_tangent_point_on_both_paths():
+    """Lattice geometry at scale 1e-3, drawn (t, pi, 0): a double root (audit S2-TRR lattice #5 seed 1:
+    the batch row came back 1.9e-6 off while the scalar one was exact, and the residual is flat to
+    roundoff that far).  Both paths return the drawn values to 1e-9."""
+    s = 1e-3
+    d = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    tw = np.array(
+        [
+            prismatic_twist(d),
+            revolute_twist(np.array([1.0, -1.0, 0.0]) / np.sqrt(2), s * np.array([-0.75, -0.75, 0.0])),
+            revolute_twist(d, s * np.array([0.0, 0.0, 0.5])),
+        ]
+    )
+    th = np.array([-0.0010237164098192563, np.pi, 0.0])
+    p = s * np.array([0.0, 1.0, 0.5])
+    q = fk_point(tw, th, p)
+    others = _unreachable(np.random.default_rng(3), "S2-TRR", 3)  # solved together with others
+    b = solve_batch(
+        "S2-TRR",
+        np.array([tw] + [t for t, _, _ in others]),
+        p=np.array([p] + [x for _, x, _ in others]),
+        q=np.array([q] + [y for _, _, y in others]),
+    )
+    r = solve("S2-TRR", tw, p=p, q=q)
+    qb = b.q[0][b.valid[0]]
+    for rows in (r.q, qb):
+        dist = [
+            max(abs(np.remainder(a - t + np.pi, 2 * np.pi) - np.pi) for a, t in zip(row, th)) for row in rows
+        ]
+        assert min(dist) <= 1e-9
+        for row in rows:
+            assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9 * 1.0
+    assert not r.ls.any() and not b.ls[0][b.valid[0]].any()
+    assert len(r.q) == len(qb)
