@@ -347,6 +347,10 @@ def _candidates(Mr, ke, ku, u):
     psi = _basis_values(ku, u)
     n, C = u.shape
     rv = np.swapaxes(Mr.reshape(n, 6, 3) @ np.swapaxes(psi, 1, 2), 1, 2).reshape(n, C, 2, 3)
+    # an equation whose dependence on x nearly vanishes at this root (against its own size): Cramer's
+    # x then follows the root's error in u, amplified; the other equation alone also gives x
+    eq_size = np.abs(Mr).max(axis=(2, 3))[:, None, :] + TINY  # (n, 1, 2)
+    faint = np.any(np.abs(rv[..., 1:]).max(axis=-1) <= 1e-2 * eq_size, axis=-1)
     if ke == "R":
         al, be, g = rv[..., 1], rv[..., 2], -rv[..., 0]
         D = al[..., 0] * be[..., 1] - al[..., 1] * be[..., 0]
@@ -367,7 +371,7 @@ def _candidates(Mr, ke, ku, u):
         phi = np.arctan2(B, A)
         delta = np.arccos(np.clip(C / np.where(r == 0, 1.0, r), -1.0, 1.0))
         X = np.stack([x0, phi - delta, phi + delta], axis=-1)
-        weak = np.abs(D) <= 1e-2 * ref  # ill-conditioned Cramer: also try the single equation
+        weak = (np.abs(D) <= 1e-2 * ref) | faint  # ill-conditioned Cramer: also try the single equation
         V = np.stack([nondeg, weak, weak], axis=-1)
         return X, V
     A, B, C = rv[..., 2], rv[..., 1], rv[..., 0]
@@ -385,7 +389,7 @@ def _candidates(Mr, ke, ku, u):
     r1 = np.where(lin, -c / np.where(b == 0, 1.0, b), (-b - sq) / (2 * safe_a))
     r2 = np.where(lin, r1, (-b + sq) / (2 * safe_a))
     X = np.stack([x0, r1, r2], axis=-1)
-    weak = np.abs(den) <= 1e-2 * ref
+    weak = (np.abs(den) <= 1e-2 * ref) | faint
     V = np.stack([nondeg, weak, weak & ~lin], axis=-1)
     return X, V
 

@@ -266,3 +266,18 @@ def test_lengths_that_square_to_zero(tiny):
     Q, th = np.zeros((2, 3)), np.array([0.0, 0.0])
     D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     check_instance("S3-TT", "TT", tw, {"p": P, "q": Q, "d": D}, th)
+
+
+def test_root_where_one_equation_barely_depends_on_the_eliminated_value():
+    # thorough profile: p_1 at the origin, on axis 1, axes 0.0039 rad from parallel.  At th_2 = 0
+    # equation 1 does not depend on th_1; the eliminant's double root there came back as a complex
+    # pair 3e-5 off the circle, and Cramer's th_1 (following equation 1's vanishing row) was -1.57:
+    # the well-conditioned root (0, 0) (sigma_min 1.6e-3) was lost.  Now the other equation alone also
+    # gives th_1 there
+    w = np.array([0.99999237, 0.00390622, 0.0])
+    tw = np.array([revolute_twist(w, [0.0, 0.0, 0.0]), revolute_twist([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])])
+    th = np.array([0.0, 0.0])
+    P, Q = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.5]]), np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    r = check_instance("S3-RR", "RR", tw, {"p": P, "q": Q, "d": D}, th)
+    assert not r.ls.any() and contains_solution(r.q, th, "RR", 1e-12), r
