@@ -63,6 +63,26 @@ from subproblems._class2 import (
 from subproblems.core import BatchResult, Solution, register
 
 PARALLEL_TOL = 1e-12
+#: Axes whose direction cross product is below this also get the parallel (planar) candidates.
+NEAR_PARALLEL_TOL = 1e-6
+
+
+def _planar_points(w1, r1, r2, p, q) -> list[np.ndarray]:
+    """The two meeting points of the circles of ``p`` (about axis 2) and ``q`` (about axis 1) in the
+    plane of ``p`` normal to ``w1`` (parallel axes)."""
+    c1 = r1 + w1 * (w1 @ (p - r1))  # centres of the two circles in the plane of p
+    c2 = r2 + w1 * (w1 @ (p - r2))
+    qr = (q - r1) - w1 * (w1 @ (q - r1))
+    rho1, rho2 = float(np.linalg.norm(qr)), float(np.linalg.norm(p - c2))
+    e = c1 - c2
+    de = float(np.linalg.norm(e))
+    if de == 0.0:
+        return []
+    e = e / de
+    a = (rho2**2 - rho1**2 + de**2) / (2 * de)
+    h = math.sqrt(max(rho2**2 - a * a, 0.0))
+    n = np.cross(w1, e)
+    return [c2 + a * e + h * n, c2 + a * e - h * n]
 
 
 def rr_candidates(twists, p, q, scale: float) -> tuple[list, bool]:
@@ -78,18 +98,11 @@ def rr_candidates(twists, p, q, scale: float) -> tuple[list, bool]:
         if np.linalg.norm(off) <= FREE_TOL * scale:  # coincident axes: th_1 + th_2 is what counts
             th1, free = rotation_angle(x1, p, q, scale)
             return [((th1, 0.0), True)], True
-        c1 = r1 + w1 * (w1 @ (p - r1))  # centres of the two circles in the plane of p
-        c2 = r2 + w1 * (w1 @ (p - r2))
-        qr = (q - r1) - w1 * (w1 @ (q - r1))
-        rho1, rho2 = float(np.linalg.norm(qr)), float(np.linalg.norm(p - c2))
-        e = c1 - c2
-        de = float(np.linalg.norm(e))
-        e = e / de
-        a = (rho2**2 - rho1**2 + de**2) / (2 * de)
-        h = math.sqrt(max(rho2**2 - a * a, 0.0))
-        n = np.cross(w1, e)
-        xs = [c2 + a * e + h * n, c2 + a * e - h * n]
-    else:
+    if nd <= NEAR_PARALLEL_TOL:
+        # parallel, or so nearly (sine <= 1e-6) that the planar construction's roots are exact to the
+        # tolerance too: the skew one below finds one of the two (audit S2-RR near, sine 1e-10)
+        xs += _planar_points(w1, r1, r2, p, q)
+    if nd > PARALLEL_TOL:
         d = d / nd
         h1, h2 = float(w1 @ q), float(w2 @ p)
         x0 = (h1 * np.cross(w2, d) + h2 * np.cross(d, w1)) / (float(np.cross(w1, w2) @ d))

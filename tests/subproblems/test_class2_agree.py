@@ -101,3 +101,26 @@ def test_s2_trr_double_root_is_the_tangent_point_on_both_paths():
             assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9 * 1.0
     assert not r.ls.any() and not b.ls[0][b.valid[0]].any()
     assert len(r.q) == len(qb)
+
+
+@pytest.mark.parametrize("tilt", [1e-11, 1e-10])
+def test_s2_rr_nearly_parallel_axes_return_both_planar_roots(tilt):
+    """Axes 1e-11 / 1e-10 from parallel: the two roots of the parallel construction are exact to the
+    tolerance (audit S2-RR near #47 seed 1: the scalar skew-axes construction returned one of them,
+    the batch path both).  Both paths return the same rows, all exact, the drawn values among them."""
+    w1 = np.array([0.36, -0.48, 0.8])
+    w2 = w1 + tilt * np.array([0.8, 0.6, 0.0])
+    tw = np.array(
+        [revolute_twist(w1, [0.2, 0.1, -0.3]), revolute_twist(w2 / np.linalg.norm(w2), [0.9, -0.4, 0.5])]
+    )
+    th = np.array([2.1, -0.7])
+    p = np.array([0.3, 1.1, -0.6])
+    q = fk_point(tw, th, p)
+    r = solve("S2-RR", tw, p=p, q=q)
+    b = solve_batch("S2-RR", tw[None], p=p[None], q=q[None])
+    qb = b.q[0][b.valid[0]]
+    assert not r.ls.any() and not r.continuum and len(r.q) == 2 and len(qb) == 2
+    for row in r.q:
+        assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9
+        assert min(np.abs(np.remainder(qb - row + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-6
+    assert min(np.abs(np.remainder(r.q - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-9
