@@ -542,7 +542,7 @@ def _distance(kx, ky, X1, Y1, X2, Y2):
     return np.maximum(np.abs(dx), np.abs(dy))
 
 
-def _merge_clusters(pb: Pair, X, Y, exact, res):
+def _merge_clusters(pb: Pair, X, Y, exact, res, tangent=None):
     """Merge exact rows that are one multiple root split by roundoff (module docstring).
 
     Two exact rows are the same root when they are within ``MERGE_TOL`` of each other *and* the
@@ -607,11 +607,13 @@ def _merge_clusters(pb: Pair, X, Y, exact, res):
     MX, MY = _wrap(kx, MX), _wrap(ky, MY)
     mres = np.abs(mr).max(axis=-1)
     # a member with a residual no larger than the polished mean's represents the group instead (the
-    # equations are flat across the cluster: the residual is the only evidence of where the root is)
-    Rg = np.where(link, res[:, None, :], np.inf)
+    # equations are flat across the cluster: the residual is the only evidence of where the root is),
+    # a tangent point (_refine_folds) first: it is the root itself
+    tangent = np.zeros((n, C), dtype=bool) if tangent is None else tangent
+    Rg = np.where(link, np.where(tangent, -1.0, res)[:, None, :], np.inf)
     bi = np.argmin(Rg, axis=2)
     bres = np.take_along_axis(res, bi, axis=1)
-    use = bres <= mres
+    use = (bres <= mres) | np.take_along_axis(tangent, bi, axis=1)
     MX = np.where(use, np.take_along_axis(X, bi, axis=1), MX)
     MY = np.where(use, np.take_along_axis(Y, bi, axis=1), MY)
     mres = np.where(use, bres, mres)
@@ -655,8 +657,9 @@ def _refine_folds(pb: Pair, X, Y, exact, res, J):
     natural2 = np.maximum(size2, pb.scale[:, None] ** 2)
     near = exact & (np.abs(det) <= FOLD_SV * natural2)
     idx = np.nonzero(near.any(axis=1))[0]
+    tangent = np.zeros(X.shape, dtype=bool)
     if not len(idx):
-        return X, Y, res
+        return X, Y, res, tangent
     sub = pb.subset(idx)
     flat = size2[idx] <= (FOLD_FLAT * sub.scale[:, None]) ** 2
     x, y = X[idx], Y[idx]
@@ -681,7 +684,8 @@ def _refine_folds(pb: Pair, X, Y, exact, res, J):
     take = near[idx] & (fres <= MERGE_SPREAD * floor) & (moved <= MERGE_TOL) & np.isfinite(x + y)
     X[idx], Y[idx] = np.where(take, x, X[idx]), np.where(take, y, Y[idx])
     res[idx] = np.where(take, fres, res[idx])
-    return X, Y, res
+    tangent[idx] = take
+    return X, Y, res, tangent
 
 
 def _wrap(kind, v):
@@ -955,9 +959,9 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     tol = EXACT_TOL * pb.scale[:, None]
     exact = V & (res <= tol)
     # a tangency (double root of the system) found ~sqrt(eps) off by roundoff: the tangent point itself
-    X, Y, res = _refine_folds(pb, X, Y, exact & ~xfree & ~yfree, res, J)
+    X, Y, res, tangent = _refine_folds(pb, X, Y, exact & ~xfree & ~yfree, res, J)
     # a multiple root of the eliminant split by roundoff into several nearby roots: one row
-    X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res)
+    X, Y, res, merged = _merge_clusters(pb, X, Y, exact & ~xfree & ~yfree, res, tangent)
     exact &= ~merged
     # duplicates: a candidate close to an earlier exact one
     dx = X[:, :, None] - X[:, None, :]

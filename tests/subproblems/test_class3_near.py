@@ -11,7 +11,7 @@ import pytest
 
 from subproblems import solve
 from subproblems._class3_pairs import Pair
-from subproblems.screw import revolute_twist
+from subproblems.screw import prismatic_twist, revolute_twist
 from tests.strategies import contains_solution
 
 from ._checks3 import check_instance, fk_point
@@ -281,3 +281,16 @@ def test_root_where_one_equation_barely_depends_on_the_eliminated_value():
     D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     r = check_instance("S3-RR", "RR", tw, {"p": P, "q": Q, "d": D}, th)
     assert not r.ls.any() and contains_solution(r.q, th, "RR", 1e-12), r
+
+
+def test_tangent_point_represents_its_cluster():
+    # thorough profile: p_1 at the origin (d_1 = 0, th_1 = 0 forced), p_2 1e-5 from axis 2: equation 2
+    # is tangent at th_2 = 0 (residual 2.6e-6 th_2^2, Jacobian zero there).  The tangent point was
+    # found, but the cluster merge kept a member 7.5e-6 away (the same residual, 0) in its place
+    w = np.array([0.0, 1.0, 1e-5])
+    tw = np.array([prismatic_twist([1.0, 0.0, 0.0]), revolute_twist(w, [0.0, 0.0, 0.0])])
+    th = np.array([0.0, 0.0])
+    P, Q = np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.625]])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    r = check_instance("S3-TR", "TR", tw, {"p": P, "q": Q, "d": D}, th)
+    assert not r.ls.any() and contains_solution(r.q, th, "TR", 1e-12), r
