@@ -16,7 +16,8 @@ Elimination (one unknown at a time, DESIGN.md section 4 notes):
 * a revolute unknown ``x`` is eliminated by Cramer's rule: each equation reads
   ``alpha_k cos x + beta_k sin x = g_k`` with coefficients polynomial in ``y``; ``cos x = Nc / D``,
   ``sin x = Ns / D`` and the unit circle gives ``F(y) = Nc^2 + Ns^2 - D^2 = 0``;
-* two prismatic unknowns: the resultant of the two quadratics in ``x``;
+* two prismatic unknowns: the resultant of the two quadratics in ``x``; H-TT, linear in both, is the
+  2x2 linear system it is (:func:`_solve_linear`: one solution, or a continuum when singular);
 * ``F`` is a polynomial of degree <= 8 in ``z = exp(i y)`` (revolute ``y``, roots on the unit circle)
   or in ``y`` itself (prismatic, real roots); roots come from companion-matrix eigenvalues (batched).
 
@@ -32,8 +33,18 @@ span ``scale^8``; scaling an instance by a power of two scales its prismatic val
 Tangencies: at a double root of the system (the two curves touch, the Jacobian is singular there)
 the equations are flat to second order, so roundoff leaves the polished row anywhere within
 ~sqrt(eps) of it (two rows, or one ~3e-8 off).  A row whose Jacobian is nearly singular is moved onto
-the point where, in addition, ``det J = 0`` (Gauss-Newton on the three equations), if the equations
-hold there to ``MERGE_SPREAD`` times its own residual; two rows of one split tangency then coincide.
+the point where, in addition, ``det J = 0`` (or ``J = 0`` where both equations are stationary;
+Gauss-Newton), if the equations hold there to ``MERGE_SPREAD`` times its own residual; two rows of one
+split tangency then coincide, and a tangent point represents its cluster in the merge below.
+
+Weak values: where one value barely acts on the equations (a point ~1e-8 from an axis), the
+candidates of a multiple root give it anywhere and polishing stalls; such candidates start again from
+each equation solved for that value with the other fixed (:func:`_reseed`), and where one equation's
+dependence on the eliminated value vanishes at a root, the other equation alone also gives it.
+
+Zero distances (S3, ``d_k`` at roundoff): ``|g p_k - q_k| = 0`` is a cone, not a smooth equation;
+the class II solver of the same joints gives its points exactly, and those that satisfy the other
+equation are the solutions near them (:func:`_point_coincidences`).
 
 Multiple roots: a root of multiplicity ~4 of ``F`` (e.g. parallel axes, ``p_1 = q_1`` on the first
 axis and ``th_2 = pi``: equation 1 does not depend on ``x`` and is tangent there) is split by roundoff
@@ -55,14 +66,17 @@ Special geometry (points at the origin, on an axis or at an intersection of the 
   equation alone then gives both values of ``x``;
 * every tensor entry at roundoff level (``M_FLOOR`` of the problem's size) means both equations hold
   for every ``(x, y)``: a continuum, whatever the roundoff in ``F``;
-* of close exact candidates the best-converged one is kept.
+* of close exact candidates the best-converged one is kept;
+* an eliminant at roundoff relative to its terms (a near-continuum) still gives candidates: when no
+  start of the continuum fallback below reaches an exact point, its exact candidates are the answer.
 
 When ``F`` vanishes identically (the equations share a curve: a continuum) or no candidate is exact
 (unreachable), Levenberg-Marquardt runs from a fixed grid of starts, ``(0, 0)`` first; the first start
 that reaches an exact point gives the **representative** (``continuum``); the starts include the
 points where one value is a grid start and one equation is solved exactly for the other (on a
 continuum in which one value is free those already satisfy both).  Otherwise the smallest
-residual is returned flagged ``ls``.  A joint the equations do not constrain keeps its start value
+residual is returned flagged ``ls``, polished until its gradient stops falling (each instance on its
+own, so a batch and ``solve`` agree).  A joint the equations do not constrain keeps its start value
 ``0`` (LM steps are minimum-norm).
 
 Everything works on ``N`` instances at once (no Python loop over instances); the scalar path runs

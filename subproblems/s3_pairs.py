@@ -27,7 +27,11 @@ Degenerate cases and what is returned:
   directions so that only a sum of the values matters): one
   representative on the solution set, flagged ``continuum``; a joint the equations do not constrain
   is returned as 0 (the Levenberg-Marquardt start);
-* tangential solutions (the two curves touch) come back once.
+* tangential solutions (the two curves touch) come back once, at the tangent point;
+* a zero distance ``d_k`` (``p_k`` must reach ``q_k``): that equation is the point coincidence of
+  class II (S2-XY of the same joints), whose points satisfying the other equation are returned.
+
+Every instance is solved in units of its own scale: scaling all lengths scales the prismatic values.
 
 >>> import numpy as np
 >>> from subproblems import solve
