@@ -268,7 +268,9 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         elif not k[2]:
             k[4], k[5] = k[4] + joint_offset(kinds, k[3], s[1]), k[5] + 1
             cen = wrap_row(kinds, polish(twists, p, q, k[3] + k[4] / k[5], scale))
-            if residual(twists, p, q, cen) <= EXACT_TOL * scale:
+            # not worse than the cluster's best member: an exact row joined by a looser copy of
+            # itself (the other path's, 1e-12 off) keeps its place (S2-RRR lattice #68 seed 3)
+            if residual(twists, p, q, cen) <= min(EXACT_TOL * scale, max(k[0], 4 * ROUNDOFF * scale)):
                 k[1] = cen
 
     for s in exact:
@@ -362,7 +364,7 @@ def refine_singular(kinds: str, twists, p, q, th, scale: float, iters: int = 10)
     r = float(np.linalg.norm(x - q))
     if (
         np.all(np.isfinite(t))
-        and r <= max(r0, 1e-14 * scale)
+        and r <= max(r0, 4 * ROUNDOFF * scale)
         and sig <= sig0
         and joint_distance(kinds, t, th) <= TANGENT_TOL
     ):

@@ -124,3 +124,32 @@ def test_s2_rr_nearly_parallel_axes_return_both_planar_roots(tilt):
         assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9
         assert min(np.abs(np.remainder(qb - row + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-6
     assert min(np.abs(np.remainder(r.q - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-9
+
+
+def test_s2_rrr_exact_row_not_moved_by_a_looser_copy():
+    """Lattice geometry at scale 1e3, drawn (a, -pi/2, pi) at a singular configuration (audit S2-RRR
+    lattice #68 seed 3): the scalar row is exact, the batch row 3e-11 off; their union must not walk
+    along the near-null direction (it came back 1.8e-6 off, residual 3.9e-12)."""
+    tw = np.array(
+        [
+            [0.0, 0.0, 1000.0, 0.0, 1.0, 0.0],
+            [
+                -353.5533905932737,
+                1060.6601717798212,
+                353.5533905932737,
+                0.7071067811865475,
+                0.0,
+                0.7071067811865475,
+            ],
+            [0.0, 0.0, 500.0, 1.0, 0.0, 0.0],
+        ]
+    )
+    th = np.array([-3.055245647463433, -np.pi / 2, np.pi])
+    p = np.array([-500.0, -500.0, 1000.0])
+    q = fk_point(tw, th, p)
+    r = solve("S2-RRR", tw, p=p, q=q)
+    b = solve_batch("S2-RRR", tw[None], p=p[None], q=q[None])
+    for rows in (r.q, b.q[0][b.valid[0]]):
+        assert min(np.abs(np.remainder(rows - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-9
+        for row in rows:
+            assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9 * 1e3 * 5
