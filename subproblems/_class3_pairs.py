@@ -108,6 +108,7 @@ FOLD_FLAT = 1e-5  # |J| / scale under which the Jacobian vanishes at a tangency 
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
 FOLD_ITERS = 8
 MIN_UNIT = 2.0**-500  # smallest unit of length an instance is solved in (Pair.normalised)
+CLUSTER_TOL = 1e-2  # roots of the eliminant closer than this are a cluster: its centre is a root too
 RANK_TOL = 1e-12  # H-TT: singular values below this times the largest are roundoff (a singular system)
 
 
@@ -355,6 +356,32 @@ def _basis_values(kind, u):
     if kind == "R":
         return np.stack([np.ones_like(u), np.cos(u), np.sin(u)], axis=-1)
     return np.stack([np.ones_like(u), u, u * u], axis=-1)
+
+
+def _with_cluster_centres(ku, u, ok):
+    """The roots (N, 8) and, appended, the centre of each cluster of roots closer than ``CLUSTER_TOL``.
+
+    A multiple root of the eliminant is split by roundoff into a cluster (spread ~eps^(1/m), 1e-3 for
+    four); back-substitution at a member is off by that spread amplified where the eliminated value
+    barely acts, while the cluster's mean is the root to ~1e-8 or better.  One centre per cluster (at
+    its first member), valid only for clusters of two or more.
+    """
+    d = u[:, :, None] - u[:, None, :]
+    if ku == "R":
+        d = wrap_batch(d)
+    else:
+        d = d / np.maximum(1.0, np.abs(u))[:, :, None]
+    member = ok[:, :, None] & ok[:, None, :] & (np.abs(d) <= CLUSTER_TOL)
+    count = member.sum(axis=2)
+    centre = u - np.sum(np.where(member, d, 0.0), axis=2) / np.maximum(count, 1)
+    if ku == "R":
+        centre = wrap_batch(centre)
+    first = np.argmax(member, axis=2) == np.arange(u.shape[1])[None]
+    # (a cluster has distinct members: roots z and 1 / conj(z), or a complex pair of a prismatic value,
+    # give the same value twice, and their candidates are already there)
+    spread = np.any(member & (np.abs(d) > 1e-9), axis=2)
+    valid = ok & spread & first
+    return np.concatenate([u, np.where(valid, centre, 0.0)], axis=1), np.concatenate([ok, valid], axis=1)
 
 
 def _candidates(Mr, ke, ku, u):
@@ -951,7 +978,8 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     # (an eliminant judged identically zero still gives candidates: if no point of the supposed
     # continuum holds below, its exact candidates are the answer)
     u = np.where(ok, u, 0.0)
-    E, V = _candidates(Mr, ke, ku, u)  # (N, 8, 3)
+    u, ok = _with_cluster_centres(ku, u, ok)
+    E, V = _candidates(Mr, ke, ku, u)  # (N, 8 + 8, 3)
     V &= ok[..., None]
     U = np.broadcast_to(u[..., None], E.shape)
     X, Y = (U, E) if swap else (E, U)

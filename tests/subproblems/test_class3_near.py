@@ -294,3 +294,16 @@ def test_tangent_point_represents_its_cluster():
     D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     r = check_instance("S3-TR", "TR", tw, {"p": P, "q": Q, "d": D}, th)
     assert not r.ls.any() and contains_solution(r.q, th, "TR", 1e-12), r
+
+
+def test_root_at_the_centre_of_a_cluster():
+    # thorough profile: as above with the axes 6.1e-5 rad from parallel and p_2 = (0, 0, 1): the root of
+    # the eliminant at th_2 = 0 came back as a cluster of four spread 8e-4, where th_1 (acting 6e-5
+    # per radian) was found at +-pi/2 from every member; the cluster's centre gives (0, 0)
+    w = np.array([0.999999998, 6.10351561e-05, 0.0])
+    tw = np.array([revolute_twist(w, [0.0, 0.0, 0.0]), revolute_twist([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])])
+    th = np.array([0.0, 0.0])
+    P, Q = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    r = check_instance("S3-RR", "RR", tw, {"p": P, "q": Q, "d": D}, th)
+    assert not r.ls.any() and contains_solution(r.q, th, "RR", 1e-9), r
