@@ -63,10 +63,21 @@ from subproblems.s2_rr import PARALLEL_TOL
 from subproblems.s2_rt import tr_candidates, tr_candidates_batch
 
 
+def plane_normal(v1, v2):
+    """``v_1 x v_2`` computed as ``v_1 x (v_2 -+ v_1)``, accurate for nearly (anti)parallel directions.
+
+    The difference of two close directions is exact in floating point, while the products in
+    ``np.cross(v1, v2)`` round to ~1e-16 of |v1||v2|: at an angle of 1e-12 the normal would tilt by
+    ~1e-4 rad and the plane condition would miss real roots (answers flagged ls far from them).
+    """
+    sign = np.where(np.sum(v1 * v2, -1) < 0, -1.0, 1.0)[..., None]
+    return np.cross(v1, v2 - sign * v1)
+
+
 def ttr_candidates(twists, p, q, scale):
     x1, x2, x3 = twists
     v1, v2 = x1[:3], x2[:3]
-    n = np.cross(v1, v2)
+    n = plane_normal(v1, v2)
     nn = float(np.linalg.norm(n))
     if nn <= PARALLEL_TOL:
         return [((t1, 0.0, th), free) for (t1, th), free in tr_candidates([x1, x3], p, q, scale)], True
@@ -98,7 +109,7 @@ def ttr_batch(tw, p, q) -> BatchResult:
     x1, x2, x3 = tw[:, 0], tw[:, 1], tw[:, 2]
     v1, v2 = x1[:, :3], x2[:, :3]
     scale = problem_scale_batch(tw, p, q)
-    n = np.cross(v1, v2)
+    n = plane_normal(v1, v2)
     nn = np.linalg.norm(n, axis=-1)
     par = nn <= PARALLEL_TOL
     n = n / np.where(par, 1.0, nn)[:, None]
