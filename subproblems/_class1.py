@@ -306,28 +306,29 @@ def _near_families(ws, R) -> list[tuple[np.ndarray, np.ndarray]]:
     """
     out = []
     k = len(ws)
-    if k == 2 and _cross(ws[0], ws[1]) <= NEAR_TOL:
+    if k == 2 and _sin_between(ws[0], ws[1]) <= NEAR_TOL:
         s = _sign(ws[0] @ ws[1])
         out.append((np.array([0.0, s * _angle_r(ws[0], R)[0]]), np.array([1.0, -s])))
     if k != 3:
         return out
     w1, w2, w3 = ws
-    if _cross(w1, w2) <= NEAR_TOL:
+    if _sin_between(w1, w2) <= NEAR_TOL:
         ((th, _, _),) = rotation_families([w1, w3], R)
         s = _sign(w1 @ w2)
         out.append((np.array([0.0, s * th[0], th[1]]), np.array([1.0, -s, 0.0])))
-    if _cross(w2, w3) <= NEAR_TOL:
+    if _sin_between(w2, w3) <= NEAR_TOL:
         ((th, _, _),) = rotation_families([w1, w2], R)
         s = _sign(w2 @ w3)
         out.append((np.array([th[0], 0.0, s * th[1]]), np.array([0.0, 1.0, -s])))
     Rw3 = R @ w3
-    if _cross(w1, Rw3) <= GIMBAL_TOL:
+    if _sin_between(w1, Rw3) <= GIMBAL_TOL:
         ((th, _, _),) = rotation_families([w2, w3], R)
         out.append((np.array([0.0, th[0], th[1]]), np.array([1.0, 0.0, -_sign(w1 @ Rw3)])))
     return out
 
 
-def _cross(a, b) -> float:
+def _sin_between(a, b) -> float:
+    """|a x b|: the sine of the angle between unit vectors a and b."""
     return float(np.linalg.norm(np.cross(a, b)))
 
 
@@ -341,7 +342,7 @@ def _near_candidates(kinds, twists, T, scale, ir, ws, found=()):
     to ~|w_i x w_j| times the scale."""
     m = len(kinds)
     raw = []
-    if len(ir) == 3 and max(_cross(ws[0], w) for w in ws[1:]) <= NEAR_TOL:
+    if len(ir) == 3 and max(_sin_between(ws[0], w) for w in ws[1:]) <= NEAR_TOL:
         raw += _planar_candidates(twists, T, scale)
     for th, n in _near_families(ws, T[:3, :3]):
         if any(np.array_equal(n, f) for f in found):

@@ -88,23 +88,25 @@ def kinds_of(code: str) -> str:
     return code.split("-", 1)[1]
 
 
-def problem_scale(twists, p, q) -> float:
-    """Length scale of one instance: max(1, |p|, |q|, distance of each revolute axis from the origin)."""
-    s = max(1.0, float(np.linalg.norm(p)), float(np.linalg.norm(q)))
+def _largest_length(twists, p, q) -> float:
+    """max(|p|, |q|, distance of each revolute axis from the origin)."""
+    L = max(float(np.linalg.norm(p)), float(np.linalg.norm(q)))
     for xi in np.asarray(twists, dtype=float):
         if xi[3:].any():
-            s = max(s, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
-    return s
+            L = max(L, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
+    return L
+
+
+def problem_scale(twists, p, q) -> float:
+    """Length scale of one instance: max(1, |p|, |q|, distance of each revolute axis from the origin)."""
+    return max(1.0, _largest_length(twists, p, q))
 
 
 def length_scale(twists, p, q) -> float:
     """The instance's own length: max(|p|, |q|, distance of each revolute axis from the origin), or 1
     when all vanish.  Unlike :func:`problem_scale` not floored at 1: candidate constructions run on the
     instance divided by it, so that their relative tolerances mean the same at every scale."""
-    L = max(float(np.linalg.norm(p)), float(np.linalg.norm(q)))
-    for xi in np.asarray(twists, dtype=float):
-        if xi[3:].any():
-            L = max(L, float(np.linalg.norm(np.cross(xi[3:], xi[:3]))))
+    L = _largest_length(twists, p, q)
     return L if L > 0.0 and math.isfinite(L) else 1.0
 
 
@@ -118,9 +120,14 @@ def normalized(twists, p, q):
     return tw, np.asarray(p, dtype=float) / L, np.asarray(q, dtype=float) / L, L
 
 
-def length_scale_batch(tw, p, q) -> np.ndarray:
+def _largest_length_batch(tw, p, q) -> np.ndarray:
+    """Vectorised :func:`_largest_length` over a leading axis N."""
     ap = np.linalg.norm(np.cross(tw[..., 3:], tw[..., :3]), axis=-1)
-    L = np.maximum(np.maximum(np.linalg.norm(p, axis=-1), np.linalg.norm(q, axis=-1)), ap.max(axis=-1))
+    return np.maximum(np.maximum(np.linalg.norm(p, axis=-1), np.linalg.norm(q, axis=-1)), ap.max(axis=-1))
+
+
+def length_scale_batch(tw, p, q) -> np.ndarray:
+    L = _largest_length_batch(tw, p, q)
     return np.where((L > 0.0) & np.isfinite(L), L, 1.0)
 
 
@@ -592,9 +599,7 @@ def _mv(R, v):
 
 
 def problem_scale_batch(tw, p, q) -> np.ndarray:
-    ap = np.linalg.norm(np.cross(tw[..., 3:], tw[..., :3]), axis=-1)
-    s = np.maximum(np.linalg.norm(p, axis=-1), np.linalg.norm(q, axis=-1))
-    return np.maximum(1.0, np.maximum(s, ap.max(axis=-1)))
+    return np.maximum(1.0, _largest_length_batch(tw, p, q))
 
 
 def wrap_batch(a):
@@ -1223,11 +1228,8 @@ def _union(code: str, twists, p, q, sols, batch_raw) -> list[Solution]:
     kinds = kinds_of(code)
     twists = np.asarray(twists, dtype=float)
     p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
-    _IN_SCALAR[0] = True
-    try:
+    with independent_paths():  # the batch solver's own answer, not deferred back here
         b = batch_raw(twists[None], p[None], q[None])
-    finally:
-        _IN_SCALAR[0] = False
     v = b.valid[0] & np.all(np.isfinite(b.q[0]), axis=-1)
     cont = any(s.continuum for s in sols) or bool(b.continuum[0])
     exact = [np.array(s.q, dtype=float) for s in sols if not s.ls] + list(b.q[0][v & ~b.ls[0]])
