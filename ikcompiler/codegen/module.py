@@ -28,6 +28,7 @@ API: ``solve(T, *free)`` -> (k, n) every solution; ``solve_batch(Ts, *free)`` ->
 {imports}
 import numpy as np
 
+from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
 '''
@@ -131,6 +132,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_FREE = {tuple(free_idx)!r}  # positions of the free joints in JOINT_NAMES\n")
     out.append(f"_N_GROUPS = {plan.n_groups}\n")
     out.append(f"_POLISH = {10 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
+    out.append("_VARY_KINDS = ''.join(_KINDS[j] for j in _VARY)\n")
     out.append(f"_SEARCH = {_literal(list(plan.search))}  # joints gridded by the search fallback\n")
     out.append(f"_GRID = {plan.grid}\n")
     out.append("_STEPS = [\n")
@@ -250,6 +252,14 @@ def _newton(TH, goals, iters):
                       target=_SOLVE_TARGET, iters=iters, hold=_FREE)
 
 
+def _correct(TH, owner, goals):
+    """Snapped plan: carry the snapped robot's candidates to the true robot by continuation in the
+    geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md)."""
+    return _ct.correct(TH, goals[owner], owner, twists0=_PLAN_TWISTS, twists1=_TWISTS, home=_HOME, A=_A,
+                       b=_B, independent=_VARY, kinds=_VARY_KINDS, target=_SOLVE_TARGET, hold=_FREE,
+                       scale=SCALE, tol=TOLERANCE, plain=_POLISH)
+
+
 def _candidates(goals, Td, init):
     """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum)."""
     N = len(goals)
@@ -281,7 +291,7 @@ def _candidates(goals, Td, init):
             # on every joint pull it onto a nearby exact solution of the continuum.
             TH[cont] = _newton(TH[cont], goals[owner[cont]], 60)
         if _POLISH and len(TH):
-            TH = _newton(TH, goals[owner], _POLISH)
+            TH = _correct(TH, owner, goals)
     return TH, owner, ls, cont
 
 
@@ -406,7 +416,7 @@ def _solve_chunk(goals, Td, init, limits):
         Q, _, flag = _fast_leaves(goals, init)
         defer = (flag & _fk.DEFER).any(axis=1)
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
-        TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
+        TH = _correct(Q[rows, leaf] @ _A.T + _B, rows, goals)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
     else:

@@ -1,0 +1,241 @@
+"""Carry the solutions of a snapped robot over to the true (calibrated) robot without losing any.
+
+A calibrated robot misses its design relations by a little; the compiler derives its closed form on
+the *snapped* robot, where they hold exactly (``ikcompiler/geometry/snap.py``), so the closed form
+returns the snapped robot's solutions for the target.  Each is then carried to the true robot along
+the geometry homotopy
+
+    robot(s), s in [0, 1]: every axis direction w(s) = unit(w0 + s (w1 - w0)), every axis point
+    p(s) = p0 + s (p1 - p0) (prismatic: the direction alone); robot(0) snapped, robot(1) true,
+
+with the target fixed: steps in s, Newton corrections at each (predictor: the previous joint values).
+A step is accepted only when its Newton iterates *certify* convergence to the path's own point
+(every correction at most half the previous one, the first one no bigger than ``MAX_MOVE``, the error
+ending inside the tolerance); otherwise the step in s is halved (near a singular point the branches
+come close, and a long step would jump to the neighbour's branch).  With a first step s = 0 -> 1 this
+is plain Newton from the snapped answer plus the certificate, so a well-separated pose costs what
+plain Newton costs; only poses whose branches come close pay for more steps.
+
+:func:`correct` is what a generated module calls (docs/calibrated.md states the policy and its
+measurements): track every row; then rows of one target that started apart but ended on the same
+solution (a *collision*: one branch was lost) are re-tracked from their snapped answers with short
+steps; collisions that remain are reported, never hidden (the caller dedupes them and counts them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems.screw import twist_exp_batch
+
+MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
+MIN_STEP = 2.0**-12  # below this step in s a row is given up (a turning point of the path)
+SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
+
+
+def _lines(twists):
+    """Directions w (n, 3), points p (n, 3) (closest to the origin) and prismatic mask of twists (n, 6)."""
+    twists = np.asarray(twists, dtype=float)
+    v, w = twists[:, :3], twists[:, 3:]
+    prismatic = ~np.any(w != 0.0, axis=1)
+    p = np.cross(w, v)  # for a unit w and v = -w x p: w x v = p - (w.p) w
+    return np.where(prismatic[:, None], v, w), np.where(prismatic[:, None], 0.0, p), prismatic
+
+
+def homotopy_twists(twists0, twists1, s):
+    """Twists of robot(s) for each row's s (M,): (M, n, 6); see the module docstring.
+
+    >>> t0 = np.array([[0, 0, 0, 0, 0, 1.0]])
+    >>> t1 = np.array([[0, -1.0, 0, 1.0, 0, 0]])  # the x axis through (0, 0, 1)
+    >>> homotopy_twists(t0, t1, np.array([0.0, 1.0]))[:, 0].round(12).tolist()
+    [[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], [0.0, -1.0, 0.0, 1.0, 0.0, 0.0]]
+    """
+    d0, p0, prismatic = _lines(twists0)
+    d1, p1, _ = _lines(twists1)
+    s = np.asarray(s, dtype=float)[:, None, None]
+    d = d0 + s * (d1 - d0)
+    d = d / np.linalg.norm(d, axis=2, keepdims=True)
+    p = p0 + s * (p1 - p0)
+    v = np.cross(p, d)  # -w x p
+    return np.where(prismatic[None, :, None], np.concatenate([d, 0 * d], axis=2),
+                    np.concatenate([v, d], axis=2))
+
+
+def _fk_jacobian(tw, full, home, A):
+    """Tool poses G (M, 4, 4) and space Jacobian (M, 6, dof) with per-row twists tw (M, n, 6)."""
+    M, n = full.shape
+    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
+    cols = np.zeros((M, 6, n))
+    for i in range(n):
+        R, t = G[:, :3, :3], G[:, :3, 3]
+        w = np.einsum("mij,mj->mi", R, tw[:, i, 3:])
+        v = np.einsum("mij,mj->mi", R, tw[:, i, :3]) + np.cross(t, w)
+        cols[:, :3, i], cols[:, 3:, i] = v, w
+        G = G @ twist_exp_batch(tw[:, i], full[:, i])
+    G = G @ home
+    p = G[:, :3, 3]
+    v, w = cols[:, :3, :], cols[:, 3:, :]
+    J = np.concatenate([v + np.cross(w, p[:, :, None], axis=1), w], axis=1)
+    return G, J @ A
+
+
+def _residual(G, goals, target, scale):
+    """Error vector (position, then rotation times the scale) of the rows' poses G toward goals."""
+    e_pos = goals[:, :3, 3] - G[:, :3, 3]
+    Rt, Rdt = np.swapaxes(G[:, :3, :3], 1, 2), np.swapaxes(goals[:, :3, :3], 1, 2)
+    e_rot = 0.5 * np.cross(Rt, Rdt).sum(axis=1)
+    if target == "position":
+        return e_pos, slice(0, 3)
+    if target == "orientation":
+        return e_rot, slice(3, 6)
+    return np.concatenate([e_pos, e_rot], axis=1), slice(0, 6)
+
+
+def _newton_step(tw, Q, goals, robot):
+    """One damped Gauss-Newton step for every row: (new Q, step size, error before the step)."""
+    A, b, home, target, hold, scale, unit = robot
+    G, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
+    e, rows = _residual(G, goals, target, scale)
+    J = J[:, rows, :]
+    if hold:
+        J[:, :, hold] = 0.0
+    err = np.abs(e).max(axis=1)
+    if target != "position":
+        err = np.maximum(np.abs(e[:, :3]).max(axis=1) if target == "pose" else 0.0,
+                         scale * np.abs(e[:, -3:]).max(axis=1))
+    col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
+    Js = J / col[:, None, :]
+    JtJ = np.einsum("mki,mkj->mij", Js, Js) + 1e-12 * np.eye(Js.shape[2])
+    dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
+    return Q + dq, np.abs(dq / unit).max(axis=1), err
+
+
+def _track(Q, goals, twists0, twists1, robot, tol, first_step, max_move):
+    """Track rows Q (M, dof) of robot(0) to robot(1); returns (Q at s = 1, converged mask)."""
+    M = len(Q)
+    s = np.zeros(M)
+    ds = np.full(M, float(first_step))
+    done = np.zeros(M, dtype=bool)
+    failed = np.zeros(M, dtype=bool)
+    Q = Q.copy()
+    while True:
+        act = np.nonzero(~done & ~failed)[0]
+        if not len(act):
+            break
+        s_new = np.minimum(s[act] + ds[act], 1.0)
+        tw = homotopy_twists(twists0, twists1, s_new)
+        X, g = Q[act], goals[act]
+        ok = np.ones(len(act), dtype=bool)
+        last = np.full(len(act), np.inf)
+        err = np.full(len(act), np.inf)
+        for it in range(6):
+            X, step, err = _newton_step(tw, X, g, robot)
+            ok &= (step <= max_move) if it == 0 else (step <= 0.5 * last) | (step <= 1e-13) | (err <= tol)
+            last = step
+        _, _, err = _newton_step(tw, X, g, robot)
+        ok &= np.isfinite(err) & (err <= tol)
+        good, bad = act[ok], act[~ok]
+        Q[good] = X[ok]
+        s[good] = s_new[ok]
+        ds[good] = np.minimum(2.0 * ds[good], 1.0)
+        done[good] = s[good] >= 1.0
+        ds[bad] *= 0.5
+        failed[bad] = ds[bad] < MIN_STEP
+    return Q, done
+
+
+def _collisions(Q0, Q, owner, ok, kinds_mask, scale):
+    """Rows that share a target, started apart and ended on the same solution (both rows flagged)."""
+    hit = np.zeros(len(Q), dtype=bool)
+    order = np.argsort(owner, kind="stable")
+    bounds = np.flatnonzero(np.diff(owner[order])) + 1
+    for group in np.split(order, bounds):
+        group = group[ok[group]]
+        if len(group) < 2:
+            continue
+        for a in range(len(group)):
+            for c in range(a + 1, len(group)):
+                i, j = group[a], group[c]
+                if _apart(Q[i], Q[j], kinds_mask, scale) <= SEPARATE and \
+                        _apart(Q0[i], Q0[j], kinds_mask, scale) > SEPARATE:
+                    hit[i] = hit[j] = True
+    return hit
+
+
+def _apart(x, y, revolute, scale):
+    d = np.abs(x - y)
+    d = np.where(revolute, np.abs(np.remainder(d + np.pi, 2 * np.pi) - np.pi), d / scale)
+    return float(d.max())
+
+
+def _plain(Q, goals, twists1, robot, iters):
+    """Plain Newton steps on the true robot (rows that are no exact solution of the snapped robot)."""
+    tw = np.broadcast_to(np.asarray(twists1, dtype=float), (len(Q),) + np.shape(twists1))
+    for _ in range(iters):
+        Q, _, _ = _newton_step(tw, Q, goals, robot)
+    return Q
+
+
+def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
+            hold=(), scale=1.0, tol=1e-9, plain=10, report=None):
+    """Snapped robot's candidate rows TH (M, n: every joint) -> the true robot's, for goals (M, 4, 4);
+    ``owner`` (M,): which target each row solves (rows of one target are checked for collisions).
+
+    ``twists0``: the snapped robot's twists (the chain the rows solve), ``twists1``: the true robot's;
+    all joint values are ``A @ q + b`` with q the ``independent`` columns of TH; ``kinds``: their joint
+    types; ``hold``: positions in ``independent`` that keep their values (free joints).  Rows that are
+    no exact solution of the snapped robot (least-squares leaves), and rows whose tracking fails (a
+    turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
+    their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
+    when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
+    colliding after the re-tracking; the caller's dedupe merges them).
+
+    >>> t0 = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])  # planar 2R, links 1 and 1
+    >>> t1 = t0.copy(); t1[1, :3] = [0, -1.001, 0]  # the true second axis is at x = 1.001
+    >>> home = np.eye(4); home[0, 3] = 2.0
+    >>> goal = np.eye(4); goal[:2, 3] = [0.0, 1.5]
+    >>> snapped = [[np.pi / 2 - 0.7227342478, 2 * 0.7227342478], [np.pi / 2 + 0.7227342478, -2 * 0.7227342478]]
+    >>> q = correct(np.array(snapped), np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
+    ...             A=np.eye(2), b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0)
+    >>> from subproblems.plan_runtime import fk_batch
+    >>> bool(np.abs(fk_batch(t1, q, home)[:, :3, 3] - goal[:3, 3]).max() < 1e-12)  # both on the true arm
+    True
+    >>> bool(q[0, 1] > 0 > q[1, 1])  # elbow up and elbow down: two distinct solutions
+    True
+    """
+    independent = list(independent)
+    A = np.asarray(A, dtype=float)  # all joint values = A @ q + b, q the independent ones
+    revolute = np.array([k == "R" for k in kinds])
+    unit = np.where(revolute, 1.0, scale)
+    robot = (A, np.asarray(b, dtype=float), np.asarray(home, dtype=float), target, list(hold), scale, unit)
+    goals = np.asarray(goals, dtype=float)
+    TH = np.asarray(TH, dtype=float)
+    Q0 = TH[:, independent]
+    owner = np.arange(len(TH)) if owner is None else np.asarray(owner)
+    Q = Q0.copy()
+    ok = np.zeros(len(TH), dtype=bool)
+    etol = 1e-3 * tol * scale
+    usable = np.all(np.isfinite(Q0), axis=1)
+    if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
+        tw0 = np.broadcast_to(np.asarray(twists0, dtype=float), (len(Q0),) + np.shape(twists0))
+        _, _, err0 = _newton_step(tw0[usable], Q0[usable], goals[usable], robot)
+        usable[np.nonzero(usable)[0][~(err0 <= tol * scale)]] = False
+    idx = np.nonzero(usable)[0]
+    if len(idx):
+        Q[idx], ok[idx] = _track(Q0[idx], goals[idx], twists0, twists1, robot, etol, 1.0, MAX_MOVE)
+    hit = _collisions(Q0, Q, owner, ok, revolute, scale)
+    again = np.nonzero(hit)[0]
+    if len(again):  # a lost branch: re-track the rows involved with short steps and small moves
+        Q[again], ok[again] = _track(Q0[again], goals[again], twists0, twists1, robot, etol, 1.0 / 64,
+                                     0.1 * MAX_MOVE)
+    left = _collisions(Q0, Q, owner, ok, revolute, scale)
+    rest = np.nonzero(~ok & np.all(np.isfinite(Q0), axis=1))[0]
+    if len(rest) and plain:
+        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain)
+    if report is not None:
+        report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
+                      collided=int(left.sum()))
+    return Q @ A.T + b
+
+
+__all__ = ["correct", "homotopy_twists", "MAX_MOVE", "MIN_STEP", "SEPARATE"]
