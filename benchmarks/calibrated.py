@@ -10,8 +10,9 @@ Reported per row:
   prismatic ones to 1e-6 of the size), joint limits off;
 * wrong: returned exact rows whose forward kinematics (recomputed on the perturbed robot) miss the
   target by more than 1e-9 of the size;
-* lost: solutions of the snapped robot at the same pose (its own exact plan) with no counterpart among
-  the returned ones, summed over poses (``ref`` is their total); a pose counts as losing when any is;
+* lost: how many fewer exact solutions came back than the snapped robot has at the same pose (its own
+  exact plan), summed over poses (``ref`` is the snapped robot's total); a pose counts as losing when
+  any is; poses where the snapped robot has a self-motion (a continuum: no count) are counted apart;
 * time: median solve_batch_info time per pose, native (C) backend and Python fast path.
 
 Not a test (a few minutes): ``python benchmarks/calibrated.py [--poses N] [--label before]``.
@@ -57,27 +58,35 @@ def _distance(a, b, kinds, scale):
 def _exact_rows(module, G, limits=False, native=True):
     module.NATIVE = native
     t0 = time.perf_counter()
-    Q, valid, ls, _, _ = module.solve_batch_info(G, limits=limits)
+    Q, valid, ls, _, cont = module.solve_batch_info(G, limits=limits)
     dt = time.perf_counter() - t0
-    return Q, valid & ~ls, dt
+    return Q, valid & ~ls, cont & valid, dt
 
 
-def measure(chain, poses: int, seed: int) -> dict:
+def _plain_newton(module):
+    """The module as before the continuation: plain Newton steps from the snapped answers."""
+    if hasattr(module, "_correct"):
+        module._correct = lambda TH, owner, goals: (module._newton(TH, goals[owner], module._POLISH), owner)
+
+
+def measure(chain, poses: int, seed: int, special: float = 0.25, plain: bool = False) -> dict:
     """One row of the table for the (perturbed) chain."""
     module = compile_robot(chain)
+    if plain:
+        _plain_newton(module)
     snapped, notes = snap_chain(chain)
     kinds = [chain.joints[i].kind for i in chain.independent]
-    Q = sample_configurations(chain, poses, seed=seed)
+    Q = sample_configurations(chain, poses, seed=seed, special=special)
     G = chain.fk_batch(Q)
     _exact_rows(module, G[:2])  # build the native backend outside the timing
-    S, ok, t_native = _exact_rows(module, G)
-    S_py, ok_py, t_py = _exact_rows(module, G, native=False)
+    S, ok, _, t_native = _exact_rows(module, G)
+    S_py, ok_py, _, t_py = _exact_rows(module, G, native=False)
     ref_module = compile_robot(snapped) if notes else None
     if ref_module is not None:
-        R, ok_ref, _ = _exact_rows(ref_module, G, native=False)
+        _, ok_ref, cont_ref, _ = _exact_rows(ref_module, G, native=False)
     out = {"method": module.METHOD + (" (snapped)" if notes else ""), "poses": poses}
     for tag, rows, good in (("", S, ok), ("_py", S_py, ok_py)):
-        recovered = wrong = lost = ref = losing = 0
+        recovered = wrong = lost = ref = losing = continuum = 0
         for i in range(poses):
             sols = rows[i][good[i]]
             if len(sols):
@@ -90,16 +99,15 @@ def measure(chain, poses: int, seed: int) -> dict:
                 if _distance(sols, Q[i], kinds, chain.scale).min() <= 1e-6:
                     recovered += 1
             if ref_module is not None:
-                mine = R[i][ok_ref[i]]
-                ref += len(mine)
-                # a snapped solution is kept when a returned one lies within the perturbation's reach
-                miss = sum(
-                    1 for r in mine if not len(sols) or _distance(sols, r, kinds, chain.scale).min() > 0.05
-                )
-                lost += miss
-                losing += miss > 0
+                if cont_ref[i].any():  # a self-motion of the snapped robot: no count to compare with
+                    continuum += 1
+                    continue
+                n_ref = int(ok_ref[i].sum())
+                ref += n_ref
+                lost += max(0, n_ref - len(sols))
+                losing += n_ref > len(sols)
         out.update({f"recovered{tag}": recovered, f"wrong{tag}": wrong, f"lost{tag}": lost,
-                    f"ref{tag}": ref, f"losing{tag}": losing})
+                    f"ref{tag}": ref, f"losing{tag}": losing, "continuum": continuum})
     out["us_native"] = 1e6 * t_native / poses
     out["us_py"] = 1e6 * t_py / poses
     return out
@@ -112,38 +120,46 @@ def main(argv=None) -> int:
     ap.add_argument("--arms", default=",".join(ARMS))
     ap.add_argument("--sizes", default=",".join(f"{s:g}" for s in SIZES))
     ap.add_argument("--label", default="current")
+    ap.add_argument("--special", type=float, default=0.25,
+                    help="probability of a special joint value (0, +-pi/2, pi)")
+    ap.add_argument("--plain", action="store_true",
+                    help="Python path as before the continuation (plain Newton from the snapped answers)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "calibrated.md"))
     args = ap.parse_args(argv)
     lines = [
         f"## {args.label}",
         "",
-        f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, Python {platform.python_version()}, "
-        f"{platform.machine()}, {os.cpu_count()} cores shared with other jobs (timings are on a loaded machine); "
-        f"{args.poses} poses per row, limits off, special angles in a quarter of the values.",
+        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, Python {platform.python_version()}, "
+        f"{platform.machine()}, {os.cpu_count()} cores shared with other jobs (timings on a loaded machine); "
+        f"{args.poses} poses per row, limits off, special angles (0, +-pi/2, pi) with probability "
+        f"{args.special} per value{'; plain Newton (as before)' if args.plain else ''}.",
         "",
         "| arm | eps | seed | method | recovered (C / Py) | wrong (C / Py) | lost of ref (C / Py) | "
-        "poses losing (C / Py) | us/pose C | us/pose Py |",
-        "|---|---|---|---|---:|---:|---:|---:|---:|---:|",
+        "poses losing (C / Py) | snapped self-motion poses | us/pose C | us/pose Py |",
+        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name in args.arms.split(","):
         base = load_robot(name)
         for eps in (float(s) for s in args.sizes.split(",")):
             for seed in range(args.seeds):
                 t0 = time.perf_counter()
-                r = measure(perturb_chain(base, eps, seed=seed), args.poses, seed=seed + 100)
+                r = measure(perturb_chain(base, eps, seed=seed), args.poses, seed=seed + 100,
+                            special=args.special, plain=args.plain)
                 line = (
                     f"| {name} | {eps:g} | {seed} | {r['method']} | {r['recovered']} / {r['recovered_py']} | "
                     f"{r['wrong']} / {r['wrong_py']} | {r['lost']} / {r['lost_py']} of {r['ref']} | "
-                    f"{r['losing']} / {r['losing_py']} | {r['us_native']:.0f} | {r['us_py']:.0f} |"
+                    f"{r['losing']} / {r['losing_py']} | {r['continuum']} | {r['us_native']:.0f} | "
+                    f"{r['us_py']:.0f} |"
                 )
                 lines.append(line)
                 print(line, f"({time.perf_counter() - t0:.1f} s)", file=sys.stderr, flush=True)
     lines.append("")
     out = Path(args.out)
-    old = out.read_text() if out.exists() else "# Calibrated (perturbed) arms: recovery and lost solutions\n\n" + (
+    title = "# Calibrated (perturbed) arms: recovery and lost solutions\n\n" + (
         "Command: `python benchmarks/calibrated.py --label LABEL` (appends a section).  Columns: see the\n"
         "script's docstring.\n\n"
     )
+    old = out.read_text() if out.exists() else title
     out.write_text(old + "\n".join(lines) + "\n")
     print(f"wrote {out}", file=sys.stderr)
     return 0

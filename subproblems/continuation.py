@@ -26,10 +26,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems.plan_runtime import _cross
 from subproblems.screw import twist_exp_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
-MIN_STEP = 2.0**-12  # below this step in s a row is given up (a turning point of the path)
+MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
+MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
 SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
 
 
@@ -62,20 +64,23 @@ def homotopy_twists(twists0, twists1, s):
 
 
 def _fk_jacobian(tw, full, home, A):
-    """Tool poses G (M, 4, 4) and space Jacobian (M, 6, dof) with per-row twists tw (M, n, 6)."""
+    """Tool poses G (M, 4, 4) and space Jacobian (M, 6, dof) with per-row twists tw (M, n, 6) or one
+    set of twists (n, 6) for every row."""
     M, n = full.shape
+    shared = tw.ndim == 2
     G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
     cols = np.zeros((M, 6, n))
     for i in range(n):
         R, t = G[:, :3, :3], G[:, :3, 3]
-        w = np.einsum("mij,mj->mi", R, tw[:, i, 3:])
-        v = np.einsum("mij,mj->mi", R, tw[:, i, :3]) + np.cross(t, w)
+        xi = tw[i] if shared else tw[:, i]
+        w = R @ xi[3:] if shared else np.einsum("mij,mj->mi", R, xi[:, 3:])
+        v = (R @ xi[:3] if shared else np.einsum("mij,mj->mi", R, xi[:, :3])) + _cross(t, w)
         cols[:, :3, i], cols[:, 3:, i] = v, w
-        G = G @ twist_exp_batch(tw[:, i], full[:, i])
+        G = G @ twist_exp_batch(xi, full[:, i])
     G = G @ home
     p = G[:, :3, 3]
     v, w = cols[:, :3, :], cols[:, 3:, :]
-    J = np.concatenate([v + np.cross(w, p[:, :, None], axis=1), w], axis=1)
+    J = np.concatenate([v + _cross(np.swapaxes(w, 1, 2), p[:, None, :]).swapaxes(1, 2), w], axis=1)
     return G, J @ A
 
 
@@ -83,7 +88,7 @@ def _residual(G, goals, target, scale):
     """Error vector (position, then rotation times the scale) of the rows' poses G toward goals."""
     e_pos = goals[:, :3, 3] - G[:, :3, 3]
     Rt, Rdt = np.swapaxes(G[:, :3, :3], 1, 2), np.swapaxes(goals[:, :3, :3], 1, 2)
-    e_rot = 0.5 * np.cross(Rt, Rdt).sum(axis=1)
+    e_rot = 0.5 * _cross(Rt, Rdt).sum(axis=1)
     if target == "position":
         return e_pos, slice(0, 3)
     if target == "orientation":
@@ -118,21 +123,34 @@ def _track(Q, goals, twists0, twists1, robot, tol, first_step, max_move):
     done = np.zeros(M, dtype=bool)
     failed = np.zeros(M, dtype=bool)
     Q = Q.copy()
-    while True:
+    for _ in range(MAX_ROUNDS):
         act = np.nonzero(~done & ~failed)[0]
         if not len(act):
             break
         s_new = np.minimum(s[act] + ds[act], 1.0)
-        tw = homotopy_twists(twists0, twists1, s_new)
+        if np.all(s_new == 1.0):
+            tw = np.asarray(twists1, dtype=float)
+        else:
+            tw = homotopy_twists(twists0, twists1, s_new)
         X, g = Q[act], goals[act]
         ok = np.ones(len(act), dtype=bool)
-        last = np.full(len(act), np.inf)
         err = np.full(len(act), np.inf)
-        for it in range(6):
-            X, step, err = _newton_step(tw, X, g, robot)
-            ok &= (step <= max_move) if it == 0 else (step <= 0.5 * last) | (step <= 1e-13) | (err <= tol)
-            last = step
-        _, _, err = _newton_step(tw, X, g, robot)
+        last = np.full(len(act), np.inf)
+        live = np.arange(len(act))  # rows still iterating: settled or refused rows drop out
+        for it in range(7):
+            twl = tw if tw.ndim == 2 else tw[live]
+            Xn, step, err[live] = _newton_step(twl, X[live], g[live], robot)
+            settled = err[live] <= tol
+            if it == 6:
+                break  # err is that of X: the certificate below needs no further step
+            certified = (step <= max_move) if it == 0 else (step <= 0.5 * last[live]) | (step <= 1e-13)
+            ok[live] &= certified | settled
+            move = ~settled & ok[live]
+            X[live[move]] = Xn[move]
+            last[live] = step
+            live = live[move]
+            if not len(live):
+                break
         ok &= np.isfinite(err) & (err <= tol)
         good, bad = act[ok], act[~ok]
         Q[good] = X[ok]
@@ -141,39 +159,126 @@ def _track(Q, goals, twists0, twists1, robot, tol, first_step, max_move):
         done[good] = s[good] >= 1.0
         ds[bad] *= 0.5
         failed[bad] = ds[bad] < MIN_STEP
-    return Q, done
+    return Q, done  # rows still on the way after MAX_ROUNDS count as failed
 
 
-def _collisions(Q0, Q, owner, ok, kinds_mask, scale):
+def _collisions(Q0, Q, owner, ok, revolute, scale):
     """Rows that share a target, started apart and ended on the same solution (both rows flagged)."""
     hit = np.zeros(len(Q), dtype=bool)
-    order = np.argsort(owner, kind="stable")
-    bounds = np.flatnonzero(np.diff(owner[order])) + 1
-    for group in np.split(order, bounds):
-        group = group[ok[group]]
-        if len(group) < 2:
-            continue
-        for a in range(len(group)):
-            for c in range(a + 1, len(group)):
-                i, j = group[a], group[c]
-                if _apart(Q[i], Q[j], kinds_mask, scale) <= SEPARATE and \
-                        _apart(Q0[i], Q0[j], kinds_mask, scale) > SEPARATE:
-                    hit[i] = hit[j] = True
+    rows = np.nonzero(ok)[0]
+    order = rows[np.argsort(owner[rows], kind="stable")]
+    for d in range(1, len(order)):  # pairs d apart in the sorted order; a target has few rows
+        i, j = order[:-d], order[d:]
+        same = owner[i] == owner[j]
+        if not same.any():
+            break
+        i, j = i[same], j[same]
+        met = _apart(Q[i], Q[j], revolute, scale) <= SEPARATE
+        met &= _apart(Q0[i], Q0[j], revolute, scale) > SEPARATE
+        hit[i[met]] = hit[j[met]] = True
     return hit
 
 
 def _apart(x, y, revolute, scale):
+    """Row-wise joint distance: revolute values modulo 2 pi, prismatic ones relative to the size."""
     d = np.abs(x - y)
     d = np.where(revolute, np.abs(np.remainder(d + np.pi, 2 * np.pi) - np.pi), d / scale)
-    return float(d.max())
+    return d.max(axis=-1)
 
 
-def _plain(Q, goals, twists1, robot, iters):
-    """Plain Newton steps on the true robot (rows that are no exact solution of the snapped robot)."""
-    tw = np.broadcast_to(np.asarray(twists1, dtype=float), (len(Q),) + np.shape(twists1))
+def _plain(Q, goals, twists1, robot, iters, tol=0.0):
+    """Plain Newton steps on the true robot; rows stop once their error is at most ``tol``."""
+    tw = np.asarray(twists1, dtype=float)
+    Q = Q.copy()
+    live = np.arange(len(Q))
     for _ in range(iters):
-        Q, _, _ = _newton_step(tw, Q, goals, robot)
+        Xn, _, err = _newton_step(tw, Q[live], goals[live], robot)
+        more = ~(err <= tol)
+        Q[live[more]] = Xn[more]
+        live = live[more]
+        if not len(live):
+            break
     return Q
+
+
+def _weakest(Q, tw, robot):
+    """Smallest singular value of the Jacobian (rows of the target; lengths relative to the size,
+    free joints' columns left out) and its joint direction (in joint units, largest entry 1)."""
+    A, b, home, target, hold, scale, unit = robot
+    _, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
+    J = J.copy()
+    J[:, :3, :] /= scale  # lengths relative to the size, angles as they are
+    J = J[:, {"position": slice(0, 3), "orientation": slice(3, 6)}.get(target, slice(0, 6)), :]
+    keep = [c for c in range(J.shape[2]) if c not in hold]
+    _, sv, Vt = np.linalg.svd(J[:, :, keep] * unit[keep])
+    n = np.zeros((len(Q), J.shape[2]))
+    n[:, keep] = Vt[:, -1, :] * unit[keep]
+    return sv[:, -1], n / np.abs(n / unit).max(axis=1, keepdims=True)
+
+
+def near_singular(twists0, twists1, scale) -> float:
+    """Weakest singular value below which a corrected row gets rescue seeds: ``SINGULAR_FACTOR``
+    times the change in geometry, at most ``NEAR_SINGULAR`` (a calibrated robot's solutions move by
+    about change / singular value; branches closer than that may be born, lost or swapped).  The same
+    number times the scale is the largest miss of a least-squares leaf that gets seeds (the target
+    moves by about the change: a pair of solutions may be born within it)."""
+    return min(NEAR_SINGULAR, SINGULAR_FACTOR * _geometry_change(twists0, twists1, scale))
+
+
+def _rescue(Q, goals, owner, twists1, robot, tol, iters=12):
+    """Extra candidates around near-singular rows: Newton from seeds along the weakest direction.
+
+    Near a fold of the solution set (an elbow almost stretched) the snapped robot and the true one
+    may have different numbers of real solutions: a pair is born or dies within ~sqrt(eps) of the
+    fold, and near a self-motion of the snapped robot the true one has isolated solutions along it.
+    Those solutions lie along the Jacobian's weakest direction from the row; plain Newton from seeds
+    there finds them (checked by the caller like every candidate, duplicates removed by its dedupe).
+    """
+    tw = np.broadcast_to(np.asarray(twists1, dtype=float), (len(Q),) + np.shape(twists1))
+    _, n = _weakest(Q, tw, robot)
+    seeds = np.concatenate([Q[:, None, :] + t * n[:, None, :] for t in RESCUE_SEEDS], axis=1)
+    k = len(RESCUE_SEEDS)
+    X = seeds.reshape(-1, Q.shape[1])
+    g = np.repeat(goals, k, axis=0)
+    X = _plain(X, g, twists1, robot, iters, tol)
+    return X, np.repeat(owner, k)
+
+
+# Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
+# solutions anywhere on the circle.
+RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
+NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
+SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
+
+
+def _geometry_change(twists0, twists1, scale):
+    """How far the snapped robot is from the true one: largest change of a direction (rad) or of an
+    axis point (relative to the size)."""
+    d0, p0, _ = _lines(twists0)
+    d1, p1, _ = _lines(twists1)
+    return float(max(np.abs(d1 - d0).max(), np.abs(p1 - p0).max() / scale))
+
+
+def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
+    """Rows of X (owners own) that reach their goal within tol and are no row of Q (owners owner) nor
+    another row of X already: keys rounded to 1e-7 (the caller's dedupe catches keys split by it)."""
+    tw = np.asarray(twists1, dtype=float)
+    _, _, err = _newton_step(tw, X, goals, robot)
+    keep = np.isfinite(err) & (err <= tol)
+    X, own = X[keep], own[keep]
+    if not len(X):
+        return X, own
+
+    def keys(Z, o):
+        Z = np.where(revolute, np.remainder(Z + np.pi, 2 * np.pi) - np.pi, Z / robot[5])
+        return np.concatenate([o[:, None].astype(float), np.round(Z / 1e-7)], axis=1)
+
+    old = {tuple(k) for k in keys(Q[np.all(np.isfinite(Q), axis=1)], owner[np.all(np.isfinite(Q), axis=1)])}
+    _, first = np.unique(keys(X, own), axis=0, return_index=True)
+    first = np.sort(first)
+    fresh = np.array([tuple(k) not in old for k in keys(X[first], own[first])], dtype=bool)
+    return X[first[fresh]], own[first[fresh]]
+NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
 
 
 def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
@@ -188,16 +293,21 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
     their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
     when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
-    colliding after the re-tracking; the caller's dedupe merges them).
+    colliding after the re-tracking; the caller's dedupe merges them), ``rescued``.
+
+    Returns ``(TH', owner')``: the corrected rows, in order, then extra candidate rows (rescue seeds
+    around near-singular rows, see :func:`_rescue`) with their owners.
 
     >>> t0 = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])  # planar 2R, links 1 and 1
     >>> t1 = t0.copy(); t1[1, :3] = [0, -1.001, 0]  # the true second axis is at x = 1.001
     >>> home = np.eye(4); home[0, 3] = 2.0
     >>> goal = np.eye(4); goal[:2, 3] = [0.0, 1.5]
-    >>> snapped = [[np.pi / 2 - 0.7227342478, 2 * 0.7227342478], [np.pi / 2 + 0.7227342478, -2 * 0.7227342478]]
-    >>> q = correct(np.array(snapped), np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
+    >>> h = 0.7227342478  # acos(0.75): the snapped arm's half elbow angle
+    >>> snapped = [[np.pi / 2 - h, 2 * h], [np.pi / 2 + h, -2 * h]]
+    >>> q, own = correct(np.array(snapped), np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
     ...             A=np.eye(2), b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0)
     >>> from subproblems.plan_runtime import fk_batch
+    >>> q = q[:2]  # the two tracked rows (rescue rows may follow)
     >>> bool(np.abs(fk_batch(t1, q, home)[:, :3, 3] - goal[:3, 3]).max() < 1e-12)  # both on the true arm
     True
     >>> bool(q[0, 1] > 0 > q[1, 1])  # elbow up and elbow down: two distinct solutions
@@ -216,10 +326,11 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     ok = np.zeros(len(TH), dtype=bool)
     etol = 1e-3 * tol * scale
     usable = np.all(np.isfinite(Q0), axis=1)
+    err0_all = np.full(len(Q0), np.inf)
     if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
         tw0 = np.broadcast_to(np.asarray(twists0, dtype=float), (len(Q0),) + np.shape(twists0))
-        _, _, err0 = _newton_step(tw0[usable], Q0[usable], goals[usable], robot)
-        usable[np.nonzero(usable)[0][~(err0 <= tol * scale)]] = False
+        _, _, err0_all[usable] = _newton_step(tw0[usable], Q0[usable], goals[usable], robot)
+        usable &= err0_all <= tol * scale
     idx = np.nonzero(usable)[0]
     if len(idx):
         Q[idx], ok[idx] = _track(Q0[idx], goals[idx], twists0, twists1, robot, etol, 1.0, MAX_MOVE)
@@ -229,13 +340,31 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         Q[again], ok[again] = _track(Q0[again], goals[again], twists0, twists1, robot, etol, 1.0 / 64,
                                      0.1 * MAX_MOVE)
     left = _collisions(Q0, Q, owner, ok, revolute, scale)
-    rest = np.nonzero(~ok & np.all(np.isfinite(Q0), axis=1))[0]
+    finite = np.all(np.isfinite(Q0), axis=1)
+    rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
-        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain)
+        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, 1e-3 * etol)
+    # Rows whose count may differ between the snapped and the true robot: failed or colliding
+    # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
+    threshold = near_singular(twists0, twists1, scale)
+    seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
+    look = np.nonzero(finite & ~seed)[0]
+    if len(look):
+        tw1 = np.broadcast_to(np.asarray(twists1, dtype=float), (len(look),) + np.shape(twists1))
+        sv, _ = _weakest(Q[look], tw1, robot)
+        seed[look[~(sv >= threshold)]] = True
+    extra = np.nonzero(seed)[0]
+    own = owner
+    if len(extra):
+        X, own_x = _rescue(np.where(ok[extra, None], Q[extra], Q0[extra]), goals[extra], owner[extra],
+                           twists1, robot, 1e-3 * etol)
+        X, own_x = _new_solutions(X, own_x, np.repeat(goals[extra], len(RESCUE_SEEDS), axis=0), Q, owner,
+                                  twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
+        Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
     if report is not None:
         report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
-                      collided=int(left.sum()))
-    return Q @ A.T + b
+                      collided=int(left.sum()), rescued=len(extra))
+    return Q @ A.T + b, own
 
 
-__all__ = ["correct", "homotopy_twists", "MAX_MOVE", "MIN_STEP", "SEPARATE"]
+__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "SEPARATE"]

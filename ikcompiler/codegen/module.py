@@ -171,7 +171,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
                                 upper=output.upper, free=free_idx,
                                 target=plan.target, scale=scale, tol=tol, slots=slots, twists=chain.twists,
                                 home=np.asarray(chain.home, float), A=A, b=b, search=len(plan.search),
-                                grid=plan.grid, polish=10 if plan.snapped else 0)
+                                grid=plan.grid, polish=10 if plan.snapped else 0,
+                                near_singular=_near_singular(plan, chain, scale))
     out.append(
         "\n\n# Native backend: the fast chain above in C (the same arithmetic), built with the machine's C\n"
         "# compiler on first use and cached (subproblems.native); without a compiler, or with NATIVE set\n"
@@ -183,6 +184,15 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     text = "".join(out)
     # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
     return text.replace("{imports}", "\nimport math\n" if "math.inf" in text else "", 1)
+
+
+def _near_singular(plan, chain, scale: float) -> float:
+    """The C finish's threshold for handing a snapped plan's target to the Python continuation."""
+    if not (plan.snapped and plan.plan_twists):
+        return 0.0
+    from subproblems.continuation import near_singular
+
+    return near_singular(np.asarray(plan.plan_twists, float), np.asarray(chain.twists, float), scale)
 
 
 BODY = '''
@@ -291,7 +301,9 @@ def _candidates(goals, Td, init):
             # on every joint pull it onto a nearby exact solution of the continuum.
             TH[cont] = _newton(TH[cont], goals[owner[cont]], 60)
         if _POLISH and len(TH):
-            TH = _correct(TH, owner, goals)
+            TH, owner = _correct(TH, owner, goals)
+            extra = np.zeros(len(TH) - len(ls), dtype=bool)
+            ls, cont = np.concatenate([ls, extra]), np.concatenate([cont, extra])
     return TH, owner, ls, cont
 
 
@@ -401,7 +413,7 @@ def _native_batch(Ts, free, limits):
         goals, Td = _targets(raw[idx])
         # the C did the fast path's work already: what is left is for the reference runtime (a search
         # plan keeps its own Python search, which the reference runtime would redo much slower)
-        settle = _solve_chunk if _SEARCH else _reference_chunk
+        settle = _solve_chunk if (_SEARCH or _POLISH) else _reference_chunk  # _POLISH: the continuation
         for whole, part in zip(parts, settle(goals, Td, init[idx], limits)):
             whole[idx] = part
     return parts
@@ -416,7 +428,7 @@ def _solve_chunk(goals, Td, init, limits):
         Q, _, flag = _fast_leaves(goals, init)
         defer = (flag & _fk.DEFER).any(axis=1)
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
-        TH = _correct(Q[rows, leaf] @ _A.T + _B, rows, goals)
+        TH, rows = _correct(Q[rows, leaf] @ _A.T + _B, rows, goals)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
     else:
