@@ -96,7 +96,7 @@ def _residual(G, goals, target, scale):
     return np.concatenate([e_pos, e_rot], axis=1), slice(0, 6)
 
 
-def _newton_step(tw, Q, goals, robot):
+def _newton_step(tw, Q, goals, robot, damping=1e-12):
     """One damped Gauss-Newton step for every row: (new Q, step size, error before the step)."""
     A, b, home, target, hold, scale, unit = robot
     G, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
@@ -110,7 +110,7 @@ def _newton_step(tw, Q, goals, robot):
                          scale * np.abs(e[:, -3:]).max(axis=1))
     col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
     Js = J / col[:, None, :]
-    JtJ = np.einsum("mki,mkj->mij", Js, Js) + 1e-12 * np.eye(Js.shape[2])
+    JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
     dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
     return Q + dq, np.abs(dq / unit).max(axis=1), err
 
@@ -186,13 +186,13 @@ def _apart(x, y, revolute, scale):
     return d.max(axis=-1)
 
 
-def _plain(Q, goals, twists1, robot, iters, tol=0.0):
+def _plain(Q, goals, twists1, robot, iters, tol=0.0, damping=1e-12):
     """Plain Newton steps on the true robot; rows stop once their error is at most ``tol``."""
     tw = np.asarray(twists1, dtype=float)
     Q = Q.copy()
     live = np.arange(len(Q))
     for _ in range(iters):
-        Xn, _, err = _newton_step(tw, Q[live], goals[live], robot)
+        Xn, _, err = _newton_step(tw, Q[live], goals[live], robot, damping)
         more = ~(err <= tol)
         Q[live[more]] = Xn[more]
         live = live[more]

@@ -29,7 +29,10 @@ SAME = 1e-6  # rad (revolute) / of the size (prismatic): a recovered sample
 def _distance(a, b, kinds, scale):
     d = np.abs(np.asarray(a, float) - np.asarray(b, float))
     for c, k in enumerate(kinds):
-        d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi) if k == "R" else d[..., c] / scale
+        if k == "R":
+            d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi)
+        else:
+            d[..., c] /= scale
     return d.max(axis=-1)
 
 
@@ -69,8 +72,10 @@ def _doosan_like(calibrated: bool) -> Chain:
         return ideal
     joints = list(ideal.joints)
     j4, j5 = joints[3], joints[4]
-    joints[3] = Joint("j4", "R", revolute_twist((0, math.sin(tilt), math.cos(tilt)), j4.point), j4.lower, j4.upper)
-    joints[4] = Joint("j5", "R", revolute_twist(j5.axis, j5.point + (miss * ideal.scale, 0, 0)), j5.lower, j5.upper)
+    tilted = revolute_twist((0, math.sin(tilt), math.cos(tilt)), j4.point)
+    joints[3] = Joint("j4", "R", tilted, j4.lower, j4.upper)
+    shifted = revolute_twist(j5.axis, j5.point + (miss * ideal.scale, 0, 0))
+    joints[4] = Joint("j5", "R", shifted, j5.lower, j5.upper)
     return Chain("doosan-like (calibrated)", tuple(joints), ideal.home)
 
 
@@ -94,35 +99,64 @@ def test_doosan_like_arm_returns_every_solution_of_the_ideal_arm(doosan, native)
 
 
 def test_doosan_like_arm_keeps_both_wrist_branches(doosan):
-    """The issue's case: for each arm branch only one wrist branch came back (4 of 8)."""
-    true, module, _, _ = doosan
-    q = np.array([0.4, -0.6, 1.1, 0.9, 1.2, -0.5])
+    """The issue's case (for each arm branch only one wrist branch came back: 4 of 8): every solution of
+    the ideal arm has its own calibrated counterpart, one to one."""
+    true, module, ideal, ideal_module = doosan
+    T = true.fk(np.array([0.4, -0.6, 1.1, 0.9, 1.2, -0.5]))
+    ideal_rows = ideal_module.solve(T, limits=False)
+    assert len(ideal_rows) == 8
     for native in (True, False):
         module.NATIVE = native
-        rows = module.solve(true.fk(q), limits=False)
+        rows = module.solve(T, limits=False)
         assert len(rows) == 8
-        arms = {}
-        for r in rows:  # the arm branch (j1, j2, j3) to 1e-2 rad, and the wrist flip (sign of j5)
-            arms.setdefault(tuple(np.round(r[:3], 2)), set()).add(bool(r[4] > 0))
-        assert len(arms) == 4 and all(flips == {True, False} for flips in arms.values()), rows
+        nearest = [int(np.argmin(_distance(ideal_rows, r, "RRRRRR", true.scale))) for r in rows]
+        assert sorted(nearest) == list(range(8)), (rows, ideal_rows)
+        assert all(_distance(ideal_rows[k], r, "RRRRRR", true.scale) < 0.05 for k, r in zip(nearest, rows))
 
 
 ARMS = ["puma560", "ur5", "kr6_r700", "prob", "rhino"]
-# (arm, eps) pairs not met today, with the measured reason (benchmarks/results/calibrated.md)
-KNOWN = {}
+_MODULES: dict = {}
+
+
+def _perturbed(name, eps):
+    """The perturbed arm (seed 3) and its compiled module, compiled once per test session."""
+    if (name, eps) not in _MODULES:
+        chain = perturb_chain(load_robot(name), eps, seed=3)
+        _MODULES[name, eps] = chain, compile_robot(chain)
+    return _MODULES[name, eps]
+
+
+# Not met today, with the measured reason (benchmarks/results/calibrated.md, docs/calibrated.md).
+SEARCH = ("misses of about 2e-3 exceed the snap tolerance 1e-3: no closed form on the snapped robot, "
+          "solved by the 1-D search (incomplete; the general 6R solver replaces it: issue 10 item 1)")
+KNOWN_GENERIC = {(name, 2e-3): SEARCH for name in ("puma560", "ur5", "kr6_r700", "prob")}
+SINGULAR = ("sampled vector at a singular configuration of the ideal arm (special angle: wrist or elbow "
+            "aligned): the calibrated arm has a near-self-motion there and Newton does not resolve it")
+KNOWN_SPECIAL = {(name, 1e-4): SINGULAR for name in ("ur5", "prob", "rhino")}
 
 
 @pytest.mark.parametrize("eps", [1e-8, 1e-6, 1e-4, 2e-3])
 @pytest.mark.parametrize("name", ARMS)
-def test_perturbed_zoo_arm_recovers_every_sample(name, eps, request):
-    if (name, eps) in KNOWN:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN[name, eps]))
-    chain = perturb_chain(load_robot(name), eps, seed=3)
-    module = compile_robot(chain)
-    Q = sample_configurations(chain, 30, seed=7)
+def test_perturbed_zoo_arm_recovers_every_generic_sample(name, eps, request):
+    if (name, eps) in KNOWN_GENERIC:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_GENERIC[name, eps]))
+    chain, module = _perturbed(name, eps)
+    Q = sample_configurations(chain, 20, seed=7, special=0.0)
     recovered, wrong, _ = _check(chain, module, Q, True)
     assert wrong == 0
     assert recovered == len(Q), f"{name} perturbed by {eps:g}: {recovered} of {len(Q)} recovered"
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_perturbed_zoo_arm_at_special_angles(name, request):
+    """A quarter of the joint values at 0, +-pi/2, pi (wrists and elbows aligned), perturbed by 1e-4."""
+    if (name, 1e-4) in KNOWN_SPECIAL:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_SPECIAL[name, 1e-4]))
+    chain, module = _perturbed(name, 1e-4)
+    Q = sample_configurations(chain, 30, seed=7, special=0.25)
+    recovered, wrong, _ = _check(chain, module, Q, True)
+    assert wrong == 0
+    assert recovered == len(Q), f"{name} at special angles: {recovered} of {len(Q)} recovered"
 
 
 def test_homotopy_ends_at_both_robots():
@@ -146,8 +180,9 @@ def test_correct_retracks_a_collision():
     h = math.acos(1.9 / 2)
     snapped = np.array([[-h, 2 * h], [h, -2 * h]])
     report = {}
-    q, own = correct(snapped, np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home, A=np.eye(2),
-                     b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0, report=report)
+    q, own = correct(snapped, np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
+                     A=np.eye(2), b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0,
+                     report=report)
     from subproblems.plan_runtime import fk_batch
 
     P = fk_batch(t1, q, home)[:, :3, 3]
