@@ -37,6 +37,7 @@ sys.path.insert(0, str(ROOT))
 from ikcompiler import load_robot  # noqa: E402
 from ikcompiler.compiler import compile_robot  # noqa: E402
 from ikcompiler.geometry.perturb import perturb_chain  # noqa: E402
+from ikcompiler.geometry.relations import Tolerance  # noqa: E402
 from ikcompiler.geometry.snap import snap_chain  # noqa: E402
 from ikcompiler.verify import sample_configurations  # noqa: E402
 
@@ -69,12 +70,13 @@ def _plain_newton(module):
         module._correct = lambda TH, owner, goals: (module._newton(TH, goals[owner], module._POLISH), owner)
 
 
-def measure(chain, poses: int, seed: int, special: float = 0.25, plain: bool = False) -> dict:
-    """One row of the table for the (perturbed) chain."""
-    module = compile_robot(chain)
+def measure(chain, poses: int, seed: int, special: float = 0.25, plain: bool = False, snap=None) -> dict:
+    """One row of the table for the (perturbed) chain; ``snap``: the snap tolerance (default 1e-3)."""
+    tol = Tolerance(snap=snap) if snap else None
+    module = compile_robot(chain, tol=tol)
     if plain:
         _plain_newton(module)
-    snapped, notes = snap_chain(chain)
+    snapped, notes = snap_chain(chain, tol)
     kinds = [chain.joints[i].kind for i in chain.independent]
     Q = sample_configurations(chain, poses, seed=seed, special=special)
     G = chain.fk_batch(Q)
@@ -124,6 +126,7 @@ def main(argv=None) -> int:
                     help="probability of a special joint value (0, +-pi/2, pi)")
     ap.add_argument("--plain", action="store_true",
                     help="Python path as before the continuation (plain Newton from the snapped answers)")
+    ap.add_argument("--snap", type=float, default=None, help="snap tolerance (default: Tolerance().snap)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "calibrated.md"))
     args = ap.parse_args(argv)
     lines = [
@@ -132,7 +135,8 @@ def main(argv=None) -> int:
         f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, Python {platform.python_version()}, "
         f"{platform.machine()}, {os.cpu_count()} cores shared with other jobs (timings on a loaded machine); "
         f"{args.poses} poses per row, limits off, special angles (0, +-pi/2, pi) with probability "
-        f"{args.special} per value{'; plain Newton (as before)' if args.plain else ''}.",
+        f"{args.special} per value{'; plain Newton (as before)' if args.plain else ''}"
+        f"{f'; snap tolerance {args.snap:g}' if args.snap else ''}.",
         "",
         "| arm | eps | seed | method | recovered (C / Py) | wrong (C / Py) | lost of ref (C / Py) | "
         "poses losing (C / Py) | snapped self-motion poses | us/pose C | us/pose Py |",
@@ -144,7 +148,7 @@ def main(argv=None) -> int:
             for seed in range(args.seeds):
                 t0 = time.perf_counter()
                 r = measure(perturb_chain(base, eps, seed=seed), args.poses, seed=seed + 100,
-                            special=args.special, plain=args.plain)
+                            special=args.special, plain=args.plain, snap=args.snap)
                 line = (
                     f"| {name} | {eps:g} | {seed} | {r['method']} | {r['recovered']} / {r['recovered_py']} | "
                     f"{r['wrong']} / {r['wrong_py']} | {r['lost']} / {r['lost_py']} of {r['ref']} | "

@@ -277,7 +277,15 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
     _, first = np.unique(keys(X, own), axis=0, return_index=True)
     first = np.sort(first)
     fresh = np.array([tuple(k) not in old for k in keys(X[first], own[first])], dtype=bool)
-    return X[first[fresh]], own[first[fresh]]
+    pick = first[fresh]
+    # at most RESCUE_KEEP new rows a target, the best first (near a self-motion of the snapped robot
+    # many points of the true robot's near-continuum reproduce the target; the finish's cost grows
+    # with the square of a target's candidates)
+    pick = pick[np.lexsort((err[keep][pick], own[pick]))]
+    rank = np.arange(len(pick)) - np.searchsorted(own[pick], own[pick], side="left")
+    pick = pick[rank < RESCUE_KEEP]
+    return X[pick], own[pick]
+RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
 NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
 
 
