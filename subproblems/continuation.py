@@ -33,6 +33,13 @@ MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths rel
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
 MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
 SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
+# Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
+# solutions anywhere on the circle.
+RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
+NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
+SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
+RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
+NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
 
 
 def _lines(twists):
@@ -234,8 +241,7 @@ def _rescue(Q, goals, owner, twists1, robot, tol, iters=12):
     Those solutions lie along the Jacobian's weakest direction from the row; plain Newton from seeds
     there finds them (checked by the caller like every candidate, duplicates removed by its dedupe).
     """
-    tw = np.broadcast_to(np.asarray(twists1, dtype=float), (len(Q),) + np.shape(twists1))
-    _, n = _weakest(Q, tw, robot)
+    _, n = _weakest(Q, np.asarray(twists1, dtype=float), robot)
     seeds = np.concatenate([Q[:, None, :] + t * n[:, None, :] for t in RESCUE_SEEDS], axis=1)
     k = len(RESCUE_SEEDS)
     X = seeds.reshape(-1, Q.shape[1])
@@ -244,11 +250,6 @@ def _rescue(Q, goals, owner, twists1, robot, tol, iters=12):
     return X, np.repeat(owner, k)
 
 
-# Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
-# solutions anywhere on the circle.
-RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
-NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
-SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 
 
 def _geometry_change(twists0, twists1, scale):
@@ -273,7 +274,8 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
         Z = np.where(revolute, np.remainder(Z + np.pi, 2 * np.pi) - np.pi, Z / robot[5])
         return np.concatenate([o[:, None].astype(float), np.round(Z / 1e-7)], axis=1)
 
-    old = {tuple(k) for k in keys(Q[np.all(np.isfinite(Q), axis=1)], owner[np.all(np.isfinite(Q), axis=1)])}
+    finite = np.all(np.isfinite(Q), axis=1)
+    old = {tuple(k) for k in keys(Q[finite], owner[finite])}
     _, first = np.unique(keys(X, own), axis=0, return_index=True)
     first = np.sort(first)
     fresh = np.array([tuple(k) not in old for k in keys(X[first], own[first])], dtype=bool)
@@ -285,8 +287,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
     rank = np.arange(len(pick)) - np.searchsorted(own[pick], own[pick], side="left")
     pick = pick[rank < RESCUE_KEEP]
     return X[pick], own[pick]
-RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
-NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
+
 
 
 def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
@@ -336,8 +337,8 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     usable = np.all(np.isfinite(Q0), axis=1)
     err0_all = np.full(len(Q0), np.inf)
     if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
-        tw0 = np.broadcast_to(np.asarray(twists0, dtype=float), (len(Q0),) + np.shape(twists0))
-        _, _, err0_all[usable] = _newton_step(tw0[usable], Q0[usable], goals[usable], robot)
+        tw0 = np.asarray(twists0, dtype=float)
+        _, _, err0_all[usable] = _newton_step(tw0, Q0[usable], goals[usable], robot)
         usable &= err0_all <= tol * scale
     idx = np.nonzero(usable)[0]
     if len(idx):
@@ -358,8 +359,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
     look = np.nonzero(finite & ~seed)[0]
     if len(look):
-        tw1 = np.broadcast_to(np.asarray(twists1, dtype=float), (len(look),) + np.shape(twists1))
-        sv, _ = _weakest(Q[look], tw1, robot)
+        sv, _ = _weakest(Q[look], np.asarray(twists1, dtype=float), robot)
         seed[look[~(sv >= threshold)]] = True
     extra = np.nonzero(seed)[0]
     own = owner
