@@ -302,7 +302,9 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
     their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
     when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
-    colliding after the re-tracking; the caller's dedupe merges them), ``rescued``.
+    colliding after the re-tracking; the caller's dedupe merges them), ``rescued`` and ``uncertain``:
+    the owners of the rows that got rescue seeds (targets where the count may differ between the
+    snapped and the true robot; a complete solver of the true robot may be asked about them).
 
     Returns ``(TH', owner')``: the corrected rows, in order, then extra candidate rows (rescue seeds
     around near-singular rows, see :func:`_rescue`) with their owners.
@@ -371,7 +373,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
     if report is not None:
         report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
-                      collided=int(left.sum()), rescued=len(extra))
+                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]))
     return Q @ A.T + b, own
 
 

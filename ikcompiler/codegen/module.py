@@ -264,10 +264,41 @@ def _newton(TH, goals, iters):
 
 def _correct(TH, owner, goals):
     """Snapped plan: carry the snapped robot's candidates to the true robot by continuation in the
-    geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md)."""
-    return _ct.correct(TH, goals[owner], owner, twists0=_PLAN_TWISTS, twists1=_TWISTS, home=_HOME, A=_A,
-                       b=_B, independent=_VARY, kinds=_VARY_KINDS, target=_SOLVE_TARGET, hold=_FREE,
-                       scale=SCALE, tol=TOLERANCE, plain=_POLISH)
+    geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md).  Targets
+    where the count may differ (rescue seeds were needed) are also given to the general 6R solver of
+    the true robot when there is one (6 revolute joints, pose target): its rows join the candidates."""
+    report = {}
+    TH, owner = _ct.correct(TH, goals[owner], owner, twists0=_PLAN_TWISTS, twists1=_TWISTS, home=_HOME,
+                            A=_A, b=_B, independent=_VARY, kinds=_VARY_KINDS, target=_SOLVE_TARGET,
+                            hold=_FREE, scale=SCALE, tol=TOLERANCE, plain=_POLISH, report=report)
+    doubt = report.get("uncertain", ())
+    solver = _general6() if len(doubt) else None
+    if solver is not None:
+        TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
+        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, np.asarray(doubt)[own2]])
+    return TH, owner
+
+
+_G6 = []  # the general 6R solver of the true robot for doubtful targets: [General6] or [None]
+
+
+def _general6():
+    """The true robot's general 6R solver (subproblems.general6, built on first use), or None when
+    the robot is no plain 6R pose chain or the package has no general solver."""
+    if not _G6:
+        solver = None
+        if _KINDS == "RRRRRR" and _SOLVE_TARGET == "pose" and not FREE_JOINTS and not _COUPLINGS:
+            try:
+                from subproblems import general6
+            except ImportError:
+                general6 = None
+            if general6 is not None:
+                try:
+                    solver = general6.General6(_TWISTS, _HOME, SCALE)
+                except general6.General6Error:
+                    solver = None
+        _G6.append(solver)
+    return _G6[0]
 
 
 def _candidates(goals, Td, init):
