@@ -83,7 +83,7 @@ def space_jacobian(twists, A, b, Q) -> np.ndarray:
 
 
 def tool_jacobian(twists, A, b, home, Q, scale: float) -> np.ndarray:
-    """(N, 6, dof) size-free Jacobian: referred to the tool origin, linear rows / scale, prismatic cols * scale."""
+    """(N, 6, dof) size-free Jacobian: at the tool origin, linear rows / scale, prismatic columns * scale."""
     twists = np.asarray(twists, dtype=float)
     A = np.asarray(A, dtype=float)
     cols, R, p = _space_columns(twists, _joint_values(A, b, Q))

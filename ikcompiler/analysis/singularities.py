@@ -355,14 +355,25 @@ def _simplest(num: _Numeric, S, P, minors, rng) -> tuple[sp.Expr, ...]:
     """The simplest equations among the minors' factors with the same zero set as ``S`` (same count)."""
     if len(S) == 1:
         return tuple(S)
-    cands = sorted({f for fs in minors for f in fs if num.vanishes(f, P).all()}, key=sp.count_ops)[:8]
     lo, hi = num.box()
+
+    def same(eqs) -> bool:  # V(eqs) contains V(S) by construction; is it inside V(S)?
+        Q, ok = num.project(eqs, rng.uniform(lo, hi, (12, num.chain.dof)))
+        return bool(ok.any()) and all(num.vanishes(e, Q[ok]).all() for e in S)
+
+    for k in range(1, len(S)):  # fewer equations with the same zero set (sin(q) + cos(q) - 1, sin(q))
+        sub = next((c for c in itertools.combinations(S, k) if same(c)), None)
+        if sub is not None:
+            S = sub
+            break
+    if len(S) == 1:
+        return tuple(S)
+    cands = sorted({f for fs in minors for f in fs if num.vanishes(f, P).all()}, key=sp.count_ops)[:8]
     combos = sorted(itertools.combinations(cands, len(S)), key=lambda c: sum(sp.count_ops(e) for e in c))
     for combo in combos:
         if sum(sp.count_ops(e) for e in combo) >= sum(sp.count_ops(e) for e in S):
             break
-        Q, ok = num.project(combo, rng.uniform(lo, hi, (12, num.chain.dof)))
-        if ok.any() and all(num.vanishes(e, Q[ok]).all() for e in S):
+        if same(combo):
             return tuple(combo)
     return tuple(S)
 

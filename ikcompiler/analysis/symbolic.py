@@ -24,8 +24,8 @@ docs/singularities.md.
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 import sympy as sp

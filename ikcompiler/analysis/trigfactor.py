@@ -33,7 +33,7 @@ def _degree_in(p, gens_idx) -> int:
 
 
 def factor_trig(sc, P) -> tuple[object, list[TrigFactor]]:
-    """(constant, factors) of the ring element ``P`` of a :class:`~ikcompiler.analysis.symbolic.SymbolicChain`.
+    """(constant, factors) of the ring element ``P`` of a ``SymbolicChain``.
 
     Each factor's zero set is part of ``P = 0``, and their union is all of it (``th = pi`` included).
     """
@@ -135,7 +135,7 @@ def _to_full(sc, T, f, extra: dict) -> sp.Expr:
 
 
 def _primitive(e: sp.Expr) -> sp.Expr:
-    """``e`` without its numeric content and with a positive leading coefficient (``2*sin(q)/3 -> sin(q)``)."""
+    """``e`` without its numeric content (``2*sin(q)/3 -> sin(q)``)."""
     e = sp.factor(e)
     _, e = e.as_coeff_Mul()
     if e.is_Add:
