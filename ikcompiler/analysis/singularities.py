@@ -531,3 +531,73 @@ def analyse(chain, samples: int = 10000, threshold: float = THRESHOLD, budget: f
         singular_everywhere=everywhere, generic_rank=rank, sampling=sampling, status=status,
         message=message, seconds=time.perf_counter() - start, notes=tuple(notes),
     )
+
+
+# ---- seed 004's method: reciprocal screws, then the determinant of the remaining rows --------------------
+
+ROWS = ("vx", "vy", "vz", "wx", "wy", "wz")  # the rows of a twist (v, w)
+
+
+def reciprocal_free_rows(chain, q) -> tuple[str, ...]:
+    """The twist components seed 004 removes: the free variables of ``W^T V = 0`` at configuration ``q``.
+
+    ``W`` spans the screws reciprocal to the joint twists (the left null space of the space Jacobian:
+    a wrench (f, m) does no work on every twist the chain can make); the ``6 - dof`` equations ``W^T V = 0``
+    tie the twist components together, and Gaussian elimination in the order v_x, v_y, v_z, w_x, w_y, w_z
+    picks ``6 - dof`` of them as the ones the others determine.  A chain with dof >= 6 removes none.
+    """
+    from ikcompiler.analysis.jacobian import space_jacobians
+
+    J = space_jacobians(chain, np.asarray(q, dtype=float)[None, :])[0]
+    u, s, _ = np.linalg.svd(J)
+    rank = int((s > 1e-9 * s[0]).sum())
+    W = u[:, rank:]  # (6, 6 - rank)
+    free, M = [], W.T.copy()
+    for col in range(6):  # pivots of the row echelon form of W^T
+        if len(free) == M.shape[0]:
+            break
+        r = len(free)
+        piv = r + int(np.argmax(np.abs(M[r:, col]))) if r < M.shape[0] else None
+        if piv is None or abs(M[piv, col]) < 1e-9:
+            continue
+        M[[r, piv]] = M[[piv, r]]
+        M[r] /= M[r, col]
+        for k in range(M.shape[0]):
+            if k != r:
+                M[k] -= M[k, col] * M[r]
+        free.append(ROWS[col])
+    return tuple(free)
+
+
+def reduced_conditions(chain, rows=None, q=None) -> tuple[tuple[str, ...], list[sp.Expr]]:
+    """Seed 004's singular conditions: the factors of det of the space Jacobian's kept ``rows``.
+
+    ``rows`` defaults to the complement of :func:`reciprocal_free_rows` at ``q`` (default: a fixed generic
+    configuration).  This is a *task* singularity (the chain cannot produce every velocity of the kept
+    components); the full singular set (:func:`analyse`) is where the whole Jacobian loses rank, which
+    implies every such determinant vanishes.  Returns (kept rows, factors).
+
+    >>> from ikcompiler import load_robot
+    >>> rows, factors = reduced_conditions(load_robot("grasp4dof"))
+    >>> rows, sorted(map(str, factors))
+    (('vz', 'wx', 'wy', 'wz'), ['cos(shoulder)', 'sin(elbow + shoulder)'])
+    """
+    from sympy.polys.matrices import DomainMatrix
+
+    from ikcompiler.analysis.symbolic import build
+    from ikcompiler.analysis.trigfactor import factor_trig
+
+    if rows is None:
+        if q is None:
+            q = np.random.default_rng(12).uniform(-1.0, 1.0, chain.dof)
+        free = reciprocal_free_rows(chain, q)
+        rows = tuple(r for r in ROWS if r not in free)
+    rows = tuple(rows)
+    if len(rows) != chain.dof or any(r not in ROWS for r in rows):
+        raise ValueError(f"need {chain.dof} distinct rows among {', '.join(ROWS)}, got {rows}")
+    sc = build(chain)
+    J = sc.jacobian_in_frame(0)
+    M = DomainMatrix([[J[ROWS.index(r)][c] for c in range(chain.dof)] for r in rows], (len(rows),) * 2,
+                     sc.ring.to_domain())
+    _, fl = factor_trig(sc, sc.nf(M.det()))
+    return rows, [_tidy(f.expr) for f in fl]
