@@ -77,8 +77,8 @@ def write_png(report, chain, path: str, grid: int = 121) -> str:
     others = ", ".join(f"{report.joints[k]}={base[k]:.3g}" for k in range(dof) if k not in (i, j))
     ax.set_xlabel(report.joints[j], fontsize=8)
     ax.set_ylabel(report.joints[i], fontsize=8)
-    ax.set_title(f"sigma_min over {report.joints[i]}, {report.joints[j]}" + (f" ({others})" if others else ""),
-                 fontsize=8)
+    title = f"sigma_min over {report.joints[i]}, {report.joints[j]}"
+    ax.set_title(title + (f" ({others})" if others else ""), fontsize=8)
     fig.suptitle(f"{report.robot}: smallest singular value of the size-free Jacobian, {s.samples} samples",
                  fontsize=9)
     fig.tight_layout()

@@ -171,14 +171,20 @@ class _Numeric:
         """(value, gradient) functions of ``e`` over Q (N, dof)."""
         if e not in self._fns:
             f = sp.lambdify(self.syms, e, "numpy")
-            g = [sp.lambdify(self.syms, sp.diff(e, s), "numpy") for s in self.syms]
 
             def val(Q, f=f):
                 return np.broadcast_to(np.asarray(f(*Q.T), dtype=float), Q.shape[:1])
 
-            def grad(Q, g=g):
-                return np.stack([np.broadcast_to(np.asarray(gi(*Q.T), dtype=float), Q.shape[:1]) for gi in g],
-                                axis=1)
+            def grad(Q, val=val):
+                # central differences: the gradient only steers Gauss-Newton and scales the distance
+                # tests; the equations themselves are evaluated exactly
+                h = 1e-6 / np.maximum(self.metric, 1e-300)
+                out = np.empty(Q.shape)
+                for k in range(Q.shape[1]):
+                    d = np.zeros(Q.shape[1])
+                    d[k] = h[k]
+                    out[:, k] = (val(Q + d) - val(Q - d)) / (2 * h[k])
+                return out
 
             self._fns[e] = (val, grad)
         return self._fns[e]
@@ -194,6 +200,8 @@ class _Numeric:
             step = np.einsum("nij,nj->ni", np.linalg.pinv(G), F)
             step = np.clip(step, -0.5, 0.5)
             Q = Q - step / W
+            if not np.any(np.abs(step) > 1e-15):  # NaN rows stop too: they never converge
+                break
         F = np.stack([f(Q) for f, _ in fns], axis=1)
         G = np.stack([g(Q) for _, g in fns], axis=1) / W
         gn = np.linalg.norm(G, axis=2)
@@ -219,38 +227,52 @@ def generic_rank(chain, rng) -> int:
 # ---- symbolic stage (child process) ---------------------------------------------------------------------
 
 
-def _minor_factors(chain, rank: int) -> list[list[sp.Expr]]:
-    """Factors (as expressions) of the nonzero ``rank x rank`` minors, smallest minors first."""
-    from sympy.polys.matrices import DomainMatrix
+class _LazyMinors:
+    """The nonzero ``rank x rank`` minors, smallest first, each factored only when first asked for."""
 
-    from ikcompiler.analysis.symbolic import build
-    from ikcompiler.analysis.trigfactor import factor_trig
+    def __init__(self, chain, rank: int):
+        from sympy.polys.matrices import DomainMatrix
 
-    sc = build(chain)
-    J = sc.jacobian_in_frame(chain.n // 2)
-    dof = len(J[0])
-    subsets = list(itertools.product(itertools.combinations(range(6), rank),
-                                     itertools.combinations(range(dof), rank)))
-    dom = sc.ring.to_domain()
-    minors = []
-    for rows, cols in subsets:
-        if len(minors) >= MAX_MINORS:
-            break
-        M = DomainMatrix([[J[r][c] for c in cols] for r in rows], (rank, rank), dom)
-        d = sc.nf(M.det())
-        if d != 0:
-            minors.append(d)
-    minors.sort(key=lambda p: len(p.terms()))
-    out = []
-    for d in minors:
-        _, fl = factor_trig(sc, d)
-        out.append([_tidy(f.expr) for f in fl])
-    return out
+        from ikcompiler.analysis.symbolic import build
+
+        self.sc = sc = build(chain)
+        J = sc.jacobian_in_frame(chain.n // 2)
+        dof = len(J[0])
+        dom = sc.ring.to_domain()
+        minors = []
+        for rows, cols in itertools.product(itertools.combinations(range(6), rank),
+                                            itertools.combinations(range(dof), rank)):
+            if len(minors) >= MAX_MINORS:
+                break
+            d = sc.nf(DomainMatrix([[J[r][c] for c in cols] for r in rows], (rank, rank), dom).det())
+            if d != 0:
+                minors.append(d)
+        minors.sort(key=lambda p: len(p.terms()))
+        self.minors = minors
+        self._factored: dict[int, list[sp.Expr]] = {}
+
+    def __len__(self) -> int:
+        return len(self.minors)
+
+    def __iter__(self):
+        for i in range(len(self.minors)):
+            yield self[i]
+
+    def __getitem__(self, i: int) -> list[sp.Expr]:
+        from ikcompiler.analysis.trigfactor import factor_trig
+
+        if i not in self._factored:
+            _, fl = factor_trig(self.sc, self.minors[i])
+            self._factored[i] = [_tidy(f.expr) for f in fl]
+        return self._factored[i]
+
+    def factored(self) -> list[list[sp.Expr]]:
+        return [self._factored[i] for i in sorted(self._factored)]
 
 
 def _tidy(e: sp.Expr) -> sp.Expr:
     """A shorter equivalent form when trigsimp finds one quickly (sin(a)cos(b) + ... -> sin(a + b))."""
-    if sp.count_ops(e) > 80:
+    if sp.count_ops(e) > 40:
         return e
     s = sp.trigsimp(e)
     s = sp.factor_terms(s)
@@ -260,19 +282,33 @@ def _tidy(e: sp.Expr) -> sp.Expr:
     return e
 
 
-def _child(chain, rank, conn):
+def _symbolic_stage(chain, rank: int, seed: int):
+    """Minors, component search and simplest equations: [(equations, points, singular mask)]."""
+    rng = np.random.default_rng(seed)
+    minors = _LazyMinors(chain, rank)
+    if not len(minors):
+        return []
+    num = _Numeric(chain)
+    found = _search(num, minors, rank, rng, max_depth=min(3, chain.dof))
+    return [(_simplest(num, S, P, minors.factored(), rng), P, sing) for S, P, sing in found]
+
+
+def _child(chain, rank, seed, conn):
     try:
-        conn.send(("ok", _minor_factors(chain, rank)))
+        conn.send(("ok", _symbolic_stage(chain, rank, seed)))
     except Exception as exc:  # reported to the parent, which says so and falls back to sampling
         conn.send(("error", f"{type(exc).__name__}: {exc}"))
     conn.close()
 
 
-def symbolic_minors(chain, rank: int, budget: float) -> tuple[str, str, list[list[sp.Expr]]]:
-    """Run :func:`_minor_factors` in a child process for at most ``budget`` seconds."""
+def symbolic_components(chain, rank: int, budget: float, seed: int = 0):
+    """Run :func:`_symbolic_stage` in a child process for at most ``budget`` seconds.
+
+    Returns (status, message, components); status is "factored", "timeout" or "unsupported".
+    """
     ctx = multiprocessing.get_context("fork")
     parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(chain, rank, child), daemon=True)
+    proc = ctx.Process(target=_child, args=(chain, rank, seed, child), daemon=True)
     proc.start()
     child.close()
     if parent.poll(budget):
@@ -282,12 +318,13 @@ def symbolic_minors(chain, rank: int, budget: float) -> tuple[str, str, list[lis
             kind, payload = "error", "the symbolic process died"
     else:
         kind, payload = "timeout", None
-    proc.kill() if proc.is_alive() else None
+    if proc.is_alive():
+        proc.kill()
     proc.join(1)
     if kind == "ok":
-        return "factored", "", payload
+        return "factored", "" if payload else "every minor of the Jacobian is identically zero", payload
     if kind == "timeout":
-        return "timeout", f"sympy did not factor the minors within {budget:g} s (--budget)", []
+        return "timeout", f"sympy did not finish within {budget:g} s (raise --budget)", []
     return "unsupported", str(payload), []
 
 
@@ -505,21 +542,16 @@ def analyse(chain, samples: int = 10000, threshold: float = THRESHOLD, budget: f
     num = _Numeric(chain)
     rank = generic_rank(chain, rng)
     everywhere = rank < min(6, chain.dof)
-    status, message, minors = symbolic_minors(chain, rank, budget)
+    status, message, found = symbolic_components(chain, rank, budget, seed)
     conditions = []
     notes = []
-    if minors:
-        found = _search(num, minors, rank, rng, max_depth=min(3, chain.dof))
-        for S, P, s in found:
-            S = _simplest(num, S, P, minors, rng)
-            joints = tuple(n for n in chain.independent_names if any(sp.Symbol(n, real=True) in e.free_symbols
-                                                                     for e in S))
-            name, desc = _name(num, S, P, joints)
-            conditions.append(Condition(name, tuple(S), joints, _inside(num, S, rng), len(P), int(s.sum()),
-                                        desc))
-        conditions.sort(key=lambda c: (len(c.equations), c.joints[::-1] if c.joints else ()))
-    elif status == "factored":
-        notes.append("every minor of the Jacobian is identically zero")
+    for S, P, sing in found:
+        joints = tuple(n for n in chain.independent_names
+                       if any(sp.Symbol(n, real=True) in e.free_symbols for e in S))
+        name, desc = _name(num, S, P, joints)
+        inside = _inside(num, S, rng)
+        conditions.append(Condition(name, tuple(S), joints, inside, len(P), int(sing.sum()), desc))
+    conditions.sort(key=lambda c: (len(c.equations), c.joints[::-1] if c.joints else ()))
     sampling = sample(chain, conditions, rank, samples, threshold, rng)
     if sampling.near_singular > sampling.explained:
         notes.append(

@@ -73,6 +73,16 @@ def factor_trig(sc, P) -> tuple[object, list[TrigFactor]]:
             out.append(TrigFactor(_to_full(sc, T, f, {}), m))
         else:
             pending.append((f, m, odd))
+    # t itself (th = 0) with the th = pi root first: t * cos(th/2)**2 is sin(th)/2
+    rest = []
+    for f, m, odd in pending:
+        (k,) = odd if len(odd) == 1 else (None,)
+        if k is not None and f == tmap[f"t_{k}"] and infinity.get(k, 0) >= m:
+            infinity[k] -= m
+            out.append(TrigFactor(_to_full(sc, T, f, {k: 1}), m))
+        else:
+            rest.append((f, m, odd))
+    pending = rest
     # two odd factors of the same joints make an even product: (t - 1)(t + 1) is -cos(th) up to (1 + t**2)
     paired = []
     while pending:
@@ -131,7 +141,11 @@ def _to_full(sc, T, f, extra: dict) -> sp.Expr:
             else:
                 term *= rg[n] ** p
         out += term
-    return _primitive(sc.to_expr(sc.nf(out)))
+    out = sc.nf(out)
+    _, out = out.primitive()
+    if out.LC < 0:
+        out = -out
+    return sc.to_expr(out)
 
 
 def _primitive(e: sp.Expr) -> sp.Expr:
