@@ -17,11 +17,11 @@ dimensionless: a revolute column holds its unit axis and ``w x (p_tool - r) / sc
 order 1 far from one, whatever the unit of length.
 
 >>> import numpy as np
->>> tw = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1]])   # planar RR: z axes through 0 and x=1
->>> home = np.eye(4); home[0, 3] = 2.0
->>> A, b = np.eye(2), np.zeros(2)
->>> Q = np.array([[0.3, 0.0], [0.3, 1.0]])                          # stretched, then bent
->>> s = sigma_min(tw, A, b, home, Q, scale=2.0)
+>>> tw = np.array([[0, 0, 0, 0, 0, 1.0], [0, 0, 0, 1.0, 0, 0], [0, 0, 0, 0, 0, 1.0]])  # a ZXZ wrist
+>>> home = np.eye(4); home[2, 3] = 0.1
+>>> A, b = np.eye(3), np.zeros(3)
+>>> Q = np.array([[0.3, 0.0, 0.2], [0.3, 0.5, 0.2]])     # axes 1 and 3 in line, then not
+>>> s = sigma_min(tw, A, b, home, Q, scale=0.1)
 >>> bool(s[0] < 1e-12), bool(s[1] > 0.1)
 (True, True)
 """

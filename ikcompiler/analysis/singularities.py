@@ -69,6 +69,7 @@ class Sampling:
     lowest: tuple[tuple[float, tuple[float, ...]], ...] = ()  # (sigma_min, q) of the smallest samples
     Q: np.ndarray | None = None  # the samples and their sigma_min, for plotting
     sigma: np.ndarray | None = None
+    nonsingular_minima: int = 0  # unexplained samples whose local minimum of sigma_min is not 0
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,7 @@ class SingularityReport:
                 "message": self.message,
                 "seconds": round(self.seconds, 3),
                 "sigma_min_lowest": [{"sigma_min": s, "q": list(q)} for s, q in self.sampling.lowest],
+                "unexplained_nonsingular_minima": self.sampling.nonsingular_minima,
             },
         }
 
@@ -208,12 +210,41 @@ class _Numeric:
         ok = np.all(np.abs(F) <= 1e-11 * np.maximum(gn, 1e-300), axis=1) & np.all(gn > 0, axis=1)
         return Q, ok & np.all(np.isfinite(Q), axis=1)
 
-    def vanishes(self, e: sp.Expr, Q) -> np.ndarray:
-        """First-order distance test |e| / |grad e| < 1e-8 (a polynomial that is 0 to rounding)."""
+    def vanishes(self, e: sp.Expr, Q, tol: float = 1e-8) -> np.ndarray:
+        """First-order distance test |e| / |grad e| < tol (default: a polynomial that is 0 to rounding)."""
         f, g = self.fn(e)
         v = np.abs(f(Q))
         gn = np.linalg.norm(g(Q) / self.metric, axis=1)
-        return (v <= 1e-8 * gn) | (v <= 1e-12 * (1 + np.abs(v)))
+        return (v <= tol * gn) | (v <= 1e-12 * (1 + np.abs(v)))
+
+    def descend(self, Q0, rank: int, iters: int = 80) -> tuple[np.ndarray, np.ndarray]:
+        """Damped Newton steps on sigma(q) = 0 (the rank-th singular value), from each row of Q0.
+
+        Near a singular set sigma is about |a linear function| of the distance, so the full step
+        ``sigma grad / |grad|**2`` lands on the set; a step that does not lower sigma is halved.  Returns
+        (points, sigma at them).
+        """
+        Q = np.array(Q0, dtype=float)
+        h = 1e-7 / self.metric
+        s = self.sv(Q)[:, rank - 1]
+        damp = np.ones(len(Q))
+        for _ in range(iters):
+            live = (s >= 1e-12) & (damp > 1e-6)
+            if not live.any():
+                break
+            G = np.empty(Q.shape)
+            for k in range(Q.shape[1]):
+                d = np.zeros(Q.shape[1])
+                d[k] = h[k]
+                G[:, k] = (self.sv(Q + d)[:, rank - 1] - self.sv(Q - d)[:, rank - 1]) / (2 * h[k])
+            g2 = np.maximum((G * G).sum(axis=1), 1e-300)
+            step = np.clip((damp * s / g2)[:, None] * G, -0.2, 0.2)
+            trial = Q - np.where(live[:, None], step, 0.0)
+            st = self.sv(trial)[:, rank - 1]
+            better = live & (st < s)
+            Q[better], s[better] = trial[better], st[better]
+            damp = np.where(better, np.minimum(1.0, damp * 2), np.where(live, damp / 2, damp))
+        return Q, s
 
 
 def generic_rank(chain, rng) -> int:
@@ -511,18 +542,31 @@ def sample(chain, conditions, rank: int, n: int, threshold: float, rng) -> Sampl
     sigma = num.sv(Q)[:, rank - 1]
     near = np.flatnonzero(sigma < threshold)
     explained = np.zeros(len(near), dtype=bool)
+    nonsingular = 0
+    rev = np.array([k == "R" for k in num.kinds])
     for c in conditions:
         if not len(near):
             break
         P, ok = num.project(c.equations, Q[near])
-        d = np.linalg.norm((P - Q[near]) * num.metric, axis=1)
-        rev = np.array([k == "R" for k in num.kinds])
         dw = (P - Q[near] + math.pi) % (2 * math.pi) - math.pi  # angles modulo 2 pi
         d = np.linalg.norm(np.where(rev, dw, (P - Q[near]) * num.metric), axis=1)
         explained |= ok & (d <= RADIUS)
+    if (~explained).any():
+        # farther than RADIUS from every condition: follow sigma_min down to the singular point the sample
+        # leads to, and accept when that point lies on a reported condition
+        idx = near[~explained]
+        P, s_end = num.descend(Q[idx], rank)
+        on = np.zeros(len(idx), dtype=bool)
+        for c in conditions:
+            on |= np.all([num.vanishes(e, P, tol=1e-6) for e in c.equations], axis=0)
+        rest = np.flatnonzero(~explained)
+        explained[rest[(s_end < 1e-10) & on]] = True
+        # the others: a local minimum of sigma_min that is not 0 (no singular configuration there), or a
+        # singular point no condition describes (a missing component: reported)
+        nonsingular = int(((s_end >= 1e-8) & ~on).sum())
     order = np.argsort(sigma)[:5]
     lowest = tuple((float(sigma[i]), tuple(float(x) for x in Q[i])) for i in order)
-    return Sampling(n, threshold, int(len(near)), int(explained.sum()), lowest, Q, sigma)
+    return Sampling(n, threshold, int(len(near)), int(explained.sum()), lowest, Q, sigma, nonsingular)
 
 
 # ---- entry point ----------------------------------------------------------------------------------------
@@ -553,10 +597,13 @@ def analyse(chain, samples: int = 10000, threshold: float = THRESHOLD, budget: f
         conditions.append(Condition(name, tuple(S), joints, inside, len(P), int(sing.sum()), desc))
     conditions.sort(key=lambda c: (len(c.equations), c.joints[::-1] if c.joints else ()))
     sampling = sample(chain, conditions, rank, samples, threshold, rng)
-    if sampling.near_singular > sampling.explained:
+    unexplained = sampling.near_singular - sampling.explained
+    if unexplained:
         notes.append(
-            f"{sampling.near_singular - sampling.explained} near-singular samples lie farther than {RADIUS} "
-            "from every condition" + (" (no symbolic conditions)" if not conditions else "")
+            f"{unexplained} near-singular samples lie farther than {RADIUS} from every condition"
+            + (" (no symbolic conditions)" if not conditions else "")
+            + f"; {sampling.nonsingular_minima} of them lead down to a local minimum of sigma_min that is "
+            "not 0 (no singular configuration there)"
         )
     return SingularityReport(
         robot=chain.name, joints=chain.independent_names, conditions=tuple(conditions),
