@@ -232,11 +232,11 @@ class _Numeric:
             live = (s >= 1e-12) & (damp > 1e-6)
             if not live.any():
                 break
-            G = np.empty(Q.shape)
-            for k in range(Q.shape[1]):
-                d = np.zeros(Q.shape[1])
-                d[k] = h[k]
-                G[:, k] = (self.sv(Q + d)[:, rank - 1] - self.sv(Q - d)[:, rank - 1]) / (2 * h[k])
+            n, dof = Q.shape
+            D = np.diag(h)  # every +-h_k perturbation of every row in one batch
+            S = self.sv(np.concatenate([(Q[:, None, :] + D).reshape(-1, dof),
+                                        (Q[:, None, :] - D).reshape(-1, dof)]))[:, rank - 1]
+            G = (S[: n * dof] - S[n * dof:]).reshape(n, dof) / (2 * h)
             g2 = np.maximum((G * G).sum(axis=1), 1e-300)
             step = np.clip((damp * s / g2)[:, None] * G, -0.2, 0.2)
             trial = Q - np.where(live[:, None], step, 0.0)
@@ -318,10 +318,10 @@ def _symbolic_stage(chain, rank: int, seed: int):
     rng = np.random.default_rng(seed)
     minors = _LazyMinors(chain, rank)
     if not len(minors):
-        return []
+        return 0, []
     num = _Numeric(chain)
     found = _search(num, minors, rank, rng, max_depth=min(3, chain.dof))
-    return [(_simplest(num, S, P, minors.factored(), rng), P, sing) for S, P, sing in found]
+    return len(minors), [(_simplest(num, S, P, minors.factored(), rng), P, sing) for S, P, sing in found]
 
 
 def _child(chain, rank, seed, conn):
@@ -353,7 +353,8 @@ def symbolic_components(chain, rank: int, budget: float, seed: int = 0):
         proc.kill()
     proc.join(1)
     if kind == "ok":
-        return "factored", "" if payload else "every minor of the Jacobian is identically zero", payload
+        n_minors, comps = payload
+        return "factored", "" if n_minors else "every minor of the Jacobian is identically zero", comps
     if kind == "timeout":
         return "timeout", f"sympy did not finish within {budget:g} s (raise --budget)", []
     return "unsupported", str(payload), []

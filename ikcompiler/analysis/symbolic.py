@@ -40,15 +40,15 @@ class SymbolicUnsupported(IkcError):
     """The chain has a feature the exact algebra does not cover (e.g. a non-integer revolute coupling)."""
 
 
-def exact_number(x: float, tol: float = 1e-12) -> sp.Expr:
+def exact_number(x: float, tol: float = 1e-12, atol: float = 0.0) -> sp.Expr:
     """An exact number equal to ``x`` to ``tol`` (relative): ``p/q * sqrt(k)`` (q <= 1000, k in 1, 2, 3, 6),
-    else the rational of the float's shortest decimal.
+    else the shortest decimal within ``max(tol * max(1, |x|), atol)``.
 
     >>> exact_number(0.7071067811865476), exact_number(0.4318), exact_number(-1e-17)
     (sqrt(2)/2, 2159/5000, 0)
     """
     x = float(x)
-    if abs(x) <= tol:
+    if abs(x) <= max(tol, atol):
         return sp.Integer(0)
     # p/q or p/q * sqrt(k) with small q: unit axes at 30/45/60 degrees, halves, thirds ...
     for k in (1, 2, 3, 6):
@@ -59,7 +59,7 @@ def exact_number(x: float, tol: float = 1e-12) -> sp.Expr:
     # else the shortest decimal within tol: URDF sums such as 0.8172499999999999 are 0.81725
     for k in range(16):
         r = round(x * 10**k)
-        if abs(r / 10**k - x) <= tol * max(1.0, abs(x)):
+        if abs(r / 10**k - x) <= max(tol * max(1.0, abs(x)), atol):
             return sp.Rational(r, 10**k)
     return sp.Rational(repr(x))
 
@@ -156,7 +156,10 @@ def build(chain) -> SymbolicChain:
     indep = chain.independent_names
     kinds = {j.name: j.kind for j in chain.joints}
     qs = dict(zip(indep, joint_symbols(chain)))
-    twists_exact = [[exact_number(x) for x in j.twist] for j in chain.joints]
+    # lengths to 1e-9 of the robot's size (the project's structural tolerance), directions to 1e-9:
+    # digits beyond that only slow the factoring down (a random 6R's 16-digit floats time out)
+    atol = [1e-9 * chain.scale] * 3 + [1e-9] * 3
+    twists_exact = [[exact_number(x, atol=a) for x, a in zip(j.twist, atol)] for j in chain.joints]
     radicals = [r for r in _IRRATIONALS if any(e.has(r) for tw in twists_exact for e in tw)]
     s_names = [f"s_{i}" for i, n in enumerate(indep) if kinds[n] == "R"]
     c_names = [f"c_{i}" for i, n in enumerate(indep) if kinds[n] == "R"]
