@@ -1,11 +1,12 @@
 """Exact symbolic Jacobians of a POE chain, as polynomials in ``cos``/``sin`` of the joint angles.
 
-Numbers.  Each twist entry is turned into an exact number by :func:`exact_number`: ``nsimplify`` with
-tolerance 1e-12 (relative) against ``sqrt(2)`` and ``sqrt(3)``, so that unit axes at 45 or 30 degrees
-(``0.7071067811865476``) become ``sqrt(2)/2``, keeping identities such as ``a**2 + b**2 = 1`` exact and the
-determinant factorable; any other number becomes the rational of its shortest decimal ``repr`` (the value
-the robot file wrote: ``0.4318`` is ``2159/5000``), exact for that float.  Never floats: a float
-determinant does not factor.
+Numbers.  Each twist entry is turned into an exact number by :func:`exact_number`: ``p/q * sqrt(k)``
+(q <= 1000, k in 2, 3, 6) when the float is within 1e-12 (relative) of one, so that unit axes at 30, 45
+or 60 degrees (``0.7071067811865476``) become ``sqrt(2)/2``, keeping identities such as
+``a**2 + b**2 = 1`` exact and the determinant factorable; any other number becomes the shortest decimal
+within 1e-9 of the robot's size (lengths) or 1e-9 (directions), the project's structural tolerance: the
+value the robot file wrote (``0.4318`` is ``2159/5000``; a URDF sum ``0.8172499999999999`` is
+``0.81725``).  Never floats: a float determinant does not factor.
 
 Algebra.  A revolute joint ``q`` enters as two ring generators ``c_q, s_q`` (its cosine and sine), a
 prismatic joint as one ``d_q``; ``sqrt(2)``, ``sqrt(3)`` are generators too.  Every polynomial is kept
