@@ -186,6 +186,29 @@ def test_a_budget_too_short_says_so_and_still_samples():
     assert rep.sampling.lowest[0][0] == pytest.approx(rep.sampling.sigma.min())
 
 
+def test_a_calibrated_puma_is_analysed_on_its_ideal_robot():
+    # axes and points moved by ~1e-4 of the size (a calibrated URDF): dense numbers would time out
+    from subproblems.screw import revolute_twist
+
+    puma = load_robot("puma560")
+    rng = np.random.default_rng(0)
+    joints = tuple(Joint(j.name, "R", revolute_twist(j.axis + rng.normal(size=3) * 1e-4,
+                                                     j.point + rng.normal(size=3) * 1e-4), j.lower, j.upper)
+                   for j in puma.joints)
+    chain = Chain("puma_calibrated", joints, puma.home)
+    rep = analyse(chain, samples=1500, budget=30)
+    assert rep.status == "factored" and any("ideal robot" in n for n in rep.notes)
+    assert sorted(c.name for c in rep.conditions) == ["elbow", "shoulder", "wrist"]
+    s = rep.sampling
+    assert s.near_singular > 0 and s.explained == s.near_singular
+    # recomputed on the robot as loaded: sigma_min at points on each ideal condition is of the size of
+    # the calibration error, far below a generic value
+    num = _Numeric(chain)
+    for c in rep.conditions:
+        P, ok = num.project(c.equations, _random_q(chain, rng, 12))
+        assert num.sv(P[ok])[:, -1].max() < 1e-2 * np.median(s.sigma)
+
+
 # ---- known sets from the literature -----------------------------------------------------------------------
 
 

@@ -22,11 +22,13 @@ vanishes.  Method (docs/singularities.md):
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import multiprocessing
 import time
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 import sympy as sp
@@ -570,6 +572,63 @@ def sample(chain, conditions, rank: int, n: int, threshold: float, rng) -> Sampl
     return Sampling(n, threshold, int(len(near)), int(explained.sum()), lowest, Q, sigma, nonsingular)
 
 
+# ---- the ideal robot of a calibrated one ----------------------------------------------------------------
+
+
+def _nice(chain) -> bool:
+    """Every twist entry is a short exact number (at most 6 decimals or a small radical)."""
+    from ikcompiler.analysis.symbolic import exact_number
+
+    atol = [1e-9 * chain.scale] * 3 + [1e-9] * 3
+    for j in chain.joints:
+        for x, a in zip(j.twist, atol):
+            e = exact_number(x, atol=a)
+            if any(r.q > 10**6 for r in e.atoms(sp.Rational)):
+                return False
+    return True
+
+
+def ideal_chain(chain, tol: float = 1e-3):
+    """(ideal chain, largest twist change relative to the size) of a calibrated chain.
+
+    Near-parallel and near-meeting axes are snapped (:func:`ikcompiler.geometry.snap.snap_chain`, the
+    compiler's own ideal robot), then every axis direction is replaced by the nearest ``p/q * sqrt(k)``
+    components (q <= 12, within ``tol``) when those make a unit vector, and every axis point by the
+    shortest decimals within ``tol`` of the size: the design robot the numbers were calibrated from.
+    """
+    from ikcompiler.analysis.symbolic import exact_number
+    from ikcompiler.geometry.snap import snap_chain
+    from ikcompiler.model.chain import Joint
+    from subproblems.screw import prismatic_twist, revolute_twist
+
+    snapped, _ = snap_chain(chain)
+    size = chain.scale
+    joints = []
+    for j in snapped.joints:
+        w = j.axis
+        we = []
+        for x in w:
+            e = None
+            for k in (1, 2, 3, 6):
+                f = Fraction(x / math.sqrt(k)).limit_denominator(12)
+                if abs(float(f) * math.sqrt(k) - x) <= tol:
+                    e = sp.Rational(f.numerator, f.denominator) * sp.sqrt(k)
+                    break
+            we.append(e)
+        if all(e is not None for e in we) and sp.simplify(sum(e**2 for e in we) - 1) == 0:
+            w = np.array([float(e) for e in we])
+        if j.kind == "R":
+            r = np.array([float(exact_number(x, tol=0.0, atol=tol * size)) for x in j.point])
+            tw = revolute_twist(w, r)
+        else:
+            tw = prismatic_twist(w)
+        joints.append(Joint(j.name, j.kind, tw, j.lower, j.upper))
+    ideal = dataclasses.replace(chain, joints=tuple(joints), name=chain.name)
+    change = np.abs(ideal.twists - chain.twists)
+    change[:, :3] /= size
+    return ideal, float(change.max())
+
+
 # ---- entry point ----------------------------------------------------------------------------------------
 
 
@@ -584,17 +643,27 @@ def analyse(chain, samples: int = 10000, threshold: float = THRESHOLD, budget: f
     """
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
-    num = _Numeric(chain)
     rank = generic_rank(chain, rng)
     everywhere = rank < min(6, chain.dof)
-    status, message, found = symbolic_components(chain, rank, budget, seed)
-    conditions = []
     notes = []
+    sym_chain = chain
+    if not _nice(chain):
+        # a calibrated robot: dense numbers make sympy slow and hide the design's factors; derive the
+        # conditions on the ideal robot, sample the robot as loaded
+        sym_chain, change = ideal_chain(chain)
+        notes.append(
+            f"conditions derived on the ideal robot (axes snapped and rounded to 1e-3 of the size; largest "
+            f"twist change {change:.1e} of the size) and checked rank deficient there; sampled on the "
+            "robot as loaded"
+        )
+    status, message, found = symbolic_components(sym_chain, rank, budget, seed)
+    conditions = []
+    num_sym = _Numeric(sym_chain)
     for S, P, sing in found:
         joints = tuple(n for n in chain.independent_names
                        if any(sp.Symbol(n, real=True) in e.free_symbols for e in S))
-        name, desc = _name(num, S, P, joints)
-        inside = _inside(num, S, rng)
+        name, desc = _name(num_sym, S, P, joints)
+        inside = _inside(num_sym, S, rng)
         conditions.append(Condition(name, tuple(S), joints, inside, len(P), int(sing.sum()), desc))
     conditions.sort(key=lambda c: (len(c.equations), c.joints[::-1] if c.joints else ()))
     sampling = sample(chain, conditions, rank, samples, threshold, rng)
