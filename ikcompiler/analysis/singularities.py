@@ -647,16 +647,19 @@ def analyse(chain, samples: int = 10000, threshold: float = THRESHOLD, budget: f
     everywhere = rank < min(6, chain.dof)
     notes = []
     sym_chain = chain
-    if not _nice(chain):
-        # a calibrated robot: dense numbers make sympy slow and hide the design's factors; derive the
-        # conditions on the ideal robot, sample the robot as loaded
+    nice = _nice(chain)
+    # long decimals (a calibrated URDF, or derived lengths such as jaco's): try the robot as loaded with
+    # part of the budget, then the ideal robot, whose short numbers factor fast
+    first = budget if nice else 0.4 * budget
+    status, message, found = symbolic_components(chain, rank, first, seed)
+    if status == "timeout" and not nice:
         sym_chain, change = ideal_chain(chain)
+        status, message, found = symbolic_components(sym_chain, rank, budget - first, seed)
         notes.append(
-            f"conditions derived on the ideal robot (axes snapped and rounded to 1e-3 of the size; largest "
-            f"twist change {change:.1e} of the size) and checked rank deficient there; sampled on the "
-            "robot as loaded"
+            f"the robot as loaded did not factor within {first:g} s: conditions derived on its ideal robot "
+            f"(axes snapped and rounded to 1e-3 of the size; largest twist change {change:.1e} of the size) "
+            "and checked rank deficient there; sampled on the robot as loaded"
         )
-    status, message, found = symbolic_components(sym_chain, rank, budget, seed)
     conditions = []
     num_sym = _Numeric(sym_chain)
     for S, P, sing in found:
