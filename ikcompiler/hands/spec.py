@@ -397,7 +397,8 @@ def _contact(value, src: str, where: str) -> str:
 
     if value not in CONTACT_ALIASES:
         raise ManipulationSpecError(
-            f'unknown contact type {value!r}; use "point" (point contact with friction) or "soft" (soft finger)',
+            f'unknown contact type {value!r}; use "point" (point contact with friction) '
+            'or "soft" (soft finger)',
             source=src,
             where=where,
         )

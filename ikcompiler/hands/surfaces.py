@@ -223,7 +223,7 @@ class Circle(Surface):
         return _vec(r * c, r * si, v), _vec(-si, c, 0), _vec(0, 0, 1), _vec(-c / r, -si / r, 0), z, z
 
     def domain(self):
-        return (-math.pi * self.radius, math.pi * self.radius), (0.0, 0.0)
+        return (0.0, 2 * math.pi * self.radius), (0.0, 0.0)
 
     def implicit(self, p) -> float:
         return float(math.hypot(p[0], p[1]) - self.radius)

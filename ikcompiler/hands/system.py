@@ -184,7 +184,15 @@ class HandSystem:
     # ---- projection onto the contact constraints ---------------------------------------------------
 
     def project(
-        self, theta, g_o, U, *, max_iter: int = 30, tol: float = PROJECTION_TOL, where: str = ""
+        self,
+        theta,
+        g_o,
+        U,
+        *,
+        max_iter: int = 30,
+        tol: float = PROJECTION_TOL,
+        where: str = "",
+        fix_joints: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, Contacts, float]:
         """Minimum-norm Gauss-Newton: contact points coincide, normals opposed, at the fixed object pose.
 
@@ -192,6 +200,8 @@ class HandSystem:
         problem); each column is scaled to unit size (joints in radians, chart coordinates in object
         lengths) and the least-norm step is taken, so the configuration moves as little as possible.
         Returns ``(theta, U, contacts, residual)``; :class:`ContactError` when it does not converge.
+        ``fix_joints`` moves the chart coordinates only and returns the best it found without raising
+        (the initial contact search: find where the fingertips touch before moving any joint).
         """
         theta = np.array(theta, dtype=float)
         U = np.array(U, dtype=float)
@@ -218,12 +228,17 @@ class HandSystem:
                     a = col % 2
                     A[6 * i : 6 * i + 3, j] = s * side.tangents[:, a] / L
                     A[6 * i + 3 : 6 * i + 6, j] = side.dnormal[:, a]
+            if fix_joints:
+                A[:, :n_th] = 0.0
             w = np.linalg.norm(A, axis=0)
             w[w == 0] = 1.0
             dz, *_ = np.linalg.lstsq(A / w, -r, rcond=1e-10)
             dz /= w
             theta += dz[:n_th]
             U[:, ucols] += dz[n_th:].reshape(n_c, len(ucols))
+        if fix_joints:
+            c = self.contacts(theta, g_o, U)
+            return theta, U, c, self.residual(c)
         raise ContactError(
             f"{where}could not put the fingertips back on the object (constraint residual {res:.2e} of its "
             f"size after {max_iter} steps): a contact was lost or the hand is at a singular configuration; "

@@ -146,8 +146,8 @@ def rates(system: HandSystem, t: float, theta, g_o, U, u, objective: GraspObject
     if miss > 1e-6:
         raise ContactError(
             f"t = {t:.6g}: the commanded object twist {np.round(u, 6).tolist()} is not a motion this hand "
-            f"can produce (the system is {jo.kind}, rank D = {jo.rank_D} < {jo.dof}; {miss:.1e} of it is outside "
-            "R(D)); command a twist in R(D) (ikc manipulate --describe)"
+            f"can produce (the system is {jo.kind}, rank D = {jo.rank_D} < {jo.dof}; "
+            f"{miss:.1e} of it is outside R(D)); command a twist in R(D) (ikc manipulate --describe)"
         )
     maps = system.rate_map(c)
     eta_c = system.contact_rates(m, maps, dth_c, np.asarray(u, dtype=float))
@@ -273,8 +273,7 @@ def manipulate(
     poses = poses_half[::2]
     theta_in = np.array(theta0, dtype=float)
     U = system.find_contacts(theta_in, poses[0]) if U0 is None else np.array(U0, dtype=float)
-    c0 = system.contacts(theta_in, poses[0], U)
-    gap = system.residual(c0)
+    _, U, _, gap = system.project(theta_in, poses[0], U, fix_joints=True, max_iter=50)
     if gap > 0.02:
         raise ContactError(
             f"{system.name}: the fingertips do not touch the object at the initial configuration "
