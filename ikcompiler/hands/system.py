@@ -245,8 +245,11 @@ class HandSystem:
             "try a smaller --dt or check the initial grasp"
         )
 
-    def find_contacts(self, theta, g_o, samples: int = 48) -> np.ndarray:
-        """Initial chart coordinates: the closest pair of points with opposed normals, per contact."""
+    def find_contacts(self, theta, g_o, samples: int = 24) -> np.ndarray:
+        """Initial chart coordinates: the closest pair of points with opposed normals, per contact.
+
+        A coarse grid (``samples`` per chart coordinate); :meth:`project` with ``fix_joints`` refines it.
+        """
         U = np.zeros((len(self.fingers), 4))
         g_surf = np.asarray(g_o) @ self.object_frame
         obj_pts, obj_n, obj_u = _sample(self.object_surface, g_surf, samples)
@@ -262,14 +265,22 @@ class HandSystem:
 
 
 def _sample(surface: Surface, g: np.ndarray, n: int):
+    """World points, outward normals and chart coordinates on an n x n grid of the chart's domain."""
     (u0, u1), (v0, v1) = surface.domain()
     us = np.linspace(u0, u1, n, endpoint=False)
     vs = np.linspace(v0, v1, n) if v1 > v0 else np.array([v0])
     pts, nrm, uv = [], [], []
     for u in us:
         for v in vs:
-            geo = placed_geometry(surface, (u, v), g)
-            pts.append(geo.point)
-            nrm.append(geo.normal)
+            f, fu, fv, *_ = surface._derivs(float(u), float(v))
+            c = np.array(
+                [fu[1] * fv[2] - fu[2] * fv[1], fu[2] * fv[0] - fu[0] * fv[2], fu[0] * fv[1] - fu[1] * fv[0]]
+            )
+            nc = np.linalg.norm(c)
+            if nc < 1e-9 * surface.size**2:
+                continue
+            pts.append(f)
+            nrm.append(c / nc)
             uv.append((u, v))
-    return np.array(pts), np.array(nrm), np.array(uv)
+    R, p = g[:3, :3], g[:3, 3]
+    return np.array(pts) @ R.T + p, np.array(nrm) @ R.T, np.array(uv)
