@@ -193,7 +193,8 @@ def test_rolling_without_slipping_equal_arc_lengths(which, request):
         s_f = _arc(run.finger_point[:, i], tips, f.surface.radius)
         s_o = _arc(run.object_point[:, i], run.object_pose, s.object_surface.radius)
         assert s_o[-1] > 0.5  # the contacts do travel (cm)
-        assert np.abs(s_f - s_o).max() < 1e-6 * s.length_scale
+        # RK4 + projection: ~4e-11 cm at dt = 0.02 (the paper's Euler steps slip by ~1e-2 cm)
+        assert np.abs(s_f - s_o).max() < 1e-9 * s.length_scale
 
 
 def test_no_slip_velocity_at_the_contacts(run_self):

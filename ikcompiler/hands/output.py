@@ -113,6 +113,7 @@ def summary(run: Trajectory, seconds: float) -> str:
             f"alpha_o[{run.system.fingers[0].name}] - alpha_o[{run.system.fingers[i].name}]: "
             f"start {-d[0]:.6g}, end {-d[-1]:.6g}, largest change {np.abs(d - d[0]).max():.3e}"
         )
+    lines += [f"note: {n}" for n in run.notes]
     return "\n".join(lines)
 
 

@@ -309,6 +309,11 @@ def manipulate(
         if progress and (k + 1) % max(1, steps // 10) == 0:
             print(f"  step {k + 1}/{steps}  t = {t + h:.3f}  residual {res:.1e}", file=sys.stderr, flush=True)
     tw = np.array([np.asarray(twist(t), dtype=float) for t in times])
+    notes = _limit_notes(system, times, rec.theta)
+    if len(set(kinds)) > 1:
+        notes.append(
+            f"the class changed during the run: {', '.join(sorted(set(kinds)))} (a singular configuration)"
+        )
     return Trajectory(
         system,
         times,
@@ -327,7 +332,24 @@ def manipulate(
         method,
         tw,
         float(np.abs(theta_in - rec.theta[0]).max()),
+        notes,
     )
+
+
+def _limit_notes(system: HandSystem, times, theta) -> list[str]:
+    """Joints that leave their limits (the algorithm does not enforce them; it reports them)."""
+    notes = []
+    for f, sl in zip(system.fingers, system.joint_slices()):
+        for k, (idx, name) in enumerate(zip(f.chain.independent, f.joint_names)):
+            j = f.chain.joints[idx]
+            q = theta[:, sl.start + k]
+            out = np.nonzero((q < j.lower - 1e-12) | (q > j.upper + 1e-12))[0]
+            if out.size:
+                notes.append(
+                    f"joint {name} leaves its limits [{j.lower:.4g}, {j.upper:.4g}] rad "
+                    f"at t = {times[out[0]]:.4g} s"
+                )
+    return notes
 
 
 class _Recorder:
