@@ -197,8 +197,10 @@ def test_rolling_without_slipping_equal_arc_lengths(which, request):
         assert np.abs(s_f - s_o).max() < 1e-9 * s.length_scale
 
 
-def test_no_slip_velocity_at_the_contacts(run_self):
+@pytest.mark.parametrize("which", ["run_self", "sphere_run"])
+def test_no_slip_velocity_at_the_contacts(which, request):
     """The body-fixed points at the contact move alike on finger and object (central differences)."""
+    run_self = request.getfixturevalue(which)
     s = run_self.system
     h = run_self.t[1] - run_self.t[0]
     worst = 0.0
@@ -384,3 +386,31 @@ def test_cli_json_csv_png_describe(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "non-redundant" in out and "rank D (object motions) = 6" in out
     assert main(["manipulate", "robots/nothing.toml"]) == 2
+
+
+def test_a_user_objective_plugs_in():
+    """Any object with rows(ctx) is an objective: here, keep contact 1 still on its fingertip."""
+
+    class HoldFingertipPoint:
+        name = "hold_fingertip_point"
+
+        def rows(self, ctx):
+            S = np.zeros((1, 5 * ctx.U.shape[0]))
+            S[0, 0] = 1.0  # alpha_f' of contact 1
+            return S, np.zeros(1)
+
+    system, theta = _planar_hand(3, 3)
+    twist = lambda t: np.array([0.5, -0.3, 0.05])  # noqa: E731
+    held = manipulate(system, theta, np.eye(4), twist, duration=0.3, dt=0.05, objective=HoldFingertipPoint())
+    free = manipulate(system, theta, np.eye(4), twist, duration=0.3, dt=0.05)
+    assert held.objective == "hold_fingertip_point" and held.max_residual < 1e-9
+    assert np.abs(held.U[:, 0, 0] - held.U[0, 0, 0]).max() < 1e-9
+    assert np.abs(free.U[:, 0, 0] - free.U[0, 0, 0]).max() > 1e-3
+
+
+def test_cli_three_dimensional_json(capsys):
+    assert main(["manipulate", "three_finger_sphere", "--duration", "0.02", "--dt", "0.02", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["object"][0]) == 6 and len(data["contacts"]) == 3
+    assert len(data["contacts"][0]["finger_point"][0]) == 3 and "beta_o" in data["contacts"][0]
+    assert data["object_radius"] == 3.0 and data["max_constraint_residual"] < 1e-9

@@ -1,6 +1,6 @@
 """One contact: contact types, selection matrices H (seed eq. 4), relative velocities (15)/(16), Montana (1).
 
-Conventions (docs/design.md, "hands"; docs/hands.md):
+Conventions (docs/hands.md):
 
 * Twists are ``(v, w)`` 6-vectors.  A *contact twist* is the velocity of the body-fixed point at the
   contact, ``v_c = v_s + w x c``, with the body's angular velocity ``w``, both in world coordinates.

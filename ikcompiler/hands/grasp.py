@@ -76,11 +76,13 @@ class JointObject:
             return "degenerate"
         return "redundant" if self.rank_NJ > 0 else "non-redundant"
 
-    def joint_rates(self, u: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, float]:
-        """Step 2a: ``th'_c = E y_C`` with ``D y_C = u``; returns it and the relative residual of u."""
+    def joint_rates(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """Step 2a: ``th'_c = E y_C`` with ``D y_C = u`` (least squares); also the part of u outside R(D),
+        relative to |u| (0 for a reachable twist)."""
         y, *_ = np.linalg.lstsq(self.D, u, rcond=None)
-        res = float(np.linalg.norm(self.D @ y - u) / max(np.linalg.norm(u), 1e-300))
-        return self.E @ y, res if np.linalg.norm(u) > 0 else 0.0
+        norm = float(np.linalg.norm(u))
+        miss = float(np.linalg.norm(self.D @ y - u)) / norm if norm > 0 else 0.0
+        return self.E @ y, miss
 
 
 def analyse(Gt: np.ndarray, J: np.ndarray, *, dof: int, row_scale=None, twist_scale=None) -> JointObject:

@@ -117,6 +117,22 @@ def summary(run: Trajectory, seconds: float) -> str:
     return "\n".join(lines)
 
 
+def _displacements(run: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """(N, n) contact displacement on the fingertips and on the object: the signed arc length in the plane
+    (alpha - alpha(0)), in space the distance from the starting point in the body's own frame."""
+    if run.system.planar:
+        return run.U[:, :, 0] - run.U[0, :, 0], run.U[:, :, 2] - run.U[0, :, 2]
+    s = run.system
+    fin = np.zeros(run.U.shape[:2])
+    obj = np.zeros(run.U.shape[:2])
+    for i, f in enumerate(s.fingers):
+        pf = np.array([f.surface.chart(u) for u in run.U[:, i, :2]])
+        po = np.array([s.object_surface.chart(u) for u in run.U[:, i, 2:]])
+        fin[:, i] = np.linalg.norm(pf - pf[0], axis=1)
+        obj[:, i] = np.linalg.norm(po - po[0], axis=1)
+    return fin, obj
+
+
 def plot(runs: list[Trajectory], path) -> None:
     """Fig. 3 of seed 002: joint angles per finger, contact positions on the fingers and on the object.
 
@@ -153,26 +169,33 @@ def plot(runs: list[Trajectory], path) -> None:
                 )
             ax.set_title(f"({letters[i]}) joints of finger {f.name}")
             ax.set_ylabel("deg")
+        fin_d, obj_d = _displacements(run)
         ax = axes[nf]
         for i, f in enumerate(sys.fingers):
-            ax.plot(run.t, run.U[:, i, 0] - run.U[0, i, 0], ls, color=f"C{i}", label=f"{f.name} ({tag})")
+            ax.plot(run.t, fin_d[:, i], ls, color=f"C{i}", label=f"{f.name} ({tag})")
         ax.set_title(f"({letters[nf]}) contact displacement on the fingertips")
-        ax.set_ylabel(f"alpha_f - alpha_f(0) [{unit if sys.planar else 'chart'}]")
+        ax.set_ylabel(f"alpha_f - alpha_f(0) [{unit}]" if sys.planar else f"distance from the start [{unit}]")
         ax = axes[nf + 1]
         for i, f in enumerate(sys.fingers):
-            ax.plot(run.t, run.U[:, i, 2] - run.U[0, i, 2], ls, color=f"C{i}", label=f"{f.name} ({tag})")
-        if nf >= 2:
+            ax.plot(run.t, obj_d[:, i], ls, color=f"C{i}", label=f"{f.name} ({tag})")
+        if nf >= 2 and sys.planar:
             d = (run.U[:, 0, 2] - run.U[:, 1, 2]) - (run.U[0, 0, 2] - run.U[0, 1, 2])
             ax.plot(run.t, d, ls, color="k", label=f"change of alpha_1 - alpha_2 ({tag})")
         ax.set_title(f"({letters[nf + 1]}) contact displacement on the object")
-        ax.set_ylabel(f"alpha_o - alpha_o(0) [{unit if sys.planar else 'chart'}]")
+        ax.set_ylabel(f"alpha_o - alpha_o(0) [{unit}]" if sys.planar else f"distance from the start [{unit}]")
     for ax in axes[:panels]:
         ax.set_xlabel("t [s]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
     for ax in axes[panels:]:
         ax.axis("off")
-    fig.suptitle(f"{sys.name}: solid with self-motion, dashed without")
+    cases = {r.self_motion for r in runs}
+    title = (
+        "solid with self-motion, dashed without"
+        if len(cases) == 2
+        else ("with self-motion" if True in cases else "without self-motion")
+    )
+    fig.suptitle(f"{sys.name}: {title}")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -161,9 +161,7 @@ def surface(table, source: str, where: str, scale: float) -> tuple[Surface, np.n
     """A surface and the pose of its frame (xyz, rpy) from a table."""
     if not isinstance(table, dict):
         raise ManipulationSpecError("must be a table with surface = ...", source=source, where=where)
-    check_keys(
-        table, SURFACE_KEYS | ({"position", "angle", "chart"} if where == "object" else set()), source, where
-    )
+    check_keys(table, SURFACE_KEYS, source, where)
     kind = string(table, "surface", source, where)
     if kind in ("circle", "sphere", "cylinder"):
         r = number(table, "radius", source, where)
@@ -274,8 +272,7 @@ def load_manipulation(spec) -> ManipulationSpec:
         raise ManipulationSpecError("an [object] table is required", source=src, where="object")
     check_keys(obj_t, OBJECT_KEYS, src, "object")
     osurf, _ = surface(
-        {k: v for k, v in obj_t.items() if k not in ("position", "angle", "chart", "rpy")}
-        | ({"surface": obj_t.get("surface")}),
+        {k: v for k, v in obj_t.items() if k not in ("position", "angle", "chart", "rpy")},
         src,
         "object",
         scale,

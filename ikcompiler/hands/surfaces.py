@@ -86,16 +86,6 @@ class Surface:
         """The point ``f(u)``."""
         return self._derivs(float(u[0]), float(u[1]))[0]
 
-    def check_chart(self, u, where: str) -> None:
-        """Raise :class:`ContactError` when ``u`` is at a chart singularity (a pole)."""
-        _, fu, fv, *_ = self._derivs(float(u[0]), float(u[1]))
-        c = np.linalg.norm(_cross(fu, fv))
-        if c < 1e-6 * self.size**2:
-            raise ContactError(
-                f"{where}: contact at chart coordinates {np.round(u, 6).tolist()} is at a singular point of "
-                f"the {self.name} chart (a pole); rotate the surface's frame (rpy) so the contact stays away"
-            )
-
     def describe(self) -> str:
         return self.name
 

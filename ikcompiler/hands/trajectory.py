@@ -47,9 +47,6 @@ from ikcompiler.hands.surfaces import ContactError
 from ikcompiler.hands.system import HandSystem
 from subproblems.screw import rotation_exp
 
-ETA = ("alpha_f", "beta_f", "alpha_o", "beta_o", "psi")  # the 5 contact rates per contact
-
-
 # ---- grasp objectives (step c) -----------------------------------------------------------------------
 
 
