@@ -414,3 +414,26 @@ def test_cli_three_dimensional_json(capsys):
     assert len(data["object"][0]) == 6 and len(data["contacts"]) == 3
     assert len(data["contacts"][0]["finger_point"][0]) == 3 and "beta_o" in data["contacts"][0]
     assert data["object_radius"] == 3.0 and data["max_constraint_residual"] < 1e-9
+
+
+def test_a_non_planar_finger_in_a_planar_spec_is_refused():
+    f = planar_finger("x", [10.0, 5.0], surface=Circle(1.0))
+    tilted = f.base.copy()
+    tilted[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]  # joints about -y: out of the plane
+    bad = Finger("x", f.chain, tilted, f.tip, f.surface)
+    with pytest.raises(ContactError, match="planar problem needs every joint"):
+        HandSystem((bad,), Circle(5.0), ("point",), True)
+
+
+def test_describe_gives_R_D_of_a_degenerate_hand():
+    from ikcompiler.hands.cli import describe
+    from ikcompiler.hands.spec import ManipulationSpec
+
+    system, theta = _planar_hand(1, 1)
+    spec = ManipulationSpec(system, theta, np.eye(4), lambda t: np.zeros(3), {}, 1.0, 0.1, "none", "test")
+    text = describe(spec)
+    assert "class: degenerate" in text and "basis of R(D)" in text
+    basis = np.array(
+        [json.loads(line.strip()) for line in text.split("basis of R(D) in (vx, vy, wz):\n")[1].splitlines()]
+    )
+    assert basis.shape == (2, 3) and np.abs(basis[:, 0]).max() < 1e-9  # v_x is not among them

@@ -57,6 +57,11 @@ def describe(spec) -> str:
     lines.append(f"grasp objective for the self-motion: {spec.objective}")
     lines.append(f"initial constraint residual after projection: {res:.1e}")
     lines.append(report(jo, contacts=len(s.fingers), joints=s.n_joints, rows=m.J.shape[0]))
+    if jo.kind == "degenerate" and jo.rank_D:
+        names = "(vx, vy, wz)" if s.planar else "(vx, vy, vz, wx, wy, wz)"
+        Uo, sv, _ = np.linalg.svd(jo.D, full_matrices=False)
+        lines.append(f"object twists the hand can produce now, a basis of R(D) in {names}:")
+        lines += [f"  {np.round(Uo[:, k], 6).tolist()}" for k in range(jo.rank_D)]
     if spec.assumptions:
         lines.append("assumptions of the spec:")
         lines += [f"  - {a}" for a in spec.assumptions]

@@ -86,6 +86,11 @@ class HandSystem:
                         else ""
                     )
                 )
+            for f in self.fingers:
+                _check_planar(f)
+        for f, kind in zip(self.fingers, self.contact):
+            if kind not in ("point", "soft"):
+                raise ContactError(f"finger {f.name}: contact type must be 'point' or 'soft', got {kind!r}")
 
     # ---- sizes -----------------------------------------------------------------------------------
 
@@ -262,6 +267,29 @@ class HandSystem:
             a, b = np.unravel_index(int(np.argmin(d)), d.shape)
             U[i, :2], U[i, 2:] = fu[a], obj_u[b]
         return U
+
+
+def _check_planar(f: Finger) -> None:
+    """Planar fingers move in the xy plane: joints about z or along xy, the tip frame's z axis up."""
+    q = np.zeros(f.dof)
+    J = f.spatial_jacobian(q)
+    g = f.tip_pose(q)
+    bad = [
+        name
+        for name, col in zip(f.joint_names, J.T)
+        if abs(col[2]) > 1e-9 * max(1.0, float(np.abs(col[:3]).max())) or np.abs(col[3:5]).max() > 1e-9
+    ]
+    if (
+        bad
+        or np.abs(g[:3, 2] - [0, 0, 1]).max() > 1e-9
+        or abs(g[2, 3]) > 1e-9 * max(1.0, abs(g[:3, 3]).max())
+    ):
+        raise ContactError(
+            f"finger {f.name}: a planar problem needs every joint to turn about z or slide in the xy plane "
+            "and the fingertip in the plane z = 0 with its z axis up"
+            + (f"; joints {', '.join(bad)} do not" if bad else "; the fingertip frame does not")
+            + " (set planar = false for a 3-D hand)"
+        )
 
 
 def _sample(surface: Surface, g: np.ndarray, n: int):
