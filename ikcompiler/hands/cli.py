@@ -49,9 +49,9 @@ def describe(spec) -> str:
         lines.append(
             f"finger {f.name}: {f.chain.joint_types} ({', '.join(f.chain.independent_names)}), "
             f"tip {f.surface.name} of size {f.surface.size:g}, {kind} contact; initial angles "
-            f"{np.round(np.degrees(theta[sl]), 6).tolist()} deg, "
+            f"{(np.round(np.degrees(theta[sl]), 6) + 0.0).tolist()} deg, "
             f"contact (alpha_f, beta_f, alpha_o, beta_o) = "
-            f"{np.round(u, 6).tolist()}, psi = {psi:.6f}"
+            f"{(np.round(u, 6) + 0.0).tolist()}, psi = {psi:.6f}"
         )
     lines.append(f"commanded twist (world): {', '.join(f'{k} = {v}' for k, v in spec.twist_text.items())}")
     lines.append(f"grasp objective for the self-motion: {spec.objective}")
