@@ -12,6 +12,19 @@ from pathlib import Path
 from ikcompiler.errors import UnknownRobotError
 
 SUFFIXES = (".urdf", ".toml")
+MANIPULATION_HINT = 'it is a manipulation task (kind = "manipulation"), not a robot: run `ikc manipulate {}`'
+
+
+def is_manipulation_spec(path: Path) -> bool:
+    """True for a hand task file (top-level ``kind = "manipulation"``, see ``ikcompiler/hands/spec.py``)."""
+    if not str(path).lower().endswith(".toml"):
+        return False
+    try:
+        import tomllib
+
+        return tomllib.loads(Path(path).read_text(encoding="utf-8")).get("kind") == "manipulation"
+    except (OSError, ValueError):
+        return False  # unreadable or malformed: the robot loader reports it
 
 
 def zoo_dir() -> Path:
@@ -29,7 +42,8 @@ def _files() -> dict[str, Path]:
     out: dict[str, Path] = {}
     for p in sorted(folder.iterdir()):
         if p.is_file() and p.name.lower().endswith(SUFFIXES) and not p.name.startswith("."):
-            out.setdefault(p.name.split(".")[0], p)
+            if not is_manipulation_spec(p):
+                out.setdefault(p.name.split(".")[0], p)
     return out
 
 
@@ -47,6 +61,9 @@ def resolve(name: str) -> Path:
     files = _files()
     if name in files:
         return files[name]
+    task = zoo_dir() / f"{name}.toml"
+    if is_manipulation_spec(task):
+        raise UnknownRobotError(f"zoo file {task.name}: " + MANIPULATION_HINT.format(task))
     names = ", ".join(sorted(files)) or f"(none: the zoo folder {zoo_dir()} is empty or missing)"
     raise UnknownRobotError(
         f"no robot file or zoo robot named {name!r}. Give a path to a .urdf or .toml file, "
