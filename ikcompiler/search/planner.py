@@ -1,4 +1,4 @@
-"""Search for the cheapest chain of subproblems (DESIGN.md section 5).
+"""Search for the cheapest chain of subproblems (docs/design.md section 5).
 
 State: which joints are solved and which parallel-group sums are known.  A move (from
 :mod:`ikcompiler.rules`) solves one canonical subproblem.  Every proposed move is validated on random
