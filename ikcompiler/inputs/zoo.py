@@ -22,11 +22,9 @@ SUFFIXES = (".urdf", ".toml")
 
 
 def _installed_dir() -> Path | None:
-    """``ikcompiler/robots/`` inside the installed package, when it is a folder on disk."""
-    try:
-        folder = Path(str(resources.files("ikcompiler") / "robots"))
-    except (ModuleNotFoundError, TypeError):  # no file-system location (a zip import)
-        return None
+    """``ikcompiler/robots/`` inside the installed package, when it is a folder on disk (not in a
+    checkout, where ``robots/`` sits beside the package; not inside a zip import)."""
+    folder = Path(str(resources.files("ikcompiler") / "robots"))
     return folder if folder.is_dir() else None
 
 
