@@ -66,10 +66,7 @@ def resolve(name: str) -> Path:
     files = _files()
     if name in files:
         return files[name]
-    names = ", ".join(sorted(files)) or (
-        f"(none: the zoo folder {zoo_dir()} is empty or missing; set IKC_ROBOTS to a folder of robot "
-        "files, or reinstall the package: a wheel carries the zoo as ikcompiler/robots)"
-    )
+    names = ", ".join(sorted(files)) or f"(none: the zoo folder {zoo_dir()} is empty or missing)"
     raise UnknownRobotError(
         f"no robot file or zoo robot named {name!r}. Give a path to a .urdf or .toml file, "
         f"or one of the zoo names: {names}"
