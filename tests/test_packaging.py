@@ -59,25 +59,30 @@ def installed(wheel, tmp_path_factory) -> Path:
     return target
 
 
-def _sources(folder: str, patterns: tuple[str, ...]) -> set[str]:
-    base = REPO / folder
+def _checkout_files(folder: str, suffixes: tuple[str, ...] = ()) -> set[str]:
+    """Files under ``folder`` of the checkout (all of them, or those ending in ``suffixes``)."""
     return {
         p.relative_to(REPO).as_posix()
-        for pattern in patterns
-        for p in base.rglob(pattern)
-        if "__pycache__" not in p.parts
+        for p in (REPO / folder).rglob("*")
+        if p.is_file()
+        and not any(part.startswith(".") or part == "__pycache__" for part in p.relative_to(REPO).parts)
+        and p.suffix != ".pyc"
+        and (not suffixes or p.name.endswith(suffixes))
     }
 
 
-def test_wheel_holds_every_module_header_and_robot(wheel):
+def test_wheel_holds_every_module_data_file_and_robot(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    # A package folder without __init__.py is not found by setup.py's find_packages: its modules would
-    # be missing from the wheel although the checkout runs.
-    code = _sources("ikcompiler", ("*.py",)) | _sources("subproblems", ("*.py", "*.h"))
-    assert code - names == set()
-    robots = {p.name for p in (REPO / "robots").iterdir() if p.suffix in (".toml", ".urdf")}
+    # Every file of the two packages: a package folder without __init__.py is not found by setup.py's
+    # find_packages, and a data file (not .py) needs its pattern in pyproject's package-data; either
+    # would be missing from the wheel although the checkout runs.
+    code = _checkout_files("ikcompiler") | _checkout_files("subproblems")
+    assert {"ikcompiler/cli.py", "subproblems/fast_kernels.h", "subproblems/plan_runtime.py"} <= code
+    assert code - names == set(), "add an __init__.py, or the pattern to [tool.setuptools.package-data]"
+    # The zoo, sub-folders included (a hand task names its fingers' files relative to itself).
+    robots = _checkout_files("robots", (".toml", ".urdf"))
     assert len(robots) >= 14
-    assert {f"ikcompiler/robots/{r}" for r in robots} - names == set()
+    assert {"ikcompiler/" + r for r in robots} - names == set()
 
 
 def _env(site: Path, tmp: Path) -> dict[str, str]:

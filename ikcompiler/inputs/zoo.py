@@ -6,7 +6,8 @@ first found:
 1. the folder named by the environment variable ``IKC_ROBOTS``;
 2. the package data ``ikcompiler/robots/`` of an installed package: a wheel or ``pip install .``
    installs the checkout's top-level ``robots/`` there (``setup.py`` maps the package
-   ``ikcompiler.robots`` to that folder, ``pyproject.toml`` lists ``*.toml`` and ``*.urdf`` as its data);
+   ``ikcompiler.robots`` to that folder, ``pyproject.toml`` lists ``**/*.toml`` and ``**/*.urdf`` as
+   its data);
 3. the checkout's ``robots/`` beside the package folder (an editable install or ``PYTHONPATH``).
 """
 
