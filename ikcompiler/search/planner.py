@@ -11,8 +11,7 @@ The cost of a chain adds ``log2(branches)`` and a per-subproblem price, so it pr
 cheaper subproblems.  Expansion is Dijkstra in cost order over the lazily built state graph,
 deterministic (fixed seeds, ordered moves) and bounded by a state budget.  Each state is accepted once,
 from the cheapest validated move into it, so the accepted moves form a shortest-path tree: the chain is
-read back along the parent links from the goal (no second graph search; see docs/design.md, section
-"Decisions: sympy and networkx").
+read back along the parent links from the goal (no second graph search: docs/design.md section 13).
 """
 
 from __future__ import annotations
