@@ -1,12 +1,20 @@
 """The robot zoo: the robot files in the repository's ``robots/`` folder, loadable by bare name.
 
-A file's zoo name is its name without extension(s): ``puma560.dh.toml`` is ``puma560``.  The folder is
-``robots/`` next to the package, or the folder named by the environment variable ``IKC_ROBOTS``.
+A file's zoo name is its name without extension(s): ``puma560.dh.toml`` is ``puma560``.  The folder is,
+first found:
+
+1. the folder named by the environment variable ``IKC_ROBOTS``;
+2. the package data ``ikcompiler/robots/`` of an installed package: a wheel or ``pip install .``
+   installs the checkout's top-level ``robots/`` there (``setup.py`` maps the package
+   ``ikcompiler.robots`` to that folder, ``pyproject.toml`` lists ``**/*.toml`` and ``**/*.urdf`` as
+   its data);
+3. the checkout's ``robots/`` beside the package folder (an editable install or ``PYTHONPATH``).
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
 
 from ikcompiler.errors import UnknownRobotError
@@ -27,12 +35,24 @@ def is_manipulation_spec(path: Path) -> bool:
         return False  # unreadable or malformed: the robot loader reports it
 
 
+def _installed_dir() -> Path | None:
+    """``ikcompiler/robots/`` inside the installed package, when it is a folder on disk (not in a
+    checkout, where ``robots/`` sits beside the package; not inside a zip import)."""
+    folder = Path(str(resources.files("ikcompiler") / "robots"))
+    return folder if folder.is_dir() else None
+
+
 def zoo_dir() -> Path:
-    """The zoo folder: ``$IKC_ROBOTS`` if set, else the repository's ``robots/``."""
+    """The zoo folder: ``$IKC_ROBOTS`` if set, else the installed package data, else the checkout's
+    ``robots/``.
+
+    >>> zoo_dir().name
+    'robots'
+    """
     env = os.environ.get("IKC_ROBOTS")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[2] / "robots"
+    return _installed_dir() or Path(__file__).resolve().parents[2] / "robots"
 
 
 def _files() -> dict[str, Path]:
