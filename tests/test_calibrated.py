@@ -173,8 +173,17 @@ def test_homotopy_ends_at_both_robots():
     assert np.allclose(np.linalg.norm(tw[1, :, 3:], axis=1), 1.0)
 
 
-def test_correct_retracks_a_collision():
-    """Two snapped rows whose plain Newton would meet on one solution come back as two solutions."""
+def test_collisions_flag_rows_that_started_apart_and_met():
+    from subproblems.continuation import _collisions
+
+    Q0 = np.array([[0.0, 0.5], [0.0, -0.5], [1.0, 0.0], [2.0, 0.0]])
+    Q = np.array([[0.1, 0.2], [0.1, 0.2 + 2 * math.pi], [1.0, 0.0], [0.1, 0.2]])  # rows 0, 1 met (mod 2 pi)
+    hit = _collisions(Q0, Q, np.array([0, 0, 0, 1]), np.ones(4, dtype=bool), np.array([True, True]), 1.0)
+    assert hit.tolist() == [True, True, False, False]  # row 3 has another owner
+
+
+def test_correct_keeps_both_elbows_near_a_stretched_arm():
+    """Near a fold (the elbow pair close together) both snapped rows come back as two solutions."""
     t0 = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])  # planar 2R, links 1 and 1
     t1 = t0.copy()
     t1[1, :3] = [0, -1.02, 0]  # the true elbow is 2% further out
