@@ -181,6 +181,7 @@ def follow(module, poses, q_start, *free, max_jump=None, weights=None, refine: i
             a, b = layers[k], layers[k + 1]
             T = interpolate(a.target, b.target, [0.5])[0]
             layers.insert(k + 1, _Layer((a.s + b.s) / 2, T, solve(T), max(a.depth, b.depth) + 1))
+    choice = _search(layers, kinds, module.SCALE, weights, jump)  # layers may have grown in the last round
     return _assemble(module, layers, choice, jump, free, names, kinds, singular)
 
 
@@ -188,14 +189,16 @@ def _search(layers, kinds, scale, weights, jump) -> list[int]:
     """Least-cost choice of one row per layer (up to the first empty layer): jumps first, then motion."""
     cost = np.zeros(1)
     back = []
-    for k in range(1, len(layers)):
+    m = len(layers)
+    for k in range(1, m):
         rows, prev = layers[k].rows, layers[k - 1].rows
         if len(rows) == 0:
             break
         D = rows[None, :, :] - prev[:, None, :]  # (prev, rows, n)
         motion = select.distance(D.reshape(-1, len(kinds)), np.zeros(len(kinds)), kinds, scale, weights)
         over = np.any(np.abs(D) > jump, axis=2).reshape(-1)
-        total = (cost[:, None] + (motion + BREAK * over).reshape(D.shape[:2]))
+        # a forced jump is cheaper the later it comes: it then sits where the old branch ends
+        total = cost[:, None] + (motion + BREAK * (1 + (m - k) / m) * over).reshape(D.shape[:2])
         best = np.argmin(total, axis=0)
         back.append(best)
         cost = total[best, np.arange(len(rows))]
@@ -244,12 +247,14 @@ def _assemble(module, layers, choice, jump, free, names, kinds, singular) -> Pat
         T = module_target(module, layers[k].target)
         loose = module.solve(T, *free, limits=False)
         if len(loose):
-            dist = select.distance(loose, Q[k - 1], kinds, module.SCALE, wrap=True)
-            cand = loose[int(np.argmin(dist))]
-            diff = np.abs(np.remainder(cand - Q[k - 1] + math.pi, 2 * math.pi) - math.pi)
-            diff = np.where(np.array([c == "R" for c in kinds]), diff, np.abs(cand - Q[k - 1]))
-            out = select.excluding_joints(cand[None], kinds, lower, upper)[0]
-            if np.all(diff <= jump) and out.any():
+            # the old branch continued: its nearest solution without limits, as a motor position
+            rev = np.array([c == "R" for c in kinds])
+            diff = loose - Q[k - 1]
+            diff[:, rev] = np.remainder(diff[:, rev] + math.pi, 2 * math.pi) - math.pi
+            best = int(np.argmin(np.max(np.abs(diff) / jump, axis=1)))
+            cont = Q[k - 1] + diff[best]
+            out = (cont < lower - select.LIMIT_EPS) | (cont > upper + select.LIMIT_EPS)
+            if np.all(np.abs(diff[best]) <= jump) and out.any():
                 events.append(Event(k, "joint_limit", tuple(names[j] for j in np.nonzero(out)[0]),
                                     "the branch followed leaves the joint limits; the path jumps to another"))
                 continue
