@@ -100,7 +100,7 @@ def nearest_alias(Q, q_seed, kinds: str, lower, upper):
     [[6.2832]]
     """
     Q = np.array(Q, dtype=float).reshape(-1, len(kinds))
-    seed = np.asarray(q_seed, dtype=float).reshape(-1)
+    seed = _seed(q_seed, kinds)
     for j, kind in enumerate(kinds):
         if kind != "R":
             continue
@@ -109,6 +109,15 @@ def nearest_alias(Q, q_seed, kinds: str, lower, upper):
             if vals:
                 Q[r, j] = min(vals, key=lambda x: (abs(x - seed[j]), x))
     return Q
+
+
+def _seed(q_seed, kinds: str) -> np.ndarray:
+    seed = np.asarray(q_seed, dtype=float).reshape(-1)
+    if seed.shape != (len(kinds),):
+        raise ValueError(f"q_seed has {seed.size} values; the robot has {len(kinds)} joints {kinds}")
+    if not np.all(np.isfinite(seed)):
+        raise ValueError("q_seed contains NaN or infinity")
+    return seed
 
 
 def distance(Q, q_seed, kinds: str, scale: float, weights=None, wrap: bool = False) -> np.ndarray:
@@ -124,12 +133,7 @@ def distance(Q, q_seed, kinds: str, scale: float, weights=None, wrap: bool = Fal
     [0.1832]
     """
     Q = np.asarray(Q, dtype=float).reshape(-1, len(kinds))
-    seed = np.asarray(q_seed, dtype=float).reshape(-1)
-    if seed.shape != (len(kinds),):
-        raise ValueError(f"q_seed has {seed.size} values; the robot has {len(kinds)} joints {kinds}")
-    if not np.all(np.isfinite(seed)):
-        raise ValueError("q_seed contains NaN or infinity")
-    d = Q - seed
+    d = Q - _seed(q_seed, kinds)
     rev = np.array([k == "R" for k in kinds])
     if wrap:
         d[:, rev] = np.remainder(d[:, rev] + math.pi, TWO_PI) - math.pi
