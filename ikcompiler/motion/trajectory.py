@@ -308,8 +308,9 @@ def time_path(Q, *, vmax, amax) -> Trajectory:
 
     The rows are spaced along a trapezoidal speed profile of the path parameter (each segment's length
     the time its slowest joint needs at full speed; the parameter accelerates at most at
-    min(amax / vmax)), joined by quintics through every row, then scaled uniformly so the binding limit
-    is just met: at rest at both ends, continuous velocity and acceleration, every row passed.
+    min(amax / vmax)), joined by the C2 cubic spline through every row at those times (at rest at both
+    ends), then scaled uniformly so the binding limit is just met: continuous velocity and acceleration,
+    every row passed exactly.
     """
     Q = np.asarray(getattr(Q, "q", Q), dtype=float)
     n = Q.shape[1]
@@ -340,4 +341,35 @@ def time_path(Q, *, vmax, amax) -> Trajectory:
             return T - math.sqrt(max(0.0, 2 * (total - x) / alpha))
     t = np.array([when(x) for x in lam])
     dts = np.maximum(np.diff(t), 1e-9 * T)
-    return _rescale(_quintic_through(Q, dts), vm, am)
+    return _rescale(_clamped_spline(Q, dts), vm, am)
+
+
+def _clamped_spline(Q, dts) -> Trajectory:
+    """The C2 cubic spline through the rows of Q at the knot spacing dts, at rest at both ends.
+
+    Unknowns: the knot accelerations M (m, n); continuity of velocity at the inner knots and zero
+    velocity at the ends give a tridiagonal system, solved by the Thomas algorithm (all joints at once).
+    """
+    m = len(Q)
+    h = dts
+    slope = np.diff(Q, axis=0) / h[:, None]
+    sub, diag, sup = np.zeros(m), np.zeros(m), np.zeros(m)
+    rhs = np.zeros_like(Q)
+    diag[0], sup[0], rhs[0] = 2 * h[0], h[0], 6 * slope[0]
+    diag[-1], sub[-1], rhs[-1] = 2 * h[-1], h[-1], -6 * slope[-1]
+    sub[1:-1], diag[1:-1], sup[1:-1] = h[:-1], 2 * (h[:-1] + h[1:]), h[1:]
+    rhs[1:-1] = 6 * (slope[1:] - slope[:-1])
+    for i in range(1, m):  # forward elimination
+        w = sub[i] / diag[i - 1]
+        diag[i] -= w * sup[i - 1]
+        rhs[i] -= w * rhs[i - 1]
+    M = np.zeros_like(Q)
+    M[-1] = rhs[-1] / diag[-1]
+    for i in range(m - 2, -1, -1):
+        M[i] = (rhs[i] - sup[i] * M[i + 1]) / diag[i]
+    c = np.zeros((m - 1, 6, Q.shape[1]))
+    c[:, 0] = Q[:-1]
+    c[:, 1] = slope - h[:, None] * (2 * M[:-1] + M[1:]) / 6
+    c[:, 2] = M[:-1] / 2
+    c[:, 3] = (M[1:] - M[:-1]) / (6 * h[:, None])
+    return Trajectory(np.concatenate([[0.0], np.cumsum(dts)]), c, Q.copy())
