@@ -70,7 +70,12 @@ def _cmd_path(args) -> int:
         goal[:3, :3] = T0[:3, :3]
     poses = straight_line(T0, goal, max_step=step, max_angle=angle)
     print(f"following {len(poses)} poses of {chain.name} ...", file=sys.stderr)
-    path = follow(module, poses, q0)
+
+    def progress(done, total):
+        if done == total or done % max(1, total // 10) == 0:
+            print(f"  solved {done}/{total} waypoints", file=sys.stderr, flush=True)
+
+    path = follow(module, poses, q0, progress=progress)
     if args.csv:
         _write_path_csv(path, args.csv)
     if args.png:

@@ -123,6 +123,7 @@ class _Layer:
     target: np.ndarray  # 4x4
     rows: np.ndarray  # (k, n) exact solutions inside the limits, aliases included
     depth: int  # halvings of an input step that made this waypoint
+    link: tuple | None = None  # (previous layer, motion, over) of the last search, reused while unchanged
 
 
 def follow(module, poses, q_start, *free, max_jump=None, weights=None, refine: int = 8,
@@ -186,7 +187,14 @@ def follow(module, poses, q_start, *free, max_jump=None, weights=None, refine: i
 
 
 def _search(layers, kinds, scale, weights, jump) -> list[int]:
-    """Least-cost choice of one row per layer (up to the first empty layer): jumps first, then motion."""
+    """Least-cost choice of one row per layer (up to the first empty layer): jumps first, then motion.
+
+    The motion of a step is select.distance's (radians, prismatic over scale, times the weights), here
+    written out for all pairs of two layers at once.
+    """
+    w = np.array([1.0 if k == "R" else 1.0 / scale for k in kinds])
+    if weights is not None:
+        w = w * np.asarray(weights, dtype=float).reshape(-1)
     cost = np.zeros(1)
     back = []
     m = len(layers)
@@ -194,11 +202,16 @@ def _search(layers, kinds, scale, weights, jump) -> list[int]:
         rows, prev = layers[k].rows, layers[k - 1].rows
         if len(rows) == 0:
             break
-        D = rows[None, :, :] - prev[:, None, :]  # (prev, rows, n)
-        motion = select.distance(D.reshape(-1, len(kinds)), np.zeros(len(kinds)), kinds, scale, weights)
-        over = np.any(np.abs(D) > jump, axis=2).reshape(-1)
+        if layers[k].link is not None and layers[k].link[0] is layers[k - 1]:
+            motion, over = layers[k].link[1:]
+        else:
+            D = np.abs(rows[None, :, :] - prev[:, None, :])  # (prev, rows, n)
+            over = (D > jump).any(axis=2)
+            D *= w
+            motion = np.sqrt(np.einsum("prn,prn->pr", D, D))
+            layers[k].link = (layers[k - 1], motion, over)
         # a forced jump is cheaper the later it comes: it then sits where the old branch ends
-        total = cost[:, None] + (motion + BREAK * (1 + (m - k) / m) * over).reshape(D.shape[:2])
+        total = cost[:, None] + motion + BREAK * (1 + (m - k) / m) * over
         best = np.argmin(total, axis=0)
         back.append(best)
         cost = total[best, np.arange(len(rows))]
