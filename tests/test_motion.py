@@ -63,26 +63,37 @@ def test_straight_line_keeps_one_branch_and_reproduces_every_pose(prob):
     assert largest[1] < 0.6 * largest[0] and largest[2] < 0.6 * largest[1]
 
 
-def test_path_through_a_wrist_singularity_reports_it_at_that_waypoint(prob):
-    m = prob
+def _line_through_wrist_singularity(m, offset=0.0):
+    """A straight line whose middle pose is P-Rob's wrist singularity (j5 = 0), shifted by ``offset``."""
     q_sing = np.radians([10, 30, 40, 20, 0, 10])  # j5 = 0: j4 and j6 aligned
     Ts = m.fk(q_sing)
-    v, r = np.array([0.0, 0.04, 0.0]), np.array([0.0, 0.3, 0.0])
+    v, r = np.array([offset, 0.04, 0.0]), np.array([0.0, 0.3, 0.0])
     Ta, Tb = Ts.copy(), Ts.copy()
-    Ta[:3, 3] -= v
+    Ta[:3, 3] += [offset, -0.04, 0.0]
     Ta[:3, :3] = Ts[:3, :3] @ rotation_exp(-r)
     Tb[:3, 3] += v
     Tb[:3, :3] = Ts[:3, :3] @ rotation_exp(r)
-    poses = straight_line(Ta, Tb, max_step=0.01, max_angle=0.05)
+    return straight_line(Ta, Tb, max_step=0.01, max_angle=0.05), q_sing, Ts
+
+
+def test_path_through_a_wrist_singularity_reports_it_at_that_waypoint(prob):
+    m = prob
+    poses, q_sing, Ts = _line_through_wrist_singularity(m)
     assert len(poses) % 2 == 1  # the middle waypoint is the singular pose
     mid = (len(poses) - 1) / 2
     assert np.allclose(poses[int(mid)], Ts, atol=1e-12)
-    path = follow(m, poses, m.nearest(Ta, q_sing))
+    path = follow(m, poses, m.nearest(poses[0], q_sing))
     assert not path.complete
     sing = [e for e in path.events if e.kind == "singularity"]
     assert len(sing) == 1 and path.s[sing[0].index] == mid
     assert {"j4", "j6"} <= set(sing[0].joints)
     assert path.sigma_min[sing[0].index] < 1e-9
+    # passing 0.1 mm beside it: j4 and j6 would have to spin by ~pi within a step of 40 um (the finest
+    # refinement): the branch changes there, reported within one input step of the singular pose
+    poses, q_sing, _ = _line_through_wrist_singularity(m, offset=1e-4)
+    path = follow(m, poses, m.nearest(poses[0], q_sing))
+    assert [(e.kind, e.joints) for e in path.events] == [("singularity", ("j4", "j6"))]
+    assert abs(path.s[path.events[0].index] - mid) < 0.5
 
 
 def test_path_out_of_reach_and_into_a_joint_limit(prob):
