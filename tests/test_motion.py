@@ -204,7 +204,14 @@ def test_cli_trajectory_csv_png(capsys, tmp_path):
     assert [float(x) for x in rows[1]] == [0.0] * 7
     assert [float(x) for x in rows[-1]] == [2.0, *np.radians([30, 60, 90, 45, -90, 0])]
     assert len(rows) == 202 and (tmp_path / "t.png").stat().st_size > 0
+    capsys.readouterr()
     assert main(["trajectory", "prob", "--start", "0,0,0,0,0,0", "--goal", goal, "--profile", "trapezoid",
                  "--vmax", "1", "--amax", "2"]) == 0
+    shortest = capsys.readouterr().out
+    assert main(["trajectory", "prob", "--start", "0,0,0,0,0,0", "--goal", goal,
+                 "--profile", "trapezoid"]) == 0
+    assert capsys.readouterr().out == shortest  # the defaults are 1 rad/s and 2 rad/s^2
+    assert main(["trajectory", "prob", "--start", "0,0,0,0,0,0", "--goal", goal, "--duration", "0.5",
+                 "--vmax", "1"]) == 2  # too short for the limit
     assert main(["trajectory", "prob", "--start", "0,0,0,0,0,0", "--goal", "3,0,0,0,0,0",
                  "--duration", "2"]) == 2  # j1 = 3 rad is outside its +-170 deg

@@ -105,6 +105,10 @@ def _write_path_csv(path, file) -> None:
             f.write(",".join([str(k), repr(float(path.s[k]))] + [repr(float(v)) for v in vals]) + "\n")
 
 
+DEFAULT_V, DEFAULT_A = 1.0, 2.0  # rad/s, rad/s^2 for revolute joints without --duration or limits
+DEFAULT_V_T, DEFAULT_A_T = 0.25, 0.5  # prismatic: fractions of the robot's size per s, per s^2
+
+
 def _cmd_trajectory(args) -> int:
     from ikcompiler import load_robot
     from ikcompiler.motion import quintic, trapezoid
@@ -115,10 +119,15 @@ def _cmd_trajectory(args) -> int:
     q1 = parse_values(args.goal, len(names), "--goal", names)
     _check_limits(q0, chain, "--start")
     _check_limits(q1, chain, "--goal")
-    if args.duration is None and (args.vmax is None or args.amax is None):
-        raise MotionError("give --duration S, or --vmax and --amax for the shortest trajectory within them")
+    vmax, amax = args.vmax, args.amax
+    if args.duration is None:  # the shortest within the limits; defaults by joint type
+        kinds = "".join(chain.joints[i].kind for i in chain.independent)
+        if vmax is None:
+            vmax = np.array([DEFAULT_V if k == "R" else DEFAULT_V_T * chain.scale for k in kinds])
+        if amax is None:
+            amax = np.array([DEFAULT_A if k == "R" else DEFAULT_A_T * chain.scale for k in kinds])
     make = quintic if args.profile == "quintic" else trapezoid
-    traj = make(q0, q1, args.duration, vmax=args.vmax, amax=args.amax)
+    traj = make(q0, q1, args.duration, vmax=vmax, amax=amax)
     if args.csv:
         t, q, _, _ = traj.sample(args.dt)
         q[0], q[-1] = q0, q1  # the evaluation returns the knots there; say so explicitly
@@ -167,8 +176,10 @@ def add_parser(sub) -> None:
     p.add_argument("--duration", type=float, metavar="S",
                    help="seconds (default: shortest within the limits)")
     p.add_argument("--profile", default="quintic", choices=["quintic", "trapezoid"])
-    p.add_argument("--vmax", type=float, help="joint velocity limit (rad/s or units/s), all joints")
-    p.add_argument("--amax", type=float, help="joint acceleration limit, all joints")
+    p.add_argument("--vmax", type=float, help="joint velocity limit (rad/s or units/s), all joints; without "
+                   "--duration default 1 rad/s (prismatic: 0.25 of the robot's size per s)")
+    p.add_argument("--amax", type=float, help="joint acceleration limit, all joints; without --duration "
+                   "default 2 rad/s^2 (prismatic: 0.5 of the size per s^2)")
     p.add_argument("--dt", type=float, default=0.01,
                    help="sample period of the CSV and PNG (default 0.01 s)")
     p.add_argument("--csv", metavar="FILE", help="write t and one column per joint")
