@@ -209,6 +209,11 @@ def jacobian(Q, *, twists, A, b, home, scale: float, target: str = "pose") -> np
     TH = full @ A.T + b
     J = tool_jacobian(twists, TH, home) @ A[:, :n]  # chain rule through the couplings
     J[:, :3, :] /= scale
+    # a prismatic joint's value counts in units of the robot's size (as in distance): its column * scale
+    prismatic = ~np.abs(np.asarray(twists, dtype=float)[:, 3:]).any(axis=1)
+    for k in range(n):
+        if prismatic[int(np.argmax(A[:, k] != 0))]:
+            J[:, :, k] *= scale
     if target == "position":
         return J[:, :3, :]
     if target == "orientation":
@@ -222,12 +227,14 @@ def sigma_min(Q, *, twists, A, b, home, scale: float, target: str = "pose") -> n
     ``Q`` (k, n) holds the returned joint values; the chain's joints are ``A @ [q, 0...] + b`` (mimic
     joints follow their masters, virtual joints sit at 0).  The Jacobian is that of the tool origin's
     linear velocity divided by ``scale`` and of the tool's angular velocity, both in base axes, with
-    respect to the returned joints (mimic columns folded in by the chain rule); only the rows the
-    target constrains count (position: the 3 linear rows; orientation: the 3 angular rows).  Its
-    smallest of min(rows, n) singular values is 0 at a singular configuration and of order 1 for a
+    respect to the returned joints (mimic columns folded in by the chain rule; a prismatic column times
+    ``scale``, its value counting in units of the robot's size); only the rows the target constrains
+    count (position: the 3 linear rows; orientation: the 3 angular rows).  Its smallest of
+    min(rows, n) singular values is 0 at a singular configuration and of order 1 for a
     well-conditioned one; it does not depend on where the base frame is put or on the length unit.
 
-    A stop-gap until ``subproblems/conditioning.py`` (the ``sing`` helper) lands; the two should agree.
+    The same size-free Jacobian as ``subproblems/conditioning.py`` (the ``sing`` helper's, written in
+    parallel), plus the choice of the rows the target constrains; one can call the other once merged.
 
     >>> import numpy as np
     >>> tw = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])   # planar 2R, links 1 and 1
