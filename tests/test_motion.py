@@ -63,9 +63,9 @@ def test_straight_line_keeps_one_branch_and_reproduces_every_pose(prob):
     assert largest[1] < 0.6 * largest[0] and largest[2] < 0.6 * largest[1]
 
 
-def _line_through_wrist_singularity(m, offset=0.0):
+def _line_through_wrist_singularity(m, offset=0.0, j6=10.0):
     """A straight line whose middle pose is P-Rob's wrist singularity (j5 = 0), shifted by ``offset``."""
-    q_sing = np.radians([10, 30, 40, 20, 0, 10])  # j5 = 0: j4 and j6 aligned
+    q_sing = np.radians([10, 30, 40, 20, 0, j6])  # j5 = 0: j4 and j6 aligned
     Ts = m.fk(q_sing)
     v, r = np.array([offset, 0.04, 0.0]), np.array([0.0, 0.3, 0.0])
     Ta, Tb = Ts.copy(), Ts.copy()
@@ -88,6 +88,15 @@ def test_path_through_a_wrist_singularity_reports_it_at_that_waypoint(prob):
     assert len(sing) == 1 and path.s[sing[0].index] == mid
     assert {"j4", "j6"} <= set(sing[0].joints)
     assert path.sigma_min[sing[0].index] < 1e-9
+    # with j6 = 60 deg the solver's representative of the singular pose (j6 = 0, j4 = 80 deg) is 60 deg
+    # from the path: the branch is continued by Newton steps instead of a jump, the singularity reported
+    poses, q_sing, _ = _line_through_wrist_singularity(m, j6=60.0)
+    assert abs(m.solve_info(poses[int(mid)]).q[0][5]) < 1e-9  # the representative the solver gives
+    path = follow(m, poses, m.nearest(poses[0], q_sing))
+    assert np.abs(np.diff(path.q, axis=0)).max() < np.radians(10)
+    assert [(path.s[e.index], e.kind) for e in path.events] == [(mid, "singularity")]
+    dp, dR = _errors(m, path)
+    assert dp <= 1e-9 * m.SCALE and dR <= 1e-9
     # passing 0.1 mm beside it: j4 and j6 would have to spin by ~pi within a step of 40 um (the finest
     # refinement): the branch changes there, reported within one input step of the singular pose
     poses, q_sing, _ = _line_through_wrist_singularity(m, offset=1e-4)

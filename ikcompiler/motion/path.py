@@ -6,8 +6,9 @@ waypoint (dynamic programming over the waypoints' solutions, i.e. a shortest pat
 graph), where a step may move no joint by more than its jump limit (an absolute angle for a revolute
 joint, a length for a prismatic one).  Where the chosen step moves a joint by more than half its limit
 the segment is split (its midpoint pose solved and added) and the search repeated, up to ``refine``
-halvings of one input step.  What no refinement cures is reported as an event, never passed over
-silently:
+halvings of one input step.  Where the path still jumps, the branch is continued by Newton steps from
+the previous row (a self-motion's representative at a singular waypoint need not be the one next to the
+path).  What neither cures is reported as an event, never passed over silently:
 
 - ``workspace``: a waypoint has no solution at all: the path ends before it;
 - ``joint_limit``: a waypoint has solutions only outside the joint limits (the path ends before it), or
@@ -27,10 +28,10 @@ import math
 import numpy as np
 
 from ikcompiler.errors import MotionError
-from ikcompiler.motion.poses import interpolate
+from ikcompiler.motion.poses import interpolate, rotation_log
 from subproblems import select
 
-__all__ = ["Event", "Path", "follow", "module_target"]
+__all__ = ["Event", "Path", "follow", "continue_branch", "module_target"]
 
 BREAK = 1e9  # cost of a step over a jump limit: fewer jumps always win over less motion
 
@@ -183,7 +184,60 @@ def follow(module, poses, q_start, *free, max_jump=None, weights=None, refine: i
             T = interpolate(a.target, b.target, [0.5])[0]
             layers.insert(k + 1, _Layer((a.s + b.s) / 2, T, solve(T), max(a.depth, b.depth) + 1))
     choice = _search(layers, kinds, module.SCALE, weights, jump)  # layers may have grown in the last round
+    hold = [names.index(f) for f in module.FREE_JOINTS]
+    for _ in range(4):  # where the path still jumps, try to continue the branch by Newton steps
+        added = False
+        for k in range(1, len(choice)):
+            a, b = layers[k - 1], layers[k]
+            qa = a.rows[choice[k - 1]]
+            if np.all(np.abs(b.rows[choice[k]] - qa) <= jump):
+                continue
+            qn = continue_branch(module, qa, b.target, hold)
+            if qn is None or np.any(np.abs(qn - qa) > jump) or np.any(qn < module.LOWER - select.LIMIT_EPS) \
+                    or np.any(qn > module.UPPER + select.LIMIT_EPS):
+                continue
+            b.rows = np.vstack([b.rows, qn])
+            b.link = None
+            if k + 1 < len(layers):
+                layers[k + 1].link = None
+            added = True
+        if not added:
+            break
+        choice = _search(layers, kinds, module.SCALE, weights, jump)
     return _assemble(module, layers, choice, jump, free, names, kinds, singular)
+
+
+def continue_branch(module, q, T, hold=(), iters: int = 30):
+    """An exact solution of waypoint ``T`` reached from ``q`` by Newton steps (least-norm, on the true
+    robot; the joints ``hold`` fixed), or None.
+
+    Used only where the chosen path jumps: a self-motion's representative (at a singular waypoint the
+    solver returns one of infinitely many, not necessarily the one next to the path) or a solution the
+    solver did not return near a double root.  A row found here is checked like any other: it must
+    reproduce the waypoint to the module's TOLERANCE (it is polished to 1e-12 of the size when the
+    steps allow) and lie inside the limits.
+    """
+    if module.TARGET not in ("pose", "position", "orientation"):
+        return None
+    q = np.array(q, dtype=float)
+    n = len(q)
+    rows = {"pose": slice(0, 6), "position": slice(0, 3), "orientation": slice(3, 6)}[module.TARGET]
+    best = None
+    for _ in range(iters):
+        G = module.fk(q)
+        err = target_error(module, G, T)
+        if err <= module.TOLERANCE * module.SCALE:
+            best = q.copy()
+            if err <= 1e-12 * module.SCALE:
+                break
+        e = np.concatenate([T[:3, 3] - G[:3, 3], rotation_log(T[:3, :3] @ G[:3, :3].T)])[rows]
+        full = np.concatenate([q, np.zeros(module._A.shape[1] - n)]) @ module._A.T + module._B
+        J = (select.tool_jacobian(module._TWISTS, full[None], module._HOME) @ module._A[:, :n])[0][rows]
+        J[:, list(hold)] = 0.0
+        dq = np.linalg.lstsq(J, e, rcond=1e-10)[0]
+        big = np.abs(dq).max()
+        q = q + (dq * (0.5 / big) if big > 0.5 else dq)  # at most half a radian a step
+    return best
 
 
 def _search(layers, kinds, scale, weights, jump) -> list[int]:
