@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from ikcompiler import load_robot
 from ikcompiler.compiler import compile_robot
@@ -175,3 +177,20 @@ def test_solve_info_fields_and_sigma_min(prob):
     for q_sing in (np.radians([10, 30, 40, 20, 0, 10]), np.radians([30, 60, 90, 45, -90, 0])):  # wrist, elbow
         sig = m.solve_info(m.fk(q_sing), q_seed=q_sing).sigma_min
         assert sig[0] < 1e-6
+
+
+@given(v=st.floats(-20, 20), lo=st.floats(-15, 15), width=st.floats(0, 20))
+def test_aliases_are_exactly_the_in_limit_values(v, lo, width):
+    """Against brute force: every v + 2 pi k inside [lo, lo + width], and nothing else."""
+    from subproblems.select import aliases, excluding_joints
+
+    hi = lo + width
+    rows, src = aliases(np.array([[v, 0.5]]), "RT", [lo, 0.0], [hi, 1.0])
+    expect = [v + TWO_PI * k for k in range(-10, 11) if lo - 1e-7 <= v + TWO_PI * k <= hi + 1e-7]
+    if expect:
+        assert sorted(rows[:, 0]) == pytest.approx(sorted(expect), abs=1e-12)
+        assert np.all(rows[:, 1] == 0.5) and np.all(src == 0)
+        assert not excluding_joints(rows, "RT", [lo, 0.0], [hi, 1.0]).any()
+    else:  # no alias inside: the row is kept as solved, and its joint excludes it
+        assert rows.tolist() == [[v, 0.5]]
+        assert excluding_joints(rows, "RT", [lo, 0.0], [hi, 1.0]).tolist() == [[True, False]]

@@ -47,7 +47,8 @@ class Event:
     detail: str = ""
 
     def to_json(self) -> dict:
-        return {"index": self.index, "kind": self.kind, "joints": list(self.joints), "detail": self.detail}
+        """The issue's event object: index, kind, joints (``detail`` is for people: text output only)."""
+        return {"index": self.index, "kind": self.kind, "joints": list(self.joints)}
 
 
 @dataclasses.dataclass
