@@ -20,14 +20,36 @@ Conventions (docs/motion.md):
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from subproblems.screw import twist_exp_batch
 
-__all__ = ["aliases", "nearest_alias", "distance", "order", "excluding_joints", "jacobian", "sigma_min"]
+__all__ = ["SolveInfo", "Excluded", "aliases", "nearest_alias", "distance", "order", "excluding_joints",
+           "jacobian", "sigma_min"]
 
 TWO_PI = 2 * math.pi
+
+
+class Excluded(NamedTuple):
+    """A solution left out by the joint limits: its row (as solved), the joints outside their limits."""
+
+    q: np.ndarray
+    joints: tuple
+    residual: float
+    ls: bool
+
+
+class SolveInfo(NamedTuple):
+    """Every candidate of one target (k rows) with what it is worth: a generated module's solve_info."""
+
+    q: np.ndarray  # (k, n) JOINT_NAMES order
+    residual: np.ndarray  # (k,) target error on the true robot (length units)
+    ls: np.ndarray  # (k,) least-squares rows: they miss by residual
+    continuum: np.ndarray  # (k,) one representative of a self-motion
+    sigma_min: np.ndarray  # (k,) smallest singular value of the size-free Jacobian (0: singular)
+    excluded: tuple  # Excluded solutions (limits=True only): which joints leave each one out
 LIMIT_EPS = 1e-7  # roundoff forgiven at a limit, as the finish does (a double root sits at a stop)
 
 

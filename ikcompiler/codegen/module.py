@@ -28,8 +28,6 @@ solution; ``nearest(T, q_seed, *free)`` -> the closest row or None; ``solve_batc
 including least-squares rows; ``fk(q)`` -> 4x4.
 """
 {imports}
-from typing import NamedTuple
-
 import numpy as np
 
 from subproblems import fast as _fk
@@ -492,24 +490,7 @@ def solve_batch(Ts, *free, limits=True):
     return Q, valid & ~ls
 
 
-class Excluded(NamedTuple):
-    """A solution left out by the joint limits: its row (as solved), the joints outside their limits."""
-
-    q: np.ndarray
-    joints: tuple
-    residual: float
-    ls: bool
-
-
-class SolveInfo(NamedTuple):
-    """Every candidate of one target (k rows) with what it is worth; see solve_info."""
-
-    q: np.ndarray  # (k, n) JOINT_NAMES order
-    residual: np.ndarray  # (k,) target error on the true robot (length units)
-    ls: np.ndarray  # (k,) least-squares rows: they miss by residual
-    continuum: np.ndarray  # (k,) one representative of a self-motion
-    sigma_min: np.ndarray  # (k,) smallest singular value of the size-free Jacobian (0: singular)
-    excluded: tuple  # Excluded solutions (limits=True only): which joints leave each one out
+SolveInfo, Excluded = _sel.SolveInfo, _sel.Excluded  # what solve_info returns (subproblems/select.py)
 
 
 def _rows(T, free, limits):
