@@ -26,7 +26,7 @@ import numpy as np
 
 from subproblems.screw import twist_exp_batch
 
-__all__ = ["SolveInfo", "Excluded", "aliases", "nearest_alias", "distance", "order", "excluding_joints",
+__all__ = ["SolveInfo", "Excluded", "aliases", "nearest_alias", "distance", "excluding_joints",
            "jacobian", "sigma_min"]
 
 TWO_PI = 2 * math.pi
@@ -167,11 +167,6 @@ def distance(Q, q_seed, kinds: str, scale: float, weights=None, wrap: bool = Fal
                              f"got {weights!r}")
         d = d * w
     return np.sqrt((d * d).sum(axis=1))
-
-
-def order(dist) -> np.ndarray:
-    """Row order by distance (stable: ties keep the solver's order)."""
-    return np.argsort(np.asarray(dist, dtype=float), kind="stable")
 
 
 def excluding_joints(Q, kinds: str, lower, upper, eps=LIMIT_EPS) -> np.ndarray:
