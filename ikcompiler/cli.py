@@ -139,9 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)
-    from ikcompiler.motion.cli import add_parser as motion_parsers  # ikc path, ikc trajectory
-
-    motion_parsers(sub)
+    __import__("ikcompiler.analysis.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc singularities
+    __import__("ikcompiler.motion.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc path, ikc trajectory
     return parser
 
 

@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from subproblems.screw import twist_exp_batch
+from subproblems import conditioning
 
 __all__ = ["SolveInfo", "Excluded", "aliases", "nearest_alias", "distance", "excluding_joints",
            "jacobian", "sigma_min"]
@@ -191,46 +191,16 @@ def excluding_joints(Q, kinds: str, lower, upper, eps=LIMIT_EPS) -> np.ndarray:
     return out
 
 
-def _adjoint_apply(g, xi):
-    """Ad_g xi for transforms g (M, 4, 4) and twists xi (M, 6) as (v, w)."""
-    R, p = g[:, :3, :3], g[:, :3, 3]
-    w = np.einsum("mij,mj->mi", R, xi[:, 3:])
-    v = np.einsum("mij,mj->mi", R, xi[:, :3]) + np.cross(p, w)
-    return np.concatenate([v, w], axis=1)
-
-
-def tool_jacobian(twists, TH, home):
-    """Jacobian (M, 6, n_all) of the tool origin's velocity and the tool's angular velocity, base axes,
-    with respect to every joint of the chain (mimic ones included) at joint values TH (M, n_all)."""
-    twists = np.asarray(twists, dtype=float)
-    TH = np.asarray(TH, dtype=float)
-    M, n = TH.shape
-    g = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-    J = np.zeros((M, 6, n))
-    for i in range(n):
-        J[:, :, i] = _adjoint_apply(g, np.broadcast_to(twists[i], (M, 6)))
-        g = g @ twist_exp_batch(twists[i], TH[:, i])
-    p = (g @ np.asarray(home, dtype=float))[:, :3, 3]
-    # space twist (v, w) moves the point p at v + w x p
-    J[:, :3, :] += np.cross(J[:, 3:, :], p[:, :, None], axisa=1, axisb=1, axisc=1)
-    return J
-
-
 def jacobian(Q, *, twists, A, b, home, scale: float, target: str = "pose") -> np.ndarray:
     """The size-free Jacobian of each row of ``Q`` (k, n): (k, r, n), r = 6 (3 for position or
-    orientation targets); see :func:`sigma_min`."""
+    orientation targets); ``subproblems.conditioning.tool_jacobian`` (virtual joints at 0) restricted to
+    the returned joints and to the rows the target constrains.  ``scale=1`` gives the plain Jacobian of
+    the tool origin's velocity and the tool's angular velocity."""
     Q = np.asarray(Q, dtype=float)
-    A, b = np.asarray(A, dtype=float), np.asarray(b, dtype=float)
+    A = np.asarray(A, dtype=float)
     n = Q.shape[1]
     full = np.concatenate([Q, np.zeros((len(Q), A.shape[1] - n))], axis=1)
-    TH = full @ A.T + b
-    J = tool_jacobian(twists, TH, home) @ A[:, :n]  # chain rule through the couplings
-    J[:, :3, :] /= scale
-    # a prismatic joint's value counts in units of the robot's size (as in distance): its column * scale
-    prismatic = ~np.abs(np.asarray(twists, dtype=float)[:, 3:]).any(axis=1)
-    for k in range(n):
-        if prismatic[int(np.argmax(A[:, k] != 0))]:
-            J[:, :, k] *= scale
+    J = conditioning.tool_jacobian(twists, A, b, home, full, scale)[:, :, :n]
     if target == "position":
         return J[:, :3, :]
     if target == "orientation":
@@ -250,8 +220,7 @@ def sigma_min(Q, *, twists, A, b, home, scale: float, target: str = "pose") -> n
     min(rows, n) singular values is 0 at a singular configuration and of order 1 for a
     well-conditioned one; it does not depend on where the base frame is put or on the length unit.
 
-    The same size-free Jacobian as ``subproblems/conditioning.py`` (the ``sing`` helper's, written in
-    parallel), plus the choice of the rows the target constrains; one can call the other once merged.
+    ``subproblems.conditioning.sigma_min`` of the returned joints, with the rows the target constrains.
 
     >>> import numpy as np
     >>> tw = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])   # planar 2R, links 1 and 1

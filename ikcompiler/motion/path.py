@@ -221,7 +221,6 @@ def continue_branch(module, q, T, hold=(), iters: int = 30):
     if module.TARGET not in ("pose", "position", "orientation"):
         return None
     q = np.array(q, dtype=float)
-    n = len(q)
     rows = {"pose": slice(0, 6), "position": slice(0, 3), "orientation": slice(3, 6)}[module.TARGET]
     best = None
     for _ in range(iters):
@@ -232,8 +231,8 @@ def continue_branch(module, q, T, hold=(), iters: int = 30):
             if err <= 1e-12 * module.SCALE:
                 break
         e = np.concatenate([T[:3, 3] - G[:3, 3], rotation_log(T[:3, :3] @ G[:3, :3].T)])[rows]
-        full = np.concatenate([q, np.zeros(module._A.shape[1] - n)]) @ module._A.T + module._B
-        J = (select.tool_jacobian(module._TWISTS, full[None], module._HOME) @ module._A[:, :n])[0][rows]
+        J = select.jacobian(q[None], twists=module._TWISTS, A=module._A, b=module._B, home=module._HOME,
+                            scale=1.0)[0][rows]
         J[:, list(hold)] = 0.0
         dq = np.linalg.lstsq(J, e, rcond=1e-10)[0]
         big = np.abs(dq).max()
