@@ -339,7 +339,8 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
-            err[k] = ikc_newton(rb, g, w, (flag & IKC_FAMILY) ? 8 : 3);
+            /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
+            err[k] = ikc_newton(rb, g, w, 15);
             if (err[k] != err[k]) return IKC_PYTHON;
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }

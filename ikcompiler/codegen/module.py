@@ -354,9 +354,15 @@ def _complete(TH, owner, ls, cont, goals, limits):
     if len(TH):
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
         err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
+        # At a double root Newton converges only linearly (the residual falls about 4x a step): rows
+        # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
-        if near.any():
+        for _ in range(5):
+            if not near.any():
+                break
             TH[near] = _newton(TH[near], goals[owner[near]], 3)
+            err[near] = _error(_rt.fk_batch(_TWISTS, TH[near], _HOME), goals[owner[near]])
+            near &= err > TOLERANCE * SCALE
         if limits:
             TH = _clamped_onto_limits(TH, owner, goals)
     return _rt.finish(TH, owner, ls, len(goals), twists=_TWISTS, kinds=_KINDS, home=_HOME,
@@ -538,6 +544,7 @@ def _fast_one(T, free, limits, native=True):
             return found
     rows = _python_one(T, free, limits)
     if rows is None:
+        _targets(np.asarray(T, dtype=float)[None])  # one invalid target raises (a batch marks it instead)
         return None
     q = np.array([r[2] for r in rows], dtype=float).reshape(len(rows), len(JOINT_NAMES))
     ls = np.array([r[0] for r in rows], dtype=bool)
