@@ -225,7 +225,8 @@ def _check_targets(Ts):
     Ts = np.asarray(Ts, dtype=float)
     if TARGET == "orientation":
         if Ts.ndim < 2 or Ts.shape[-2:] != (3, 3):
-            raise InvalidTargetError(f"an orientation target is a 3x3 rotation or (N, 3, 3); got shape {Ts.shape}")
+            raise InvalidTargetError(
+                f"an orientation target is a 3x3 rotation or (N, 3, 3); got shape {Ts.shape}")
         goals = np.broadcast_to(np.eye(4), (Ts.reshape(-1, 3, 3).shape[0], 4, 4)).copy()
         goals[:, :3, :3] = Ts.reshape(-1, 3, 3)
     elif TARGET == "position":
@@ -270,7 +271,7 @@ def _targets(Ts):
     goals, Td, reasons = _check_targets(Ts)
     bad = np.nonzero(reasons != "")[0]
     if len(bad):
-        where = "target" if len(goals) == 1 else f"target {bad[0]} (of {len(goals)}; invalid_reasons() lists all)"
+        where = "target" if len(goals) == 1 else f"target {bad[0]} of {len(goals)} (see invalid_reasons())"
         raise InvalidTargetError(f"{where} {reasons[bad[0]]}")
     return goals, Td
 
@@ -377,7 +378,8 @@ def _clamped_onto_limits(TH, owner, goals):
     held), so that the row as returned is exact or flagged, never outside its limits."""
     ind = list(_INDEPENDENT)
     ok = ~np.isnan(TH).any(axis=1)
-    Qr, _, out, clamped = _fk.represent(np.nan_to_num(TH[:, ind]), JOINT_TYPES, LOWER, UPPER, True, clamps=True)
+    Qr, _, out, clamped = _fk.represent(np.nan_to_num(TH[:, ind]), JOINT_TYPES, LOWER, UPPER, True,
+                                        clamps=True)
     rows = ok & ~out & clamped.any(axis=1)
     if not rows.any():
         return TH
