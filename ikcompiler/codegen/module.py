@@ -363,7 +363,7 @@ def _complete(TH, owner, ls, cont, goals, limits):
                 break
             TH[near] = _newton(TH[near], goals[owner[near]], 3)
             err[near] = _error(_rt.fk_batch(_TWISTS, TH[near], _HOME), goals[owner[near]])
-            near &= err > TOLERANCE * SCALE
+            near &= err > 1e-3 * TOLERANCE * SCALE  # as the C finish: on to well inside the precision
         if limits:
             TH = _clamped_onto_limits(TH, owner, goals)
     return _rt.finish(TH, owner, ls, len(goals), twists=_TWISTS, kinds=_KINDS, home=_HOME,
