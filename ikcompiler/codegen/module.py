@@ -24,7 +24,7 @@ Derivation:
 
 API: ``solve(T, *free)`` -> (k, n) every solution; ``solve_batch(Ts, *free)`` -> (Q, valid);
 ``solve_info(T, *free)`` -> (q, residual, ls) including least-squares rows; ``fk(q)`` -> 4x4;
-``invalid_reasons(Ts)`` -> {index: reason} of the poses a batch left empty.  Exact rows reproduce the
+``invalid_reasons(Ts)`` -> {{index: reason}} of the poses a batch left empty.  Exact rows reproduce the
 target to TOLERANCE of SCALE (rotation: Frobenius) and lie inside the limits as returned (docs/finish.md).
 """
 {imports}
