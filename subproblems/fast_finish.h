@@ -558,7 +558,9 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
             CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0);  /* plain steps, as the Python search */
-            CF[a] = 0;
+            /* merged within IKC_SPLIT_ROOT, as the Python search: two seeds of one double root stop on
+             * its flat valley up to ~1e-7 apart */
+            CF[a] = IKC_TANGENT_ROOT;
         }
         status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
         if (status < 0) status = IKC_PYTHON;

@@ -369,6 +369,7 @@ def finish(
     A=None,
     b=None,
     vary=None,
+    dedupe=None,
 ):
     """Check every candidate against its target, represent, remove duplicates, pack into slots.
 
@@ -380,7 +381,9 @@ def finish(
     :func:`subproblems.fast.represent` (inside the limits as returned), and the error of each row is
     measured on exactly those values: with ``A, b, vary`` (all joints = A q_vary + b) the other joints
     are rebuilt from them first.  A row is exact when its error is at most ``tol * scale``; exact rows
-    come first in each slot row.
+    come first in each slot row.  ``dedupe``: the joint distance within which two rows of a target are
+    one (default 1e-9 of max(1, scale); the search fallbacks pass ``fast.SPLIT_ROOT``: Newton from two
+    seeds of one double root stops on a flat valley up to ~1e-7 apart).
     """
     dof = len(independent)
     Q = np.zeros((N, slots, dof))
@@ -422,7 +425,7 @@ def finish(
     diff = cand[:, :, None, :] - cand[:, None, :, :]
     for c, k in enumerate(ind_kinds):
         diff[..., c] = angle_distance(diff[..., c], k == "R")
-    same = np.abs(diff).max(axis=3) <= 1e-9 * max(1.0, scale)
+    same = np.abs(diff).max(axis=3) <= (1e-9 * max(1.0, scale) if dedupe is None else dedupe)
     earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
     dup = np.any(same & earlier & cval[:, None, :], axis=2)
     keep = cval & ~dup

@@ -371,7 +371,8 @@ def _complete(TH, owner, ls, cont, goals, limits):
     return _rt.finish(TH, owner, ls, len(goals), twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
                       slots=MAX_SOLUTIONS, error=_error, cont=cont,
-                      limits=(LOWER, UPPER) if limits else None, A=_A, b=_B, vary=_VARY)
+                      limits=(LOWER, UPPER) if limits else None, A=_A, b=_B, vary=_VARY,
+                      dedupe=_fk.SPLIT_ROOT if _SEARCH or METHOD == "numerical" else None)
 
 
 def _clamped_onto_limits(TH, owner, goals):
