@@ -11,7 +11,7 @@ Both families have two scalar equations in ``(x, y)`` (the values of joints 1 an
   ``x``, and the squared norm of a circle point is linear in ``(1, cos, sin)`` (``|b| = |e|, b.e = 0``).
 * H (``h_k^T g1(x) g2(y) p_k = d_k``): linear in ``Y`` and in the rotated normal ``g1(x)^-T h_k``.
 
-Elimination (one unknown at a time, DESIGN.md section 4 notes):
+Elimination (one unknown at a time, docs/design.md section 4 notes):
 
 * a revolute unknown ``x`` is eliminated by Cramer's rule: each equation reads
   ``alpha_k cos x + beta_k sin x = g_k`` with coefficients polynomial in ``y``; ``cos x = Nc / D``,

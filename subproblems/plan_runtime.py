@@ -2,7 +2,7 @@
 
 This is the small runtime that generated solver modules and the compiler's own checks share.  A plan is
 a list of steps (plain dicts, written out literally in each generated module).  Each step reads the
-joints solved so far, rewrites the POE equation with the rules of DESIGN.md section 3, calls one
+joints solved so far, rewrites the POE equation with the rules of docs/design.md section 3, calls one
 canonical subproblem through :func:`subproblems.solve_batch`, and branches on its solutions.
 
 Equation bookkeeping (rules 5 and 7): with the solved joints known, every factor of

@@ -16,7 +16,7 @@ from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.inputs.zoo import zoo_names
 from ikcompiler.verify import verify
 
-# Robots whose chain must be closed form (DESIGN.md, issue 4 coverage).
+# Robots whose chain must be closed form (docs/design.md section 5, issue 4 coverage).
 CLOSED_FORM = ["rhino", "puma560"]
 
 

@@ -1,4 +1,5 @@
-"""Turn a :class:`~ikcompiler.plan.Plan` and its chain into the source of a solver module (DESIGN.md §6).
+"""Turn a :class:`~ikcompiler.plan.Plan` and its chain into the source of a solver module
+(docs/design.md section 6).
 
 The module folds the robot's constants in, writes the derivation as comments beside each step, and
 imports only the standard library, numpy and ``subproblems``.  The same robot always gives the same
