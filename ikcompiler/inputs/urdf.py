@@ -12,7 +12,9 @@ Mapping (DESIGN.md section 2):
   the joint frame's origin; a prismatic joint gives ``v = R a``; fixed joints only move the frames;
 - limits come from ``<limit>``; a continuous joint gets (-pi, pi] (the IK wraps angles there); a
   revolute joint without ``<limit>`` gets (-pi, pi] and a prismatic one no bounds, each with a note;
-- ``<mimic joint= multiplier= offset=>`` becomes a :class:`Coupling`; the master must be in the chain;
+- ``<mimic joint= multiplier= offset=>`` becomes a :class:`Coupling`.  A master outside the chain (a
+  gripper's finger pad chain whose joints all follow ``finger_joint``) becomes the chain's independent
+  joint under its own name: see :func:`_external_masters`;
 - planar and floating joints inside the chain are rejected (:class:`UnsupportedJointError`).
 
 Default base: the root link.  Default tip: the only leaf link below the base reached through at least
@@ -28,6 +30,7 @@ import numpy as np
 
 from ikcompiler.errors import ChainSelectionError, RobotInputError, UnsupportedJointError
 from ikcompiler.model import Chain, Coupling, Joint
+from subproblems.screw import transform_twist, twist_exp
 
 MOVING = {"revolute": "R", "continuous": "R", "prismatic": "T"}
 KNOWN_TYPES = {"revolute", "continuous", "prismatic", "fixed", "planar", "floating"}
@@ -216,17 +219,7 @@ def load_urdf(path: Path | str, *, base: str | None = None, tip: str | None = No
                     0.0 if j.mimic.offset is None else float(j.mimic.offset),
                 )
             )
-    in_chain = {jt.name for jt in joints}
-    for c in couplings:
-        if c.master not in in_chain:
-            j = joint_by_name[c.joint]
-            if c.master in joint_by_name:
-                m = joint_by_name[c.master]
-                what = "a fixed joint" if m.type == "fixed" else f"outside the chain {base!r} -> {tip!r}"
-                msg = f"joint {c.joint!r} mimics joint {c.master!r} (line {lines.get(c.master, '?')}), {what}"
-            else:
-                msg = f"joint {c.joint!r} mimics joint {c.master!r}, which does not exist"
-            raise ChainSelectionError(msg, source=src, where=where(j))
+    joints, couplings, g = _external_masters(joints, couplings, g, joint_by_name, lines, notes, src)
     if not joints:
         raise ChainSelectionError(f"no moving joint between {base!r} and {tip!r}", source=src)
     return Chain(
@@ -276,3 +269,101 @@ def _default_tip(base: str, children: dict[str, list], src: str) -> str:
         f"the tree below {base!r} has {len(candidates)} tips; name one (--tip): {', '.join(candidates)}",
         source=src,
     )
+
+
+def _follow_mimics(name: str, joint_by_name: dict, in_chain: set[str], src: str, where: str):
+    """``(master, a, b)`` with ``th = a * th[master] + b``, following mimics outside the chain until a
+    joint of the chain or a joint that mimics nothing (the external master) is reached."""
+    a, b, seen = 1.0, 0.0, set()
+    while name not in in_chain:
+        j = joint_by_name.get(name)
+        if j is None:
+            raise ChainSelectionError(f"mimics joint {name!r}, which does not exist", source=src, where=where)
+        if j.type not in MOVING:
+            raise ChainSelectionError(
+                f"mimics joint {name!r}, a {j.type} joint: a master must be revolute, continuous or "
+                "prismatic",
+                source=src,
+                where=where,
+            )
+        if j.mimic is None or name in seen:
+            if name in seen:
+                raise ChainSelectionError(f"mimic cycle through joint {name!r}", source=src, where=where)
+            break
+        seen.add(name)
+        m_a = 1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier)
+        m_b = 0.0 if j.mimic.offset is None else float(j.mimic.offset)
+        a, b, name = a * m_a, a * m_b + b, j.mimic.joint
+    return name, a, b
+
+
+def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src):
+    """Make every master joint outside the chain the chain's independent joint, under its own name.
+
+    Take the first chain joint j1 driven by an external master M: ``th1 = a1 q + b1`` with ``a1 = +-1``
+    (a unit twist cannot be scaled).  Then ``exp(xi1 th1) = exp(a1 xi1 q) E`` with ``E = exp(xi1 b1)``, and
+    carrying E past the later joints (``E exp(xi th) = exp(Ad_E xi th) E``) gives the chain joint M with
+    twist ``a1 xi1``, every later twist ``Ad_E xi`` and the home pose ``E g_st(0)``; the other joints
+    driven by M couple to it with their own (a, b).  M's limits are its own, narrowed to those of j1.
+
+    >>> from ikcompiler.model import Coupling, Joint
+    >>> from subproblems.screw import revolute_twist
+    >>> j = Joint("pad", "R", revolute_twist([0, 0, 1], [0, 0, 0]), -1.0, 0.0)
+    >>> class M:  # a stand-in for yourdfpy's joint: the external master "finger_joint"
+    ...     type, mimic, limit = "revolute", None, type("L", (), {"lower": 0.0, "upper": 0.8})()
+    >>> out, cs, _ = _external_masters([j], [Coupling("pad", "finger_joint", -1.0, 0.0)], np.eye(4),
+    ...                                {"finger_joint": M}, {}, [], "g.urdf")
+    >>> out[0].name, out[0].lower, out[0].upper, out[0].axis.tolist(), cs
+    ('finger_joint', 0.0, 0.8, [-0.0, -0.0, -1.0], [])
+    """
+    in_chain = {jt.name for jt in joints}
+    resolved: dict[str, tuple[str, float, float]] = {}
+    for c in couplings:
+        where = f"line {lines.get(c.joint, '?')}, joint {c.joint!r}"
+        m, a, b = _follow_mimics(c.master, joint_by_name, in_chain, src, where)
+        resolved[c.joint] = (m, c.a * a, c.a * b + c.b)
+    external = [m for m, _, _ in resolved.values() if m not in in_chain]
+    if not external:
+        return joints, [Coupling(j, m, a, b) for j, (m, a, b) in resolved.items()], home
+    joints, home = list(joints), np.asarray(home, dtype=float)
+    for master in dict.fromkeys(external):  # each external master once, in order of first use
+        driven = [i for i, jt in enumerate(joints) if resolved.get(jt.name, ("",))[0] == master]
+        unit = [i for i in driven if abs(abs(resolved[joints[i].name][1]) - 1.0) <= 1e-12]
+        if not unit:
+            names = ", ".join(
+                f"{joints[i].name!r} (multiplier {resolved[joints[i].name][1]:g})" for i in driven
+            )
+            raise ChainSelectionError(
+                f"the joints {names} all mimic joint {master!r} outside the chain with a multiplier other "
+                "than +-1: none of them can stand for the master; choose a chain through the master",
+                source=src,
+                where=f"line {lines.get(master, '?')}, joint {master!r}",
+            )
+        i1 = unit[0]
+        j1 = joints[i1]
+        _, a1, b1 = resolved.pop(j1.name)
+        for name, (m, a, b) in list(resolved.items()):  # joints that mimic j1 itself now follow M
+            if m == j1.name:
+                resolved[name] = (master, a * a1, a * b1 + b)
+        m_joint = joint_by_name[master]
+        lower, upper = _limits(m_joint, j1.kind, notes)
+        lo1, hi1 = sorted(((j1.lower - b1) / a1, (j1.upper - b1) / a1))
+        lower, upper = max(lower, lo1), min(upper, hi1)
+        if lower > upper:
+            raise ChainSelectionError(
+                f"joint {j1.name!r} = {a1:g} * {master!r} + {b1:g} has no value inside both joints' limits",
+                source=src,
+                where=f"line {lines.get(j1.name, '?')}, joint {j1.name!r}",
+            )
+        E = twist_exp(j1.twist, b1)
+        joints[i1] = Joint(master, j1.kind, a1 * j1.twist, lower, upper)
+        for k in range(i1 + 1, len(joints)):
+            jt = joints[k]
+            joints[k] = Joint(jt.name, jt.kind, transform_twist(E, jt.twist), jt.lower, jt.upper)
+        home = E @ home
+        in_chain.add(master)
+        notes.append(
+            f"joint {j1.name!r} follows joint {master!r} outside the chain ({j1.name} = {a1:g} * {master} "
+            f"+ {b1:g}): {master!r} is the chain's independent joint, limits [{lower:g}, {upper:g}]"
+        )
+    return joints, [Coupling(j, m, a, b) for j, (m, a, b) in resolved.items()], home
