@@ -10,7 +10,7 @@ import pytest
 
 from ikcompiler import load_robot
 from ikcompiler.compiler import compile_robot
-from ikcompiler.errors import ChainSelectionError
+from ikcompiler.errors import ChainSelectionError, RobotInputError
 from ikcompiler.verify import verify
 
 GRIPPER = Path(__file__).parent / "data" / "external_mimic_gripper.urdf"
@@ -107,3 +107,17 @@ def test_master_chain_unchanged_and_bad_masters_still_refused(tmp_path):
     bad.write_text(text)
     with pytest.raises(ChainSelectionError, match="multiplier other than"):
         load_robot(bad, tip="right_pad")
+
+
+def test_harmless_xml_errors_are_tolerated_and_others_are_not(tmp_path):
+    """airo-models' Robotiq 2F-85 carries ``drake:`` elements without the namespace declared, and
+    pybullet's files declare XML version 0.0: both load; a broken tag still raises with its line."""
+    text = GRIPPER.read_text().replace('<?xml version="1.0"?>', '<?xml version="0.0"?>')
+    text = text.replace("</robot>", '<drake:collision_filter_group name="g"/>\n</robot>')
+    path = tmp_path / "lenient.urdf"
+    path.write_text(text)
+    assert load_robot(path, tip="right_pad").independent_names == ("finger_joint",)
+    path.write_text(text.replace("</robot>", "<link name='x'>\n</robot>"))
+    with pytest.raises(RobotInputError, match="malformed XML") as err:
+        load_robot(path, tip="right_pad")
+    assert "line" in str(err.value)

@@ -46,21 +46,41 @@ def _floats(text: str | None, n: int) -> bool:
         return False
 
 
-def _strict_parse(path: Path):
-    """Parse the XML with lxml (strict) and check every joint element; returns the root element."""
+# Errors libxml2 reports that leave the URDF content intact: a prefix such as ``drake:`` on an element
+# URDF ignores anyway (airo-models' Robotiq 2F-85), and an XML declaration with version "0.0" (pybullet's
+# data).  Every other error is fatal.
+HARMLESS_XML_ERRORS = {"NS_ERR_UNDEFINED_NAMESPACE", "ERR_UNKNOWN_VERSION"}
+
+
+def parse_xml(path: Path | str):
+    """The root element of an XML file, parsed strictly except for :data:`HARMLESS_XML_ERRORS`;
+    malformed XML raises :class:`RobotInputError` with the file and line."""
     from lxml import etree
 
     src = str(path)
+    parser = etree.XMLParser(remove_blank_text=True, resolve_entities=False, recover=True)
     try:
-        tree = etree.parse(src, etree.XMLParser(remove_blank_text=True, resolve_entities=False))
-    except etree.XMLSyntaxError as exc:
+        tree = etree.parse(src, parser)
+    except etree.XMLSyntaxError as exc:  # even recovery failed
         line = exc.lineno if exc.lineno else None
         raise RobotInputError(
             f"malformed XML: {exc.msg}", source=src, where=f"line {line}" if line else None
         ) from exc
     except OSError as exc:
         raise RobotInputError(f"cannot read the file ({exc})", source=src) from exc
+    for err in parser.error_log:
+        if err.type_name not in HARMLESS_XML_ERRORS:
+            raise RobotInputError(f"malformed XML: {err.message}", source=src, where=f"line {err.line}")
     root = tree.getroot()
+    if root is None:
+        raise RobotInputError("malformed XML: no root element", source=src)
+    return root
+
+
+def _strict_parse(path: Path):
+    """Parse the XML with lxml (strict) and check every joint element; returns the root element."""
+    src = str(path)
+    root = parse_xml(path)
     if root.tag != "robot":
         raise RobotInputError(
             f"the root element is <{root.tag}>, a URDF needs <robot>",
