@@ -20,6 +20,7 @@ import argparse
 import collections
 import math
 import platform
+import re
 import resource
 import signal
 import statistics
@@ -193,6 +194,23 @@ def _summary(rows: list[Row]) -> list[str]:
     return out
 
 
+def file_defects(cat) -> list[str]:
+    """Markdown lines: every chain that does not load (a defect of the file, or a joint the compiler
+    cannot model) with the loader's message, and every file skipped as unreadable or unexpandable."""
+    lines = []
+    for e in cat.chains:
+        try:
+            e.load()
+        except robotdb.IkcError as exc:
+            msg = str(exc).replace(str(e.urdf), e.rel.rsplit("/", 1)[-1]).splitlines()[0][:240]
+            lines.append(f"- {e.package}: `{e.rel}` chain {e.base} -> {e.tip}: {type(exc).__name__}: {msg}")
+    for s in cat.skipped:
+        if "independent joints" not in s.reason:
+            reason = re.sub(r"/\\S*/([^/\\s]+:)", r"\\1", s.reason)  # an absolute path: the file name
+            lines.append(f"- {s.package}: `{s.rel}`: {reason[:240]}")
+    return lines
+
+
 def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
     flags = " --no-perturb" if args.no_perturb else " --perturb-only" if args.perturb_only else ""
     if args.out != OUT:
@@ -221,6 +239,13 @@ def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
         "## Every chain",
         "",
         *_table(rows),
+        "",
+        "## Defects found in the files",
+        "",
+        "Chains that do not load and files that cannot be read or expanded, with the message (a missing",
+        "mimic master, a limit with lower > upper, an unexpanded `$(optenv ...)`, malformed XML):",
+        "",
+        *(args.defects or ["- none"]),
         "",
         "## Skipped files and chains",
         "",
@@ -257,6 +282,7 @@ def main(argv=None) -> int:
     started = time.time()
     cat = robotdb.discover(progress=lambda m: print(m, file=sys.stderr))
     entries = [e for e in cat.chains if args.only in e.ident]
+    args.defects = file_defects(cat)
     work = [] if args.perturb_only else [(e, 0.0) for e in entries]
     if not args.no_perturb:
         arms = [e for e in entries if _is_arm(e)]
