@@ -206,7 +206,7 @@ def file_defects(cat) -> list[str]:
             lines.append(f"- {e.package}: `{e.rel}` chain {e.base} -> {e.tip}: {type(exc).__name__}: {msg}")
     for s in cat.skipped:
         if "independent joints" not in s.reason:
-            reason = re.sub(r"/\\S*/([^/\\s]+:)", r"\\1", s.reason)  # an absolute path: the file name
+            reason = re.sub(r"/\S*/([^/\s]+:)", r"\1", s.reason)  # an absolute path: the file name
             lines.append(f"- {s.package}: `{s.rel}`: {reason[:240]}")
     return lines
 
