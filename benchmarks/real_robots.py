@@ -213,6 +213,7 @@ def file_defects(cat) -> list[str]:
 
 def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
     flags = " --no-perturb" if args.no_perturb else " --perturb-only" if args.perturb_only else ""
+    flags += " --external-mimic" if args.external_mimic else ""
     if args.out != OUT:
         flags += f" --out {args.out.relative_to(ROOT) if args.out.is_relative_to(ROOT) else args.out}"
     lines = [
@@ -263,6 +264,13 @@ def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
     args.out.write_text("\n".join(lines))
 
 
+def _external_master(entry) -> bool:
+    try:
+        return any("is the chain's independent joint" in n for n in entry.load().notes)
+    except robotdb.IkcError:
+        return False
+
+
 def _is_arm(entry) -> bool:
     return entry.kind in ("arm", "limb") and entry.dof >= 5
 
@@ -273,6 +281,9 @@ def main(argv=None) -> int:
     ap.add_argument("--only", default="", help="only chains whose package:file:tip contains this")
     ap.add_argument("--no-perturb", action="store_true", help="skip the perturbed pass")
     ap.add_argument("--perturb-only", action="store_true", help="only the perturbed pass")
+    ap.add_argument(
+        "--external-mimic", action="store_true", help="only chains driven by a master joint outside them"
+    )
     ap.add_argument("--out", type=Path, default=OUT, help=f"results file (default {OUT.relative_to(ROOT)})")
     ap.add_argument("--memory-gb", type=float, default=8.0, help="address-space limit of the run")
     args = ap.parse_args(argv)
@@ -282,6 +293,8 @@ def main(argv=None) -> int:
     started = time.time()
     cat = robotdb.discover(progress=lambda m: print(m, file=sys.stderr))
     entries = [e for e in cat.chains if args.only in e.ident]
+    if args.external_mimic:
+        entries = [e for e in entries if _external_master(e)]
     args.defects = file_defects(cat)
     work = [] if args.perturb_only else [(e, 0.0) for e in entries]
     if not args.no_perturb:

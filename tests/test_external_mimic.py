@@ -65,8 +65,9 @@ def test_external_master_is_the_chain_joint():
     chain = load_robot(GRIPPER, tip="right_pad")
     assert chain.independent_names == ("finger_joint",)
     assert chain.joint_types == "RRT"
-    # limits: finger_joint's own [0, 0.8] narrowed by right_knuckle = 0.1 - q in [-0.8, 0.1] -> q in [0, 0.8]
+    # limits: finger_joint's own [0, 0.8] (right_knuckle = 0.1 - q in [-0.8, 0.1] allows q in [0, 0.9])
     assert (chain.lower[0], chain.upper[0]) == (0.0, 0.8)
+    assert not any("are used" in n for n in chain.notes)
     assert any("finger_joint" in n and "right_knuckle_joint" in n for n in chain.notes)
     for q in (0.0, 0.13, 0.4, 0.8):
         assert np.allclose(chain.fk([q]), _tree_pose(q, "right_pad"), atol=1e-12), q
@@ -121,3 +122,14 @@ def test_harmless_xml_errors_are_tolerated_and_others_are_not(tmp_path):
     with pytest.raises(RobotInputError, match="malformed XML") as err:
         load_robot(path, tip="right_pad")
     assert "line" in str(err.value)
+
+
+def test_follower_limits_that_disagree_with_the_master_are_noted(tmp_path):
+    """PR2's gripper gives the follower the master's range although the multiplier is -1: the master's
+    own limits are used (as for every mimic joint) and the disagreement is noted."""
+    text = GRIPPER.read_text().replace('lower="-0.8" upper="0.1"', 'lower="0" upper="0.8"')
+    path = tmp_path / "pr2like.urdf"
+    path.write_text(text)
+    chain = load_robot(path, tip="right_pad")
+    assert (chain.lower[0], chain.upper[0]) == (0.0, 0.8)
+    assert any("'right_knuckle_joint' allow 'finger_joint' in [-0.7, 0.1] only" in n for n in chain.notes)

@@ -324,11 +324,12 @@ def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src)
     (a unit twist cannot be scaled).  Then ``exp(xi1 th1) = exp(a1 xi1 q) E`` with ``E = exp(xi1 b1)``, and
     carrying E past the later joints (``E exp(xi th) = exp(Ad_E xi th) E``) gives the chain joint M with
     twist ``a1 xi1``, every later twist ``Ad_E xi`` and the home pose ``E g_st(0)``; the other joints
-    driven by M couple to it with their own (a, b).  M's limits are its own, narrowed to those of j1.
+    driven by M couple to it with their own (a, b).  M's limits are its own (a follower's are not
+    imposed, as for any mimic joint; a disagreement is noted).
 
     >>> from ikcompiler.model import Coupling, Joint
     >>> from subproblems.screw import revolute_twist
-    >>> j = Joint("pad", "R", revolute_twist([0, 0, 1], [0, 0, 0]), -1.0, 0.0)
+    >>> j = Joint("pad", "R", revolute_twist([0, 0, 1], [0, 0, 0]), -0.8, 0.0)
     >>> class M:  # a stand-in for yourdfpy's joint: the external master "finger_joint"
     ...     type, mimic, limit = "revolute", None, type("L", (), {"lower": 0.0, "upper": 0.8})()
     >>> out, cs, _ = _external_masters([j], [Coupling("pad", "finger_joint", -1.0, 0.0)], np.eye(4),
@@ -365,15 +366,14 @@ def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src)
         for name, (m, a, b) in list(resolved.items()):  # joints that mimic j1 itself now follow M
             if m == j1.name:
                 resolved[name] = (master, a * a1, a * b1 + b)
-        m_joint = joint_by_name[master]
-        lower, upper = _limits(m_joint, j1.kind, notes)
+        lower, upper = _limits(joint_by_name[master], j1.kind, notes)
         lo1, hi1 = sorted(((j1.lower - b1) / a1, (j1.upper - b1) / a1))
-        lower, upper = max(lower, lo1), min(upper, hi1)
-        if lower > upper:
-            raise ChainSelectionError(
-                f"joint {j1.name!r} = {a1:g} * {master!r} + {b1:g} has no value inside both joints' limits",
-                source=src,
-                where=f"line {lines.get(j1.name, '?')}, joint {j1.name!r}",
+        if lo1 > lower + 1e-12 or hi1 < upper - 1e-12:
+            # as for every mimic joint, the follower's own limits are not imposed (files often give a
+            # follower the master's range whatever the multiplier, PR2's gripper: [0, 0.548] at -1)
+            notes.append(
+                f"the limits of joint {j1.name!r} allow {master!r} in [{lo1:g}, {hi1:g}] only; "
+                f"{master!r}'s own limits [{lower:g}, {upper:g}] are used"
             )
         E = twist_exp(j1.twist, b1)
         joints[i1] = Joint(master, j1.kind, a1 * j1.twist, lower, upper)
