@@ -139,6 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)
+    __import__("ikcompiler.analysis.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc singularities
     return parser
 
 
