@@ -1,7 +1,7 @@
 """Jacobians of a POE chain vectorised over configurations, and how far each configuration is from singular.
 
 Plain numpy, so that generated solver modules (which may import only numpy and ``subproblems``) can flag
-solutions at or near a singular configuration.  Conventions (see docs/design.md, section on Jacobians):
+solutions at or near a singular configuration.  Conventions (docs/design.md section 16, "Jacobians"):
 
 * ``twists`` (n, 6): the home twists ``(v, w)`` of every joint in chain order, coupled joints included;
 * ``A`` (n, dof), ``b`` (n,): the coupling map ``th_full = A @ q + b`` (identity and zero without mimics);
