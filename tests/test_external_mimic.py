@@ -73,17 +73,7 @@ def test_external_master_is_the_chain_joint():
         assert np.allclose(chain.fk([q]), _tree_pose(q, "right_pad"), atol=1e-12), q
 
 
-POSITION_BUG = pytest.mark.xfail(
-    strict=True,
-    reason="compiler defect (measured 2026-12-01): a 1-DOF chain with couplings (RRT driven by one joint) "
-    "compiled for a position target returns rows whose FK misses the target (128 wrong of 328, up to 0.2 "
-    "of the size): the subset-of-equations plan is not checked against the whole target",
-)
-
-
-@pytest.mark.parametrize(
-    "target", ["pose", "position+direction", pytest.param("position", marks=POSITION_BUG)]
-)
+@pytest.mark.parametrize("target", ["pose", "position+direction", "position"])
 def test_external_master_chain_compiles_and_verifies(target):
     chain = load_robot(GRIPPER, tip="right_pad")
     module = compile_robot(chain, target=target)

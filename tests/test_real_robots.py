@@ -24,13 +24,7 @@ SAMPLE = [
     ("pybullet", "model.urdf", "lbr_iiwa_link_7"),  # KUKA iiwa 7R: one free joint
     ("example-robot-data", "allegro_left_hand.urdf", "link_3.0_tip"),  # 4-joint finger
 ]
-KNOWN_GAPS = {
-    "romeo.urdf:RFinger23Link": "compiler defect (measured 2026-12-01): a chain whose joints are all coupled "
-    "to one master (RRR, 1 independent joint) gets a plan that solves the coupled joints as if independent "
-    "(one subproblem in all three) and rows breaking the coupling pass the module's own check: 11 wrong of "
-    "41 rows on 30 special-angle poses, FK error up to 1.0 of the size (tests/test_external_mimic.py has "
-    "the same defect on a hand-made gripper, position target)",
-}
+KNOWN_GAPS: dict[str, str] = {}  # "file:tip" -> the measured reason of a strict xfail
 
 
 @pytest.fixture(scope="module")
