@@ -159,6 +159,7 @@ class _Arrangement:
 
     order: tuple[int, ...]  # original joint index at each position a..f
     sign: float  # +1: the chain as given; -1: its inverse (twists negated, target inverted)
+    conj: int  # the first `conj` joints are moved ahead of the rest: their axes are mapped by the target
     w: np.ndarray  # (6, 3) axis directions in arrangement order
     r: np.ndarray  # (6, 3) axis points
     A: np.ndarray  # (14, 3, 9) left side: quantity, (1, c_c, s_c), (1,c_d,s_d) x (1,c_e,s_e)
@@ -166,7 +167,10 @@ class _Arrangement:
     u: np.ndarray  # unit vector normal to w_f (reads th_f)
 
 
-def _arrangement(w, r, order, sign) -> _Arrangement:
+def _arrangement(w, r, sign, conj) -> _Arrangement:
+    """Joint order: the chain (sign +1) or its inverse (-1), its last ``conj`` joints moved ahead."""
+    base = list(range(6)) if sign > 0 else list(range(5, -1, -1))
+    order = base[6 - conj:] + base[:6 - conj]
     w = sign * w[list(order)]
     r = r[list(order)]
     th = np.stack(np.meshgrid(_GRID, _GRID, _GRID, indexing="ij"), axis=-1).reshape(27, 3)
@@ -177,7 +181,27 @@ def _arrangement(w, r, order, sign) -> _Arrangement:
     ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
     E = _inv(_exp(w[1], r[1], ab[:, 1])) @ _inv(_exp(w[0], r[0], ab[:, 0]))
     u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
-    return _Arrangement(tuple(order), sign, w, r, A, E, u / np.linalg.norm(u))
+    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u))
+
+
+def _axes(arr: _Arrangement, H):
+    """Axes (N, 6, 3) directions and points of the arrangement for targets H (N, 4, 4) of its chain:
+    a joint moved ahead of the others, ``X_j -> H X_j H^-1``, has its axis mapped by H."""
+    N = len(H)
+    W = np.broadcast_to(arr.w, (N, 6, 3)).copy()
+    R = np.broadcast_to(arr.r, (N, 6, 3)).copy()
+    for k in range(arr.conj):
+        W[:, k] = H[:, :3, :3] @ arr.w[k]
+        R[:, k] = np.einsum("nij,j->ni", H[:, :3, :3], arr.r[k]) + H[:, :3, 3]
+    return W, R
+
+
+def _grid_ab(W, R):
+    """X_b^-1 X_a^-1 (N, 9, 4, 4) on the (a, b) interpolation grid for per-target axes."""
+    ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
+    Xb = _exp(W[:, None, 1], R[:, None, 1], ab[None, :, 1])
+    Xa = _exp(W[:, None, 0], R[:, None, 0], ab[None, :, 0])
+    return _inv(Xb) @ _inv(Xa)
 
 
 class General6:
@@ -208,8 +232,7 @@ class General6:
         self.w, self.r = w, (r - self.center) / self._s
         self.twists = np.concatenate([-np.cross(w, r), w], axis=1)
         self.Mn = self._norm(self.home[None])[0]
-        self._arr = [_arrangement(self.w, self.r, range(6), 1.0),
-                     _arrangement(self.w, self.r, range(5, -1, -1), -1.0)]
+        self._arr = [_arrangement(self.w, self.r, sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
         self.arrangement = 0 if arrangement is None else int(arrangement)
         if arrangement is None:
             self.arrangement = self._choose()
@@ -243,23 +266,27 @@ class General6:
 
     # ------------------------------------------------------------------------------ elimination
     def _pencil(self, arr: _Arrangement, Gn):
-        """Per target: (A' (N, 14, 3, 9), pinv(B') (N, 8, 14), C (N, 6, 3, 9), rank ratio of B')."""
+        """Per target: (B's constant column (N, 14), pinv(B') (N, 8, 14), C (N, 6, 3, 9), rank ratio of B')."""
         Gn = Gn if arr.sign > 0 else _inv(Gn)
         y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
         m = Gn[:, :3, :3] @ arr.w[5]
-        p = np.einsum("kij,nj->nki", arr.E[:, :3, :3], y) + arr.E[None, :, :3, 3]
-        lv = np.einsum("kij,nj->nki", arr.E[:, :3, :3], m)
+        if arr.conj:
+            E = _grid_ab(*_axes(arr, Gn))
+            p = np.einsum("nkij,nj->nki", E[..., :3, :3], y) + E[..., :3, 3]
+            lv = np.einsum("nkij,nj->nki", E[..., :3, :3], m)
+        else:
+            p = np.einsum("kij,nj->nki", arr.E[:, :3, :3], y) + arr.E[None, :, :3, 3]
+            lv = np.einsum("kij,nj->nki", arr.E[:, :3, :3], m)
         B = np.einsum("kq,nqj->nkj", _INV9, _fourteen(p, lv))  # (N, 9 coeffs, 14)
         B = np.swapaxes(B, 1, 2)  # (N, 14, 9)
-        A = np.broadcast_to(arr.A, (len(Gn),) + arr.A.shape).copy()
-        A[:, :, 0, 0] -= B[:, :, 0]
         U, s, Vh = np.linalg.svd(B[:, :, 1:], full_matrices=True)
         Nl = U[:, :, 8:]  # (N, 14, 6)
-        C = np.einsum("nqe,nqtj->netj", Nl, A)
+        C = np.einsum("nqe,qtj->netj", Nl, arr.A)
+        C[:, :, 0, 0] -= np.einsum("nqe,nq->ne", Nl, B[:, :, 0])  # the right side's constant column
         with np.errstate(divide="ignore", invalid="ignore"):
             sinv = np.where(s > 1e-13 * s[:, :1], 1.0 / s, 0.0)
         pinv = np.einsum("nji,nj,nkj->nik", Vh, sinv, U[:, :, :8])
-        return A, pinv, C, s[:, -1] / s[:, 0]
+        return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
 
     @staticmethod
     def _matrices(C, delta):
@@ -279,7 +306,7 @@ class General6:
     def _candidates(self, arr: _Arrangement, Gn):
         """Candidate joint vectors (original order) and their owners from the eigenproblem."""
         N = len(Gn)
-        A, pinv, C, _ = self._pencil(arr, Gn)
+        B0, pinv, C, _ = self._pencil(arr, Gn)
         delta = np.full(N, SHIFTS[0])
         M = self._matrices(C, delta)
         good = _leading_ok(M[:, 2])
@@ -297,32 +324,33 @@ class General6:
         rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, 12, 24)
         with np.errstate(all="ignore"):
             K[:, 12:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(12), rhs)
-            K = np.nan_to_num(K)
-            lam, V = np.linalg.eig(K)
+            lam = np.linalg.eigvals(np.nan_to_num(K))
             th_c = delta[:, None] + 2 * np.arctan(lam)
         keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
         own, idx = np.nonzero(keep)
         th_c = th_c.real[own, idx]
-        v = V[own, :12, idx]
-        big = np.argmax(np.abs(v), axis=1)
-        v = (v / v[np.arange(len(v)), big][:, None]).real.reshape(-1, 4, 3)
+        if not len(own):  # no real root: the pose is unreachable
+            return np.zeros((0, 6)), own
+        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
         th_d = _read_ratio(v[:, :3, :], v[:, 1:, :])
         th_e = _read_ratio(v[:, :, :2], v[:, :, 1:])
         tc = np.stack([np.ones_like(th_c), np.cos(th_c), np.sin(th_c)], axis=1)
         ud = np.stack([np.ones_like(th_d), np.cos(th_d), np.sin(th_d)], axis=1)
         ue = np.stack([np.ones_like(th_e), np.cos(th_e), np.sin(th_e)], axis=1)
         u = (ud[:, :, None] * ue[:, None, :]).reshape(-1, 9)
-        rhs = np.einsum("nqtj,nt,nj->nq", A[own], tc, u)
+        rhs = np.einsum("qtj,nt->nqj", arr.A, tc)
+        rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
         mab = np.einsum("niq,nq->ni", pinv[own], rhs)
         Kab = np.concatenate([np.ones((len(mab), 1)), mab], axis=1).reshape(-1, 3, 3)
         th_a = np.arctan2(np.einsum("ni,ni->n", Kab[:, 2], Kab[:, 0]), np.einsum("ni,ni->n", Kab[:, 1], Kab[:, 0]))
         th_b = np.arctan2(np.einsum("ni,ni->n", Kab[:, :, 2], Kab[:, :, 0]),
                           np.einsum("ni,ni->n", Kab[:, :, 1], Kab[:, :, 0]))
         th = np.stack([th_a, th_b, th_c, th_d, th_e], axis=1)
+        Gk = Gn[own] if arr.sign > 0 else _inv(Gn[own])
+        W, R = _axes(arr, Gk) if arr.conj else (arr.w[None], arr.r[None])
         X = np.broadcast_to(np.eye(4), (len(th), 4, 4))
         for k in range(5):
-            X = X @ _exp(arr.w[k], arr.r[k], th[:, k])
-        Gk = Gn[own] if arr.sign > 0 else _inv(Gn[own])
+            X = X @ _exp(W[:, k], R[:, k], th[:, k])
         Rf = np.swapaxes(X[:, :3, :3], 1, 2) @ Gk[:, :3, :3]
         Ru = Rf @ arr.u
         th_f = np.arctan2(np.cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
@@ -353,7 +381,10 @@ class General6:
             e_rot = 0.5 * np.cross(np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)).sum(axis=1)
             e = np.concatenate([e_pos, e_rot], axis=1)
             with np.errstate(all="ignore"):
-                dq = np.einsum("nij,nj->ni", np.linalg.pinv(J, rcond=1e-13), e)
+                try:
+                    dq = np.linalg.solve(J, e[..., None])[..., 0]
+                except np.linalg.LinAlgError:  # an exactly singular Jacobian: least squares steps
+                    dq = np.einsum("nij,nj->ni", np.linalg.pinv(J, rcond=1e-13), e)
             step = np.abs(dq).max(axis=1)
             dq *= np.minimum(1.0, 0.5 / np.maximum(step, 1e-300))[:, None]  # a far candidate: bounded steps
             Q[idx] += np.nan_to_num(dq)
@@ -404,17 +435,17 @@ class General6:
         for k, arr in enumerate(self._arr):
             _, _, C, _ = self._pencil(arr, Gn)
             M = self._matrices(C, np.full(count, SHIFTS[0]))
-            x = 0.37
-            det = np.abs(np.linalg.det(M[:, 0] + x * M[:, 1] + x * x * M[:, 2]))
-            if np.median(det) < 1e-12:
-                why.append(f"order {arr.order}: the 12 x 12 pencil is singular (det M(x) = 0 for every x)")
+            x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
+            sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
+            if np.median(sv[:, -1] / sv[:, 0]) < 1e-10:
+                why.append(f"order {arr.order} ({arr.conj} moved ahead): the 12 x 12 pencil is singular")
                 continue
             b = self._solve_norm(Tn, k)
             d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
             hit = (np.where(b.valid, d, np.inf).min(axis=1) < 1e-6).sum()
             if hit == count:
                 return k
-            why.append(f"order {arr.order}: recovered {hit} of {count} sampled joint vectors")
+            why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {hit} of {count} sampled joint vectors")
         raise General6Error("general6: the elimination degenerates on this geometry (" + "; ".join(why) + ")")
 
 
@@ -423,6 +454,30 @@ def _leading_ok(L):
     sign, logdet = np.linalg.slogdet(L)
     rows = np.log(np.maximum(np.linalg.norm(L, axis=2), 1e-300)).sum(axis=1)
     return (sign != 0) & (logdet - rows > math.log(LEADING_OK))
+
+
+_PROBE = np.random.default_rng(12).normal(size=12)
+
+
+def _null_vectors(M, y):
+    """Null vectors (K, 12) of the pencils M (K, 3, 12, 12) at real roots y (K,): two steps of inverse
+    iteration; y is moved by ~1e-11 so that an exact root cannot make the factorisation singular."""
+    big = np.abs(y) > 1
+    yi = np.where(big, 1 / np.where(big, y, 1), y)
+    yi = yi + 1e-11 * np.where(yi >= 0, 1, -1)
+    # |y| <= 1: M0 + y M1 + y^2 M2; |y| > 1 (with yi = 1 / y): yi^2 M0 + yi M1 + M2, the same null vector
+    c0 = np.where(big, yi * yi, 1.0)[:, None, None]
+    c2 = np.where(big, 1.0, yi * yi)[:, None, None]
+    P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
+    z = np.broadcast_to(_PROBE, (len(y), 12))[..., None]
+    with np.errstate(all="ignore"):
+        for _ in range(2):
+            try:
+                z = np.linalg.solve(P, z)
+            except np.linalg.LinAlgError:  # an exactly singular P after all: least squares row by row
+                z = np.stack([np.linalg.lstsq(Pk, zk, rcond=None)[0] for Pk, zk in zip(P, z)])
+            z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), 1e-300)
+    return np.nan_to_num(z[..., 0])
 
 
 def _read_ratio(den, num):
@@ -443,22 +498,24 @@ def _pack(Q, own, err, N) -> Batch:
     """Distinct rows per target into (N, 16) slots, best residual first among duplicates."""
     order = np.lexsort((err, own))
     Q, own, err = Q[order], own[order], err[order]
+    starts = np.searchsorted(own, np.arange(N + 1))
+    slot = np.arange(len(own)) - starts[own]
+    K = int(slot.max()) + 1 if len(own) else 1
+    q = np.zeros((N, K, 6))
+    v = np.zeros((N, K), dtype=bool)
+    e = np.full((N, K), np.inf)
+    q[own, slot], v[own, slot], e[own, slot] = Q, True, err
+    d = np.abs(np.angle(np.exp(1j * (q[:, :, None, :] - q[:, None, :, :])))).max(axis=3)
+    earlier = np.tril(np.ones((K, K), dtype=bool), -1)  # [i, j]: j before i
+    dup = (earlier & (d <= SAME) & v[:, None, :]).any(axis=2)
+    v &= ~dup
+    rank = np.cumsum(v, axis=1) - 1
+    keep = v & (rank < MAX_SOLUTIONS)
     out_q = np.zeros((N, MAX_SOLUTIONS, 6))
     out_v = np.zeros((N, MAX_SOLUTIONS), dtype=bool)
     out_e = np.full((N, MAX_SOLUTIONS), np.inf)
-    if len(Q):
-        starts = np.searchsorted(own, np.arange(N + 1))
-        for n in np.nonzero(np.diff(starts))[0]:
-            rows, errs = Q[starts[n]:starts[n + 1]], err[starts[n]:starts[n + 1]]
-            d = np.abs(np.angle(np.exp(1j * (rows[:, None, :] - rows[None, :, :])))).max(axis=2)
-            keep = []
-            for i in range(len(rows)):
-                if all(d[i, j] > SAME for j in keep):
-                    keep.append(i)
-            keep = keep[:MAX_SOLUTIONS]
-            out_q[n, :len(keep)] = rows[keep]
-            out_v[n, :len(keep)] = True
-            out_e[n, :len(keep)] = errs[keep]
+    n, k = np.nonzero(keep)
+    out_q[n, rank[n, k]], out_v[n, rank[n, k]], out_e[n, rank[n, k]] = q[n, k], True, e[n, k]
     return Batch(out_q, out_v, out_e, out_v.any(axis=1))
 
 
