@@ -210,7 +210,9 @@ class General6:
     ``solve(T)`` -> (k, 6) exact solutions; ``solve_batch(Ts)`` -> :class:`Batch`; ``fk(q)`` -> 4x4.
     """
 
-    def __init__(self, twists, home, scale: float | None = None, arrangement: int | None = None):
+    def __init__(self, twists, home, scale: float | None = None, arrangement=None):
+        """``arrangement``: None (choose on sample poses, ~0.1 s), or the index or list of indices of
+        the arrangements to use, in order (``General6(...).usable`` of an earlier instance)."""
         tw = np.asarray(twists, dtype=float)
         if tw.shape != (6, 6) or not np.all(np.isfinite(tw)):
             raise SubproblemInputError(f"general6 needs 6 finite twists (6, 6); got shape {tw.shape}")
@@ -233,9 +235,12 @@ class General6:
         self.twists = np.concatenate([-np.cross(w, r), w], axis=1)
         self.Mn = self._norm(self.home[None])[0]
         self._arr = [_arrangement(self.w, self.r, sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
-        self.arrangement = 0 if arrangement is None else int(arrangement)
         if arrangement is None:
-            self.arrangement = self._choose()
+            self.usable = [0]
+            self.usable = self._choose()
+        else:
+            self.usable = [int(k) for k in np.atleast_1d(arrangement)]
+        self.arrangement = self.usable[0]
 
     # --------------------------------------------------------------------------------- kinematics
     def fk(self, q) -> np.ndarray:
@@ -306,7 +311,7 @@ class General6:
     def _candidates(self, arr: _Arrangement, Gn):
         """Candidate joint vectors (original order) and their owners from the eigenproblem."""
         N = len(Gn)
-        B0, pinv, C, _ = self._pencil(arr, Gn)
+        B0, pinv, C, brank = self._pencil(arr, Gn)
         delta = np.full(N, SHIFTS[0])
         M = self._matrices(C, delta)
         good = _leading_ok(M[:, 2])
@@ -329,8 +334,9 @@ class General6:
         keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
         own, idx = np.nonzero(keep)
         th_c = th_c.real[own, idx]
+        doubt = ~good | (brank < 1e-9)  # no well-conditioned shift, or B' loses rank: ask another order
         if not len(own):  # no real root: the pose is unreachable
-            return np.zeros((0, 6)), own
+            return np.zeros((0, 6)), own, doubt
         v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
         th_d = _read_ratio(v[:, :3, :], v[:, 1:, :])
         th_e = _read_ratio(v[:, :, :2], v[:, :, 1:])
@@ -357,21 +363,27 @@ class General6:
         th = np.concatenate([th, th_f[:, None]], axis=1)
         Q = np.empty_like(th)
         Q[:, list(arr.order)] = th
-        return Q, own
+        return Q, own, doubt
 
     # ----------------------------------------------------------------------------------- polish
     def _newton(self, Q, Gn, iters=NEWTON_ITERS):
-        """Newton steps on all six joints toward normalised targets; returns (Q, error)."""
+        """Newton steps on all six joints toward normalised targets; returns (best Q, its error).
+
+        Near a singular configuration (a double root) the plain step is amplified by the tiny singular
+        value; those rows take the truncated least-squares step instead, and every row keeps the best
+        iterate it met."""
         Q = Q.copy()
+        best, best_err = Q.copy(), np.full(len(Q), np.inf)
         active = np.ones(len(Q), dtype=bool)
-        err = np.full(len(Q), np.inf)
         for it in range(iters + 1):
             idx = np.nonzero(active)[0]
             if not len(idx):
                 break
             g, J = self._jacobian(Q[idx])
-            err[idx] = self._error(g, Gn[idx])
-            done = err[idx] <= 0.05 * EXACT
+            err = self._error(g, Gn[idx])
+            better = err < best_err[idx]
+            best[idx[better]], best_err[idx[better]] = Q[idx[better]], err[better]
+            done = err <= 0.05 * EXACT
             active[idx[done]] = False
             if it == iters:
                 break
@@ -383,12 +395,16 @@ class General6:
             with np.errstate(all="ignore"):
                 try:
                     dq = np.linalg.solve(J, e[..., None])[..., 0]
-                except np.linalg.LinAlgError:  # an exactly singular Jacobian: least squares steps
-                    dq = np.einsum("nij,nj->ni", np.linalg.pinv(J, rcond=1e-13), e)
+                except np.linalg.LinAlgError:  # an exactly singular Jacobian somewhere
+                    dq = np.full(e.shape, np.inf)
+                size = np.abs(e).max(axis=1)
+                wild = ~np.isfinite(dq).all(axis=1) | (np.abs(dq).max(axis=1) > 1e3 * size + 1e-3)
+                if wild.any():
+                    dq[wild] = np.einsum("nij,nj->ni", np.linalg.pinv(J[wild], rcond=1e-7), e[wild])
             step = np.abs(dq).max(axis=1)
             dq *= np.minimum(1.0, 0.5 / np.maximum(step, 1e-300))[:, None]  # a far candidate: bounded steps
             Q[idx] += np.nan_to_num(dq)
-        return Q, err
+        return best, best_err
 
     def _jacobian(self, Q):
         """Tool poses (normalised) and the space Jacobian of the tool origin and rotation (M, 6, 6)."""
@@ -405,10 +421,37 @@ class General6:
 
     # ------------------------------------------------------------------------------------ solve
     def _solve_norm(self, Tn, arrangement=None):
-        arr = self._arr[self.arrangement if arrangement is None else arrangement]
+        """Solutions of normalised targets.
+
+        The preferred arrangement first.  A target is *doubtful* when no shift gave a well-conditioned
+        leading matrix, B' lost rank, or a candidate stalled short of exact (the sign of a double root,
+        where eigenvectors are poorly determined); doubtful targets are re-solved with the other usable
+        arrangements and with two slightly rotated copies of the target (a double root splits, a
+        degenerate pencil becomes regular), and every candidate, pooled, is polished toward the true
+        target: Newton and the final check decide."""
         N = len(Tn)
-        Qc, own = self._candidates(arr, Tn @ _inv(self.Mn))
+        Gn = Tn @ _inv(self.Mn)
+        order = self.usable if arrangement is None else [arrangement]
+        Qc, own, doubt = self._candidates(self._arr[order[0]], Gn)
         Qc, err = self._newton(Qc, Tn[own])
+        stalled = np.zeros(N, dtype=bool)
+        stalled[own[(err > EXACT) & (err < 1e-3)]] = True
+        todo = np.nonzero(doubt | stalled)[0]
+        if len(todo) and arrangement is None:
+            Qs, owns = [Qc], [own]
+            rot = [_exp(_PERTURB[i], np.zeros(3), 1e-4)[None] for i in range(2)]
+            for k in order[1:]:
+                Qk, ok_, _ = self._candidates(self._arr[k], Gn[todo])
+                Qs.append(Qk)
+                owns.append(todo[ok_])
+            for R in rot:
+                for k in order[:2]:
+                    Qk, ok_, _ = self._candidates(self._arr[k], R @ Gn[todo])
+                    Qs.append(Qk)
+                    owns.append(todo[ok_])
+            more, mown = np.concatenate(Qs[1:]), np.concatenate(owns[1:])
+            more, merr = self._newton(more, Tn[mown], iters=3 * NEWTON_ITERS)
+            Qc, own, err = np.concatenate([Qc, more]), np.concatenate([own, mown]), np.concatenate([err, merr])
         ok = err <= EXACT
         Qc, own, err = _wrap(Qc[ok]), own[ok], err[ok]
         return _pack(Qc, own, err, N)
@@ -420,18 +463,24 @@ class General6:
             raise SubproblemInputError("general6: target contains NaN or infinity")
         return self._solve_norm(self._norm(Ts))
 
+    def rows(self, Ts):
+        """The exact solutions of N targets as flat rows: (Q (M, 6), owner (M,) target index)."""
+        b = self.solve_batch(Ts)
+        n, k = np.nonzero(b.valid)
+        return b.Q[n, k], n
+
     def solve(self, T) -> np.ndarray:
         """Every exact solution (k, 6) of one target 4x4; (0, 6) when the pose is unreachable."""
         b = self.solve_batch(np.asarray(T, dtype=float)[None])
         return b.Q[0][b.valid[0]]
 
-    def _choose(self, count: int = 12, seed: int = 5) -> int:
-        """The first arrangement whose pencil is regular and which recovers sampled joint vectors."""
+    def _choose(self, count: int = 12, seed: int = 5) -> list[int]:
+        """Arrangements whose pencil is regular, those recovering the most sampled joint vectors first."""
         rng = np.random.default_rng(seed)
         Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
         Tn = self._fk_norm(Q)
         Gn = Tn @ _inv(self.Mn)
-        why = []
+        why, found = [], []
         for k, arr in enumerate(self._arr):
             _, _, C, _ = self._pencil(arr, Gn)
             M = self._matrices(C, np.full(count, SHIFTS[0]))
@@ -442,11 +491,13 @@ class General6:
                 continue
             b = self._solve_norm(Tn, k)
             d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
-            hit = (np.where(b.valid, d, np.inf).min(axis=1) < 1e-6).sum()
-            if hit == count:
-                return k
-            why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {hit} of {count} sampled joint vectors")
-        raise General6Error("general6: the elimination degenerates on this geometry (" + "; ".join(why) + ")")
+            hit = int((np.where(b.valid, d, np.inf).min(axis=1) < 1e-6).sum())
+            found.append((-hit, k))
+            why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {hit} of {count} samples")
+        if not found or -min(found)[0] < count // 2:
+            raise General6Error("general6: the elimination degenerates on this geometry (" + "; ".join(why) + ")")
+        self.why = tuple(why)
+        return [k for _, k in sorted(found)]
 
 
 def _leading_ok(L):
@@ -457,6 +508,8 @@ def _leading_ok(L):
 
 
 _PROBE = np.random.default_rng(12).normal(size=12)
+_PERTURB = np.random.default_rng(13).normal(size=(2, 3))
+_PERTURB /= np.linalg.norm(_PERTURB, axis=1, keepdims=True)
 
 
 def _null_vectors(M, y):

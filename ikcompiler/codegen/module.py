@@ -120,6 +120,10 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_KINDS = {chain.joint_types!r}\n")
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     out.append("_HOME_INV = _rt.inverse_transform(_HOME)\n")
+    if plan.method == "general-6r":
+        out.append("# General 6R elimination (subproblems.general6), its arrangements chosen at compile time.\n")
+        out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
+                   f"{_literal(list(plan.steps[0]['arrangements']))})\n")
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
     out.append(f"_A = np.array({_array(A)})  # all joint values = _A @ q + _B\n")
     out.append(f"_B = np.array({_array(b)})\n")
@@ -180,7 +184,11 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(BODY)
     text = "".join(out)
     # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
-    return text.replace("{imports}", "\nimport math\n" if "math.inf" in text else "", 1)
+    imports = "\nimport math\n" if "math.inf" in text else ""
+    if plan.method == "general-6r":
+        text = text.replace("from subproblems import fast as _fk\n",
+                            "from subproblems import fast as _fk\nfrom subproblems import general6 as _g6\n", 1)
+    return text.replace("{imports}", imports, 1)
 
 
 BODY = '''
@@ -261,6 +269,9 @@ def _candidates(goals, Td, init):
         fixed = ~np.isnan(init[owner])
         TH = np.where(fixed, init[owner], TH)
         TH = _newton(TH, goals[owner], step["iters"])
+        ls = cont = np.zeros(len(TH), dtype=bool)
+    elif METHOD == "general-6r":
+        TH, owner = _GENERAL6.rows(goals)
         ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
