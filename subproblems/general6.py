@@ -527,8 +527,9 @@ def _null_vectors(M, y):
         for _ in range(2):
             try:
                 z = np.linalg.solve(P, z)
-            except np.linalg.LinAlgError:  # an exactly singular P after all: least squares row by row
-                z = np.stack([np.linalg.lstsq(Pk, zk, rcond=None)[0] for Pk, zk in zip(P, z)])
+            except np.linalg.LinAlgError:  # an exactly singular P in the stack: the SVD's null vectors
+                z = np.linalg.svd(P)[2][:, -1, :, None]
+                break
             z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), 1e-300)
     return np.nan_to_num(z[..., 0])
 
