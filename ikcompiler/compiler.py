@@ -202,6 +202,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
 
 SEARCH_GRID = {1: 128, 2: 40}
 GENERAL6 = "general-6r"
+USE_GENERAL6 = True  # False: 6R chains without a closed form take the search fallback as before (tests)
 
 
 def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | None:
@@ -209,7 +210,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | N
     closed form, or None (other chains; or a geometry where it degenerates: the note says why)."""
     from subproblems import general6
 
-    if target != "pose" or free or chain.n != 6 or chain.joint_types != "RRRRRR" or chain.couplings:
+    if not USE_GENERAL6 or target != "pose" or free or chain.joint_types != "RRRRRR" or chain.couplings:
         return None
     try:
         solver = general6.General6(chain.twists, chain.home, chain.scale)
@@ -231,8 +232,9 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | N
         f"general 6R elimination: joints ordered {', '.join(names)} (elimination variable {names[2]}); "
         f"arrangements {solver.usable}"
     )
+    all_names = tuple(j.name for j in chain.joints)
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
-                tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=tuple(j.name for j in chain.joints))
+                tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start):

@@ -271,7 +271,7 @@ class General6:
 
     # ------------------------------------------------------------------------------ elimination
     def _pencil(self, arr: _Arrangement, Gn):
-        """Per target: (B's constant column (N, 14), pinv(B') (N, 8, 14), C (N, 6, 3, 9), rank ratio of B')."""
+        """Per target: B's constant column (N, 14), pinv(B') (N, 8, 14), C (N, 6, 3, 9), B' rank ratio."""
         Gn = Gn if arr.sign > 0 else _inv(Gn)
         y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
         m = Gn[:, :3, :3] @ arr.w[5]
@@ -348,7 +348,8 @@ class General6:
         rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
         mab = np.einsum("niq,nq->ni", pinv[own], rhs)
         Kab = np.concatenate([np.ones((len(mab), 1)), mab], axis=1).reshape(-1, 3, 3)
-        th_a = np.arctan2(np.einsum("ni,ni->n", Kab[:, 2], Kab[:, 0]), np.einsum("ni,ni->n", Kab[:, 1], Kab[:, 0]))
+        th_a = np.arctan2(np.einsum("ni,ni->n", Kab[:, 2], Kab[:, 0]),
+                          np.einsum("ni,ni->n", Kab[:, 1], Kab[:, 0]))
         th_b = np.arctan2(np.einsum("ni,ni->n", Kab[:, :, 2], Kab[:, :, 0]),
                           np.einsum("ni,ni->n", Kab[:, :, 1], Kab[:, :, 0]))
         th = np.stack([th_a, th_b, th_c, th_d, th_e], axis=1)
@@ -390,7 +391,8 @@ class General6:
             idx, g, J = idx[~done], g[~done], J[~done]
             T = Gn[idx]
             e_pos = T[:, :3, 3] - g[:, :3, 3]
-            e_rot = 0.5 * np.cross(np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)).sum(axis=1)
+            Rt, Tt = np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)
+            e_rot = 0.5 * np.cross(Rt, Tt).sum(axis=1)
             e = np.concatenate([e_pos, e_rot], axis=1)
             with np.errstate(all="ignore"):
                 try:
@@ -451,7 +453,8 @@ class General6:
                     owns.append(todo[ok_])
             more, mown = np.concatenate(Qs[1:]), np.concatenate(owns[1:])
             more, merr = self._newton(more, Tn[mown], iters=3 * NEWTON_ITERS)
-            Qc, own, err = np.concatenate([Qc, more]), np.concatenate([own, mown]), np.concatenate([err, merr])
+            Qc, own = np.concatenate([Qc, more]), np.concatenate([own, mown])
+            err = np.concatenate([err, merr])
         ok = err <= EXACT
         Qc, own, err = _wrap(Qc[ok]), own[ok], err[ok]
         return _pack(Qc, own, err, N)
@@ -495,7 +498,10 @@ class General6:
             found.append((-hit, k))
             why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {hit} of {count} samples")
         if not found or -min(found)[0] < count // 2:
-            raise General6Error("general6: the elimination degenerates on this geometry (" + "; ".join(why) + ")")
+            raise General6Error(
+                "general6: the elimination degenerates on this geometry (" + "; ".join(why) + "); "
+                "the compiler falls back to its search"
+            )
         self.why = tuple(why)
         return [k for _, k in sorted(found)]
 

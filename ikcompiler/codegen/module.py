@@ -121,7 +121,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     out.append("_HOME_INV = _rt.inverse_transform(_HOME)\n")
     if plan.method == "general-6r":
-        out.append("# General 6R elimination (subproblems.general6), its arrangements chosen at compile time.\n")
+        out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
         out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
                    f"{_literal(list(plan.steps[0]['arrangements']))})\n")
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
@@ -186,8 +186,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
     imports = "\nimport math\n" if "math.inf" in text else ""
     if plan.method == "general-6r":
-        text = text.replace("from subproblems import fast as _fk\n",
-                            "from subproblems import fast as _fk\nfrom subproblems import general6 as _g6\n", 1)
+        fast = "from subproblems import fast as _fk\n"
+        text = text.replace(fast, fast + "from subproblems import general6 as _g6\n", 1)
     return text.replace("{imports}", imports, 1)
 
 
