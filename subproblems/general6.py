@@ -554,28 +554,44 @@ def _wrap(Q):
     return np.where(Q <= -math.pi, Q + 2 * math.pi, Q)
 
 
+def _angle_gap(a, b):
+    """|a - b| modulo 2 pi, in [0, pi]."""
+    return np.abs(np.mod(a - b + math.pi, 2 * math.pi) - math.pi)
+
+
 def _pack(Q, own, err, N) -> Batch:
     """Distinct rows per target into (N, 16) slots, best residual first among duplicates."""
     order = np.lexsort((err, own))
     Q, own, err = Q[order], own[order], err[order]
     starts = np.searchsorted(own, np.arange(N + 1))
+    count = np.diff(starts)
     slot = np.arange(len(own)) - starts[own]
-    K = int(slot.max()) + 1 if len(own) else 1
-    q = np.zeros((N, K, 6))
-    v = np.zeros((N, K), dtype=bool)
-    e = np.full((N, K), np.inf)
-    q[own, slot], v[own, slot], e[own, slot] = Q, True, err
-    d = np.abs(np.angle(np.exp(1j * (q[:, :, None, :] - q[:, None, :, :])))).max(axis=3)
-    earlier = np.tril(np.ones((K, K), dtype=bool), -1)  # [i, j]: j before i
-    dup = (earlier & (d <= SAME) & v[:, None, :]).any(axis=2)
-    v &= ~dup
-    rank = np.cumsum(v, axis=1) - 1
-    keep = v & (rank < MAX_SOLUTIONS)
     out_q = np.zeros((N, MAX_SOLUTIONS, 6))
     out_v = np.zeros((N, MAX_SOLUTIONS), dtype=bool)
     out_e = np.full((N, MAX_SOLUTIONS), np.inf)
-    n, k = np.nonzero(keep)
-    out_q[n, rank[n, k]], out_v[n, rank[n, k]], out_e[n, rank[n, k]] = q[n, k], True, e[n, k]
+    small = count[own] <= MAX_SOLUTIONS  # targets with more exact rows (duplicates) go one by one
+    if small.any():
+        K = int(count[count <= MAX_SOLUTIONS].max())
+        q = np.zeros((N, K, 6))
+        v = np.zeros((N, K), dtype=bool)
+        e = np.full((N, K), np.inf)
+        q[own[small], slot[small]], v[own[small], slot[small]], e[own[small], slot[small]] = (
+            Q[small], True, err[small])
+        d = _angle_gap(q[:, :, None, :], q[:, None, :, :]).max(axis=3)
+        earlier = np.tril(np.ones((K, K), dtype=bool), -1)  # [i, j]: j before i
+        v &= ~(earlier & (d <= SAME) & v[:, None, :]).any(axis=2)
+        rank = np.cumsum(v, axis=1) - 1
+        n, k = np.nonzero(v & (rank < MAX_SOLUTIONS))
+        out_q[n, rank[n, k]], out_v[n, rank[n, k]], out_e[n, rank[n, k]] = q[n, k], True, e[n, k]
+    for n in np.nonzero(count > MAX_SOLUTIONS)[0]:
+        keep: list[int] = []
+        rows = Q[starts[n]:starts[n + 1]]
+        for i in range(len(rows)):
+            if len(keep) < MAX_SOLUTIONS and all(_angle_gap(rows[i], rows[j]).max() > SAME for j in keep):
+                keep.append(i)
+        out_q[n, :len(keep)] = rows[keep]
+        out_v[n, :len(keep)] = True
+        out_e[n, :len(keep)] = err[starts[n]:starts[n + 1]][keep]
     return Batch(out_q, out_v, out_e, out_v.any(axis=1))
 
 
