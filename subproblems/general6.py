@@ -112,17 +112,26 @@ class Batch:
 
 
 # ----------------------------------------------------------------------------------------------- rigid
+def _cross(a, b):
+    """a x b over the last axis (broadcast); cheaper than numpy.cross on small stacks."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def _rodrigues(w, th):
-    """Rotations (..., 3, 3) about unit axes w (..., 3) by th (...)."""
+    """Rotations (..., 3, 3) about unit axes w (..., 3) by th (...): c I + s [w] + (1 - c) w w^T."""
     w = np.asarray(w, dtype=float)
     th = np.asarray(th, dtype=float)
-    shape = np.broadcast_shapes(w.shape[:-1], th.shape)
-    w = np.broadcast_to(w, shape + (3,))
-    s, c = np.sin(th)[..., None, None], np.cos(th)[..., None, None]
-    K = np.zeros(shape + (3, 3))
-    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
-    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
-    return np.eye(3) + s * K + (1 - c) * (K @ K)
+    s, c = np.sin(th)[..., None], np.cos(th)[..., None]
+    x, y, z = w[..., 0:1], w[..., 1:2], w[..., 2:3]
+    v = 1 - c
+    R = np.concatenate([
+        c + v * x * x, v * x * y - s * z, v * x * z + s * y,
+        v * x * y + s * z, c + v * y * y, v * y * z - s * x,
+        v * x * z - s * y, v * y * z + s * x, c + v * z * z,
+    ], axis=-1)
+    return R.reshape(R.shape[:-1] + (3, 3))
 
 
 def _exp(w, r, th):
@@ -130,7 +139,7 @@ def _exp(w, r, th):
     R = _rodrigues(w, th)
     g = np.zeros(R.shape[:-2] + (4, 4))
     g[..., :3, :3] = R
-    g[..., :3, 3] = r - np.einsum("...ij,...j->...i", R, np.broadcast_to(r, R.shape[:-1]))
+    g[..., :3, 3] = r - (R @ np.asarray(r, dtype=float)[..., None])[..., 0]
     g[..., 3, 3] = 1.0
     return g
 
@@ -139,7 +148,7 @@ def _inv(g):
     h = np.zeros_like(g)
     Rt = np.swapaxes(g[..., :3, :3], -1, -2)
     h[..., :3, :3] = Rt
-    h[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, g[..., :3, 3])
+    h[..., :3, 3] = -(Rt @ g[..., :3, 3, None])[..., 0]
     h[..., 3, 3] = 1.0
     return h
 
@@ -148,7 +157,7 @@ def _fourteen(p, l):
     """The 14 Raghavan-Roth quantities of a point p and direction l (..., 3) -> (..., 14)."""
     pp = np.einsum("...i,...i->...", p, p)[..., None]
     pl = np.einsum("...i,...i->...", p, l)[..., None]
-    return np.concatenate([p, l, pp, pl, np.cross(p, l), pp * l - 2 * pl * p], axis=-1)
+    return np.concatenate([p, l, pp, pl, _cross(p, l), pp * l - 2 * pl * p], axis=-1)
 
 
 # ----------------------------------------------------------------------------------------- arrangement
@@ -360,7 +369,7 @@ class General6:
             X = X @ _exp(W[:, k], R[:, k], th[:, k])
         Rf = np.swapaxes(X[:, :3, :3], 1, 2) @ Gk[:, :3, :3]
         Ru = Rf @ arr.u
-        th_f = np.arctan2(np.cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
+        th_f = np.arctan2(_cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
         th = np.concatenate([th, th_f[:, None]], axis=1)
         Q = np.empty_like(th)
         Q[:, list(arr.order)] = th
@@ -392,7 +401,7 @@ class General6:
             T = Gn[idx]
             e_pos = T[:, :3, 3] - g[:, :3, 3]
             Rt, Tt = np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)
-            e_rot = 0.5 * np.cross(Rt, Tt).sum(axis=1)
+            e_rot = 0.5 * _cross(Rt, Tt).sum(axis=1)
             e = np.concatenate([e_pos, e_rot], axis=1)
             with np.errstate(all="ignore"):
                 try:
@@ -415,10 +424,10 @@ class General6:
         for i in range(6):
             W[:, i] = g[:, :3, :3] @ self.w[i]
             r = np.einsum("nij,j->ni", g[:, :3, :3], self.r[i]) + g[:, :3, 3]
-            V[:, i] = np.cross(r, W[:, i])  # v = -w x r of the moved axis
+            V[:, i] = _cross(r, W[:, i])  # v = -w x r of the moved axis
             g = g @ _exp(self.w[i], self.r[i], Q[:, i])
         g = g @ self.Mn
-        V += np.cross(W, g[:, None, :3, 3])  # velocity of the tool origin: v + w x p
+        V += _cross(W, g[:, None, :3, 3])  # velocity of the tool origin: v + w x p
         return g, np.concatenate([V, W], axis=2).transpose(0, 2, 1)
 
     # ------------------------------------------------------------------------------------ solve
