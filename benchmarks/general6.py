@@ -157,8 +157,8 @@ def main(argv=None) -> int:
         "",
         "## Random general 6R arms",
         "",
-        "Recovered: the sampled joint vector among the returned rows (1e-6 rad). Residual: worst returned row, "
-        "recomputed by FK, max(position / size, Frobenius rotation). Times per pose.",
+        "Recovered: the sampled joint vector among the returned rows (1e-6 rad). Residual: worst returned "
+        "row, recomputed by FK, max(position / size, Frobenius rotation). Times per pose.",
         "",
         "| arm | method | recovered | module recovered | real solutions 2/4/6/8/10/12/14/16 | worst residual "
         "| batch wall us | batch CPU us | module batch us | single solve us | prepare s | compile s |",
@@ -168,7 +168,8 @@ def main(argv=None) -> int:
         c = r["counts"]
         dist = "/".join(str(int(c[k])) for k in range(2, 17, 2))
         lines.append(
-            f"| {r['seed']} | {r['method']} | {r['hits']}/{r['poses']} | {r['hits_mod']}/{r['poses']} | {dist} "
+            f"| {r['seed']} | {r['method']} | {r['hits']}/{r['poses']} | {r['hits_mod']}/{r['poses']} "
+            f"| {dist} "
             f"| {r['worst']:.1e} | {r['wall'] * 1e6:.0f} | {r['cpu'] * 1e6:.0f} | {r['wall_mod'] * 1e6:.0f} "
             f"| {r['single'] * 1e6:.0f} | {r['prep']:.2f} | {r['compile']:.2f} |"
         )
@@ -176,7 +177,8 @@ def main(argv=None) -> int:
     hits = sum(r["hits"] for r in rows)
     lines += [
         "",
-        f"Total: {hits}/{total} poses recovered; median batch wall {np.median([r['wall'] for r in rows]) * 1e6:.0f} "
+        f"Total: {hits}/{total} poses recovered; median batch wall "
+        f"{np.median([r['wall'] for r in rows]) * 1e6:.0f} "
         f"us/pose, CPU {np.median([r['cpu'] for r in rows]) * 1e6:.0f} us/pose; median single-pose solve "
         f"{np.median([r['single'] for r in rows]) * 1e6:.0f} us; median compile "
         f"{np.median([r['compile'] for r in rows]):.2f} s.",

@@ -226,12 +226,9 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | N
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     }
-    order = solver._arr[solver.arrangement].order
-    names = [chain.joints[i].name for i in order]
-    notes.append(
-        f"general 6R elimination: joints ordered {', '.join(names)} (elimination variable {names[2]}); "
-        f"arrangements {solver.usable}"
-    )
+    names = [j.name for j in chain.joints]
+    tried = "; ".join(solver.describe(k, names) for k in solver.usable)
+    notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
     all_names = tuple(j.name for j in chain.joints)
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                 tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)

@@ -475,6 +475,15 @@ class General6:
             raise SubproblemInputError("general6: target contains NaN or infinity")
         return self._solve_norm(self._norm(Ts))
 
+    def describe(self, k: int, names=None) -> str:
+        """One line on arrangement ``k``: its joint order and elimination variable."""
+        arr = self._arr[k]
+        names = names or [f"joint {i + 1}" for i in range(6)]
+        order = ", ".join(names[i] for i in arr.order)
+        how = "chain" if arr.sign > 0 else "inverse chain"
+        moved = f", {arr.conj} moved ahead" if arr.conj else ""
+        return f"#{k} {how} ({order}{moved}; eliminated {names[arr.order[2]]})"
+
     def rows(self, Ts):
         """The exact solutions of N targets as flat rows: (Q (M, 6), owner (M,) target index)."""
         b = self.solve_batch(Ts)

@@ -18,8 +18,8 @@ def _random_chain(seed: int) -> Chain:
     rng = np.random.default_rng(seed)
     joints = []
     for i in range(6):
-        w = rng.normal(size=3)
-        joints.append(Joint(f"j{i + 1}", "R", revolute_twist(w, rng.uniform(-0.5, 0.5, 3)), -math.pi, math.pi))
+        twist = revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3))
+        joints.append(Joint(f"j{i + 1}", "R", twist, -math.pi, math.pi))
     home = np.eye(4)
     home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
     return Chain(f"random-6r-{seed}", tuple(joints), home)
@@ -79,3 +79,17 @@ def test_jaco_with_limits_returns_rows_inside_them():
     rows = S[V]
     assert len(rows)
     assert np.all(rows >= chain.lower - 1e-9) and np.all(rows <= chain.upper + 1e-9)
+
+
+def test_five_joint_arm_position_direction_target_through_the_virtual_roll():
+    """A 5R arm's position + direction target is a 6R pose problem with the virtual tool roll."""
+    rng = np.random.default_rng(3)
+    twists = [revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)) for _ in range(5)]
+    joints = tuple(Joint(f"j{i + 1}", "R", tw, -math.pi, math.pi) for i, tw in enumerate(twists))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    chain = Chain("random-5r", joints, home)
+    module = compile_robot(chain, target="position+direction")
+    assert module.METHOD == "general-6r" and len(module.JOINT_NAMES) == 5
+    report = verify(chain, module, samples=60, seed=1, scalar_checks=5, special=0.0)
+    assert report.wrong == 0 and report.recovered == report.poses, report.text()
