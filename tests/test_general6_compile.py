@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 
@@ -53,12 +55,17 @@ def test_random_arm_compiles_to_general_6r_and_recovers_every_pose():
         assert len(module.solve(T[n])) == V[n].sum()
 
 
-def test_generated_module_imports_only_numpy_and_subproblems():
+def test_generated_module_imports_only_numpy_and_subproblems(tmp_path):
     source = compile_source(_random_chain(5))
     imports = {line.split()[1] for line in source.splitlines() if line.startswith(("import ", "from "))}
     assert imports <= {"math", "numpy", "subproblems", "__future__"}, imports
     assert "from subproblems import general6 as _g6" in source
     assert "METHOD = 'general-6r'" in source
+    path = tmp_path / "random_ik.py"
+    path.write_text(source)
+    cmd = [sys.executable, "-m", "ruff", "check", "--no-cache", "--isolated", str(path)]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr
 
 
 def test_jaco_generic_poses_complete_with_nothing_wrong():

@@ -124,6 +124,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
         out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
         out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
                    f"{_literal(list(plan.steps[0]['arrangements']))})\n")
+    else:
+        out.append("_GENERAL6 = None  # the general 6R elimination: not this plan's method\n")
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
     out.append(f"_A = np.array({_array(A)})  # all joint values = _A @ q + _B\n")
     out.append(f"_B = np.array({_array(b)})\n")
