@@ -80,6 +80,7 @@ __all__ = ["General6", "General6Error", "Batch", "prepare", "solve", "solve_batc
 
 MAX_SOLUTIONS = 16
 IMAG_TOL = 2e-3  # |imaginary part| of a candidate angle kept for Newton (near-real roots)
+NEAR_REAL = 1e-9  # a kept candidate with a larger imaginary part makes its target doubtful
 EXACT = 1e-12  # accepted pose error: position / size and rotation (Frobenius)
 NEWTON_ITERS = 6
 SAME = 1e-7  # two polished rows closer than this (rad, max over joints) are one solution
@@ -341,9 +342,12 @@ class General6:
             lam = np.linalg.eigvals(np.nan_to_num(K))
             th_c = delta[:, None] + 2 * np.arctan(lam)
         keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
+        # a near-real complex pair: a double root split by rounding (or a genuine pair close to real)
+        split = (keep & (np.abs(th_c.imag) > NEAR_REAL)).any(axis=1)
         own, idx = np.nonzero(keep)
         th_c = th_c.real[own, idx]
-        doubt = ~good | (brank < 1e-9)  # no well-conditioned shift, or B' loses rank: ask another order
+        # no well-conditioned shift, B' loses rank, or a split double root: ask the other orders too
+        doubt = ~good | (brank < 1e-9) | split
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
         v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
