@@ -65,7 +65,7 @@ if str(ROOT) not in sys.path:
 RESULTS = ROOT / "benchmarks" / "results"
 SEED_SINGLE = 1
 SEED_BATCH = 2
-WRONG_TOL = 1e-9  # relative to the robot's size, as DESIGN.md section 9
+WRONG_TOL = 1e-9  # relative to the robot's size, as docs/design.md section 9
 SAME_TOL = 1e-6  # joint-space distance for "the sampled joint vector is among the solutions"
 SINGULAR_TOL = 1e-7  # smallest singular value of the normalised Jacobian below which a pose is singular
 WORKER_TIMEOUT = 300

@@ -8,7 +8,7 @@ generator, not the tests' hypothesis strategies), so that it finds what the test
 
 For each code and each geometry family (below), ``n`` instances are drawn; the right-hand side is the
 left side evaluated at drawn joint values (a few are made unreachable on purpose).  Each instance is
-checked against the contract of issue 3 / DESIGN.md section 4:
+checked against the contract of issue 3 / docs/design.md section 4:
 
 * ``raise``: ``solve`` raised on valid input;  ``nan``: a non-finite value came back;
 * ``bad``: a row flagged exact (neither ``ls`` nor ``continuum``) misses the equation by more than

@@ -1,6 +1,6 @@
 """Canonical inverse-kinematics subproblems of the product-of-exponentials equation.
 
-Three classes (seed 003, Table 1; DESIGN.md section 4), written with R (revolute) and T (prismatic,
+Three classes (seed 003, Table 1; docs/design.md section 4), written with R (revolute) and T (prismatic,
 "translational") joints in chain order:
 
 * class I   ``prod exp(xi_i th_i) = T``                      S1-R ... S1-TTT

@@ -1,6 +1,6 @@
 """Shared machinery of the class I solvers (``prod exp(xi_i th_i) = T``, m <= 3): private.
 
-Every class I type is solved the same way (seed 003 section 2; DESIGN.md rule 2):
+Every class I type is solved the same way (seed 003 section 2; docs/design.md section 3, rule 2):
 
 1. **Orientation.**  Only the revolute joints rotate: ``prod_R exp([w_i] th_i) = R_T`` is an orientation
    subproblem (:func:`subproblems.rotation.rotation_families`).  It gives isolated candidates, or a

@@ -9,7 +9,7 @@ path) and two callables:
   Without one, :func:`solve_batch` loops over the scalar path (correct, slow) and says so in
   ``BatchResult.vectorised``.
 
-Inputs use the names of the equations in DESIGN.md section 4: ``T`` (4x4 target of class I),
+Inputs use the names of the equations in docs/design.md section 4: ``T`` (4x4 target of class I),
 ``p``/``q`` (points of class II and III), ``d`` (distances of class III, or plane offsets), ``h``
 (plane normals of the rotate-to-plane extras).
 """

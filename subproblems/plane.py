@@ -4,7 +4,7 @@ Equation: ``h^T exp(xi th) p = d``: after the joint moves ``p``, it lies on the 
 ``h`` need not be unit (the equation is divided by ``|h|``); the residual is the point's distance to
 the plane.  Inputs: ``twists=[xi]``, ``p`` (3,), ``h`` (3,), ``d`` (a number).
 
-Where it comes from: axial-projection invariance (DESIGN.md section 3, rule 6).  A revolute joint does
+Where it comes from: axial-projection invariance (docs/design.md section 3, rule 6).  A revolute joint does
 not change a point's coordinate along its own axis, so projecting the POE equation onto the common
 direction ``h`` of a run of parallel axes removes every joint of the run; if one unknown joint is left,
 the projection reads ``h^T exp(xi th) p = d``.  Typical use: the first joint of a UR-type arm (axes

@@ -8,7 +8,7 @@ Inputs: ``twists=[xi_1, xi_2]``, ``p`` and ``h`` (2, 3), ``d`` (2,).  ``h_k`` ne
 equation is divided by ``|h_k|``); the residual is the larger point-to-plane distance.  ``p_k`` may be
 a direction instead of a point (then use twists through the origin: ``(0, w)``).
 
-Why the compiler needs them (DESIGN.md section 3, rule 6, and section 4 "additions"): robots with
+Why the compiler needs them (docs/design.md section 3, rule 6, and section 4 "additions"): robots with
 three parallel revolute axes and no intersecting wrist (UR-type arms, planar 3R parts) have no point
 fixed by three trailing axes, so rule 1 alone does not split the chain.  Projecting on the common
 direction ``h`` of the parallel run removes the whole run (a revolute joint keeps a point's coordinate

@@ -4,7 +4,7 @@ Problem: given a continuous ``f`` on ``[a, b]`` (or on the circle ``[a, a + P)``
 return **every** ``x`` with ``f(x) = 0``, sorted and without duplicates.
 
 When the compiler finds no closed-form chain it treats one joint as known, solves the rest in closed
-form and searches the residual of the remaining equation over that joint's range (DESIGN.md section 5).
+form and searches the residual of the remaining equation over that joint's range (docs/design.md section 5).
 This module is that search.  It is not a registered subproblem (it has no twists); it is called with a
 function.
 

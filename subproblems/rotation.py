@@ -1,4 +1,4 @@
-"""Pure-rotation subproblems through the origin (orientation separation, DESIGN.md rule 2).
+"""Pure-rotation subproblems through the origin (orientation separation, docs/design.md section 3, rule 2).
 
 Equations, with unit axes ``w_i`` and ``R`` a rotation matrix:
 

@@ -4,11 +4,11 @@ Equation: ``exp(xi_1 th_1) exp(xi_2 th_2) exp(xi_3 th_3) = T`` (``T`` 4x4 rigid)
 three unknowns: a sufficient subset is solved and the rest is checked (``residual``; ``ls`` when it
 does not hold to 1e-9 of the problem scale).
 
-Method (seed 003 section 2, DESIGN.md rule 2): the revolute joints' angles come from the rotation alone
-(``O-R``/``O-RR``/``O-RRR``), the prismatic values from the translation by linear least squares; where
-the rotation leaves a one-parameter family (two revolute axes parallel in space), the translation
-selects it: a trigonometric polynomial of degree <= 2 in the family parameter, whose roots are the
-candidates.  Every candidate is checked against the whole equation.
+Method (seed 003 section 2, docs/design.md section 3, rule 2): the revolute joints' angles come from
+the rotation alone (``O-R``/``O-RR``/``O-RRR``), the prismatic values from the translation by linear
+least squares; where the rotation leaves a one-parameter family (two revolute axes parallel in space),
+the translation selects it: a trigonometric polynomial of degree <= 2 in the family parameter, whose
+roots are the candidates.  Every candidate is checked against the whole equation.
 
 Per type, maximum number of solutions and degenerate cases:
 

@@ -1,6 +1,6 @@
 """S3-RR, S3-RT, S3-TR, S3-TT: two points at given distances, moved by the same two joints.
 
-Equations (two point/distance pairs through the same product, DESIGN.md section 4):
+Equations (two point/distance pairs through the same product, docs/design.md section 4):
 
     || exp(xi_1 x) exp(xi_2 y) p_k - q_k || = d_k,      k = 1, 2.
 

@@ -18,7 +18,7 @@ from ikcompiler.verify import sample_configurations
 
 FREE = {"panda": ("panda_joint7",)}
 COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
-    "arm4dof", "cylindrical", "gantry", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
+    "arm4dof", "cylindrical", "gantry", "grasp4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
     "shadow_index", "shadow_thumb", "stanford", "ur5",
 }  # jaco: the general 6R elimination (METHOD general-6r), solved by subproblems.general6, no fast chain
 SEARCH = {"jaco"}  # compiled with the general 6R solver switched off: a search plan, on the fast chain

@@ -393,7 +393,8 @@ class _Emitter:
             parts.append(c.let(f"m.sqrt({_sumsq(dp)})", "ep"))
         if self.target in ("pose", "orientation"):
             dR = [c.lin([(1.0, F[i]), (-1.0, goal[i])]) for i in range(9)]
-            parts.append(c.let(f"{_fmt(self.scale)}*m.maxabs({', '.join(_render(x) for x in dR)})", "er"))
+            # Frobenius norm of the rotation error: the precision contract (docs/finish.md)
+            parts.append(c.let(f"{_fmt(self.scale)}*m.sqrt({_sumsq(dR)})", "er"))
         err = f"m.max2({parts[0]}, {parts[1]})" if len(parts) == 2 else parts[0]
         defer = " | ".join(self.flags) if self.flags else "False"
         qs = ", ".join(_render(self.q[j]) for j in independent)

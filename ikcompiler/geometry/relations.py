@@ -3,7 +3,7 @@
 Tolerance policy (adjustable through :class:`Tolerance`):
 
 * ``exact``: a relation that holds to ``exact * scale`` (lengths) or ``exact`` (radians) is structural;
-  the default 1e-9 matches the quality bar of DESIGN.md section 9.
+  the default 1e-9 matches the quality bar of docs/design.md section 9.
 * ``snap``: a relation that holds only to ``snap * scale`` / ``snap`` rad (default 1e-3; a calibrated URDF
   whose axes miss by 1e-4 of its size) is *snapped*: the plan is built as if it held, and every
   solution is then corrected by Newton steps on the true robot and checked there.  Solutions that do

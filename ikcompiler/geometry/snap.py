@@ -3,7 +3,7 @@
 A calibrated URDF misses its design structure by a little (axes parallel to 1e-4 rad, wrist axes that
 miss one another by 1e-4 of the robot's size).  The compiler builds its chain of subproblems on the
 *snapped* robot, where those relations hold exactly, and every solution is then corrected by Newton
-steps on the true robot and checked there (DESIGN.md section 5).  Snapping only ever moves a relation
+steps on the true robot and checked there (docs/design.md section 5).  Snapping only ever moves a relation
 that already holds to ``Tolerance.snap``; exact relations and clear non-relations are left alone.
 
 Rules, in chain order:

@@ -53,6 +53,10 @@ def load_robot(robot: str | Path, *, base: str | None = None, tip: str | None = 
         return load_urdf(path, base=base, tip=tip)
     if name.endswith(".toml"):
         from ikcompiler.inputs._common import read_toml
+        from ikcompiler.inputs.zoo import MANIPULATION_HINT, is_manipulation_spec
+
+        if is_manipulation_spec(path):
+            raise RobotInputError(MANIPULATION_HINT.format(path), source=str(path))
 
         data = read_toml(path)
         stem = path.name.split(".")[0]

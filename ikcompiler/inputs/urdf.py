@@ -4,7 +4,7 @@ The file is read with :mod:`yourdfpy` (its data model only: no meshes, no scene 
 is parsed strictly with lxml so that malformed XML and malformed joint elements are reported with their
 line numbers instead of being silently "recovered".
 
-Mapping (DESIGN.md section 2):
+Mapping (docs/design.md section 2):
 
 - every link's pose at zero joint values is the product of the joint origins (xyz + rpy) from the base;
   the home pose ``g_st(0)`` is the tip link's pose in the base link's frame;

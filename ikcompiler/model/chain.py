@@ -1,6 +1,6 @@
 """The immutable kinematic chain every later stage reads: joints with twists, limits, home pose, couplings.
 
-The chain is the product-of-exponentials (POE) model of DESIGN.md section 2::
+The chain is the product-of-exponentials (POE) model of docs/design.md section 2::
 
     g_st(th) = exp(xi_1^ th_1) ... exp(xi_n^ th_n) g_st(0)
 

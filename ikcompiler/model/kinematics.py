@@ -30,20 +30,13 @@ def forward_batch(chain, Q) -> np.ndarray:
     return g @ chain.home
 
 
-def _space_columns(chain, th) -> np.ndarray:
-    cols = np.zeros((6, chain.n))
-    g = np.eye(4)
-    for i, (joint, t) in enumerate(zip(chain.joints, th)):
-        cols[:, i] = adjoint(g) @ joint.twist
-        g = g @ twist_exp(joint.twist, t)
-    return cols
-
-
 def space_jacobian(chain, q) -> np.ndarray:
-    """(6, dof) space Jacobian at independent joint values ``q``."""
-    th = chain.expand(np.asarray(q, dtype=float))
-    A, _ = chain.coupling_matrix()
-    return _space_columns(chain, th) @ A
+    """(6, dof) space Jacobian at independent joint values ``q`` (one implementation, vectorised:
+    :func:`subproblems.conditioning.space_jacobian`)."""
+    from subproblems.conditioning import space_jacobian as batch
+
+    A, b = chain.coupling_matrix()
+    return batch(chain.twists, A, b, np.asarray(q, dtype=float)[None, :])[0]
 
 
 def body_jacobian(chain, q) -> np.ndarray:

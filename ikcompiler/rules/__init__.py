@@ -1,4 +1,4 @@
-"""POE rewriting rules (DESIGN.md section 3) as moves that turn the equation into one subproblem."""
+"""POE rewriting rules (docs/design.md section 3) as moves that turn the equation into one subproblem."""
 
 from ikcompiler.rules.moves import Context, propose
 

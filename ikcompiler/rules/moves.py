@@ -1,4 +1,4 @@
-"""The rewriting rules of DESIGN.md section 3 as *moves*: from the joints solved so far, rewrite the POE
+"""The rewriting rules of docs/design.md section 3 as *moves*: from the joints solved so far, rewrite the POE
 equation into one canonical subproblem whose inputs are computable, and say which joints it solves.
 
 A move is proposed from the axis geometry of the *current* equation: the unsolved joints' twists

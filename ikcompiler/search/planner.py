@@ -1,4 +1,4 @@
-"""Search for the cheapest chain of subproblems (DESIGN.md section 5).
+"""Search for the cheapest chain of subproblems (docs/design.md section 5).
 
 State: which joints are solved and which parallel-group sums are known.  A move (from
 :mod:`ikcompiler.rules`) solves one canonical subproblem.  Every proposed move is validated on random
@@ -8,8 +8,10 @@ rules believed in but that does not hold shows up as a failed validation, with t
 report.
 
 The cost of a chain adds ``log2(branches)`` and a per-subproblem price, so it prefers fewer branches and
-cheaper subproblems.  Expansion is Dijkstra in cost order over the lazily built state graph
-(networkx), deterministic (fixed seeds, ordered moves) and bounded by a state budget.
+cheaper subproblems.  Expansion is Dijkstra in cost order over the lazily built state graph,
+deterministic (fixed seeds, ordered moves) and bounded by a state budget.  Each state is accepted once,
+from the cheapest validated move into it, so the accepted moves form a shortest-path tree: the chain is
+read back along the parent links from the goal (no second graph search: docs/design.md section 13).
 """
 
 from __future__ import annotations
@@ -19,7 +21,6 @@ import itertools
 import math
 from dataclasses import dataclass, field
 
-import networkx as nx
 import numpy as np
 
 from ikcompiler.rules.moves import Context, propose
@@ -150,8 +151,8 @@ def search(
     trials = Trials(ctx, couplings, lower, upper)
     report = SearchReport()
     start_state = (_closure(start, couplings), frozenset())
-    graph = nx.DiGraph()
-    graph.add_node(start_state)
+    # state -> (parent state, the validated move from it): the shortest-path tree of the accepted states
+    parent_of: dict = {}
     counter = itertools.count()
     # Lazy Dijkstra: a move is validated only when the state it leads to is the cheapest one left, so
     # expensive subproblems that never beat a cheaper chain are never run.
@@ -168,7 +169,7 @@ def search(
                 names = ", ".join(ctx.names[j] for j in move.get("solve", []))
                 report.tried.append(f"{move['code']} for ({names}) via {move['rule']}: {why}")
                 continue
-            graph.add_edge(parent, state, weight=move_cost(move["code"]), move=move)
+            parent_of[state] = (parent, move)
         done[state] = cost
         report.expanded += 1
         solved, sums = state
@@ -190,9 +191,12 @@ def search(
                 heapq.heappush(heap, (cost + step_cost, next(counter), nxt, state, mv))
     if goal is None:
         return None, math.inf, report
-    path = nx.dijkstra_path(graph, start_state, goal)
-    steps = [graph.edges[a, b]["move"] for a, b in zip(path, path[1:])]
-    return steps, done[goal], report
+    steps = []
+    state = goal
+    while state != start_state:
+        state, move = parent_of[state]
+        steps.append(move)
+    return steps[::-1], done[goal], report
 
 
 def finalize_steps(steps: list[dict]) -> tuple[list[dict], int]:

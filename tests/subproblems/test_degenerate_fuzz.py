@@ -7,7 +7,7 @@ perpendicular, nearly parallel or nearly intersecting (1e-6 .. 1e-10), relations
 points, zero distances, zero plane normals, unreachable targets -- and joint values with the special
 angles 0, +-pi/2, pi, plus general position, at three length scales (1e-3, 1, 1e3).
 
-Each instance must satisfy the solver contract of DESIGN.md section 4:
+Each instance must satisfy the solver contract of docs/design.md section 4:
 
 * ``solve`` and ``solve_batch`` never raise and never return NaN or infinity (``q``, ``residual``);
 * there is at least one row (exact, least squares or a continuum representative) and at most

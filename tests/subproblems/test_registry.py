@@ -1,4 +1,4 @@
-"""Every code the issue and DESIGN.md section 4 name has a registered solver."""
+"""Every code the issue and docs/design.md section 4 name has a registered solver."""
 
 from subproblems import codes, max_solutions
 
