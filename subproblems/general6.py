@@ -83,7 +83,7 @@ IMAG_TOL = 2e-3  # |imaginary part| of a candidate angle kept for Newton (near-r
 NEAR_REAL = 1e-9  # a kept candidate with a larger imaginary part makes its target doubtful
 EXACT = 1e-12  # accepted pose error: position / size and rotation (Frobenius)
 NEWTON_ITERS = 6
-SAME = 1e-7  # two polished rows closer than this (rad, max over joints) are one solution
+SAME = 1e-6  # polished rows closer than this (rad, max over joints) are one solution: verify's tolerance
 SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
 LEADING_OK = 1e-9  # |det L| / prod(row norms of L) above which the leading matrix is used as is
 
