@@ -19,9 +19,9 @@ from ikcompiler.verify import sample_configurations
 FREE = {"panda": ("panda_joint7",)}
 COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
     "arm4dof", "cylindrical", "gantry", "grasp4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
-    "shadow_index", "shadow_thumb", "stanford", "ur5", "jaco",
-}
-SEARCH = {"jaco"}  # search fallback: seeds are local minima on a grid, so the sets may differ slightly
+    "shadow_index", "shadow_thumb", "stanford", "ur5",
+}  # jaco: the general 6R elimination (METHOD general-6r), solved by subproblems.general6, no fast chain
+SEARCH = {"jaco"}  # compiled with the general 6R solver switched off: a search plan, on the fast chain
 POSES = 60
 SPLIT = 1e-4  # two copies of one tangent root can stay this far apart and both pass the pose check
 
@@ -113,10 +113,14 @@ def test_fast_solutions_round_trip(robot):
 
 
 @pytest.mark.parametrize("name", sorted(SEARCH))
-def test_search_on_the_fast_chain_recovers_as_the_reference(name):
+def test_search_on_the_fast_chain_recovers_as_the_reference(name, monkeypatch):
     """A search plan grids its searched joints through the fast chain: on generic poses it must find
     the sampled joint vector about as often as the reference runtime, and return nothing wrong."""
+    from ikcompiler import compiler
+
+    monkeypatch.setattr(compiler, "USE_GENERAL6", False)
     module, chain = compile_robot(name), load_robot(name)
+    assert module.METHOD == "1d-search", module.METHOD
     Q = sample_configurations(chain, 80, seed=4, special=0.0)
     Ts = np.array([module.fk(q) for q in Q])
     recovered = {}

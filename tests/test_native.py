@@ -22,9 +22,8 @@ from tests.test_fastpath import FREE, _set_distance
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
-NATIVE_ROBOTS = {  # zoo robots whose modules carry their chain in C (jaco: a search plan, gridded in C)
-    "arm4dof", "cylindrical", "gantry", "grasp4dof", "jaco", "kr6_r700", "panda", "prob", "puma560", "rhino",
-    "scara",
+NATIVE_ROBOTS = {  # zoo robots whose modules carry their chain in C (jaco: general-6r, Python only)
+    "arm4dof", "cylindrical", "gantry", "grasp4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
     "shadow_index", "shadow_thumb", "stanford", "ur5",
 }
 CALIBRATED = "ur5 calibrated"  # a snapped plan: the chain on the snapped robot, Newton steps on the true one

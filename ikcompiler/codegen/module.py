@@ -135,6 +135,12 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_KINDS = {chain.joint_types!r}\n")
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     out.append("_HOME_INV = _rt.inverse_transform(_HOME)\n")
+    if plan.method == "general-6r":
+        out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
+        out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
+                   f"{_literal(list(plan.steps[0]['arrangements']))})\n")
+    else:
+        out.append("_GENERAL6 = None  # the general 6R elimination: not this plan's method\n")
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
     out.append(f"_A = np.array({_array(A)})  # all joint values = _A @ q + _B\n")
     out.append(f"_B = np.array({_array(b)})\n")
@@ -194,6 +200,9 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f'_NATIVE_SOURCE = r"""\n{native}"""\n' if native else "_NATIVE_SOURCE = None\n")
     out.append(BODY)
     text = "".join(out)
+    if plan.method == "general-6r":
+        fast = "from subproblems import fast as _fk\n"
+        text = text.replace(fast, fast + "from subproblems import general6 as _g6\n", 1)
     return text.replace("{imports}", "\nimport math\n", 1)
 
 
@@ -332,6 +341,9 @@ def _candidates(goals, Td, init):
         fixed = ~np.isnan(init[owner])
         TH = np.where(fixed, init[owner], TH)
         TH = _newton(TH, goals[owner], step["iters"])
+        ls = cont = np.zeros(len(TH), dtype=bool)
+    elif METHOD == "general-6r":
+        TH, owner = _GENERAL6.rows(goals)
         ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
