@@ -145,6 +145,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)
     __import__("ikcompiler.analysis.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc singularities
+    __import__("ikcompiler.motion.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc path, ikc trajectory
     __import__("ikcompiler.hands.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc manipulate
     return parser
 

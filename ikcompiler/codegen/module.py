@@ -23,16 +23,19 @@ Joints {kinds} ({joint_names}); target: {target}; method: {method}.
 Derivation:
 {plan_doc}
 
-API: ``solve(T, *free)`` -> (k, n) every solution; ``solve_batch(Ts, *free)`` -> (Q, valid);
-``solve_info(T, *free)`` -> (q, residual, ls) including least-squares rows; ``fk(q)`` -> 4x4;
-``invalid_reasons(Ts)`` -> {{index: reason}} of the poses a batch left empty.  Exact rows reproduce the
-target to TOLERANCE of SCALE (rotation: Frobenius) and lie inside the limits as returned (docs/finish.md).
+API: ``solve(T, *free, limits=True, aliases=False, q_seed=None, weights=None)`` -> (k, n) every
+solution; ``nearest(T, q_seed, *free)`` -> the closest row or None; ``solve_batch(Ts, *free)`` ->
+(Q, valid); ``solve_info(T, *free)`` -> SolveInfo(q, residual, ls, continuum, sigma_min, excluded)
+including least-squares rows; ``fk(q)`` -> 4x4; ``invalid_reasons(Ts)`` -> {{index: reason}} of the
+poses a batch left empty.  Exact rows reproduce the target to TOLERANCE of SCALE (rotation: Frobenius)
+and lie inside the limits as returned (docs/finish.md); selection: docs/motion.md.
 """
 {imports}
 import numpy as np
 
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
+from subproblems import select as _sel
 '''
 
 
@@ -615,8 +618,11 @@ def solve_batch(Ts, *free, limits=True):
     return Q, valid & ~ls
 
 
-def solve_info(T, *free, limits=True):
-    """All candidates of one target with residuals and flags: (q, residual, ls, continuum)."""
+SolveInfo, Excluded = _sel.SolveInfo, _sel.Excluded  # what solve_info returns (subproblems/select.py)
+
+
+def _rows(T, free, limits):
+    """(q, residual, ls, continuum) of one target, exact rows first."""
     found = _fast_one(T, free, limits)
     if found is not None:
         return found
@@ -625,9 +631,58 @@ def solve_info(T, *free, limits=True):
     return Q[0][v], res[0][v], ls[0][v], cont[0][v]
 
 
-def solve(T, *free, limits=True):
+def _select(q, keep, limits, aliases, q_seed, weights):
+    """Alias expansion and seed ordering of rows q (k, n): (rows, index into the original rows)."""
+    idx = np.arange(len(q))
+    if aliases and limits:
+        q, idx = _sel.aliases(q, JOINT_TYPES, LOWER, UPPER)
+    if q_seed is not None:
+        if limits and not aliases:  # the in-limit alias the seed reaches with least motion
+            q = _sel.nearest_alias(q, q_seed, JOINT_TYPES, LOWER, UPPER)
+        dist = _sel.distance(q, q_seed, JOINT_TYPES, SCALE, weights, wrap=not limits)
+        # exact rows first (keep False last), then by distance
+        order = np.lexsort((dist, ~keep[idx]))
+        q, idx = q[order], idx[order]
+    return q, idx
+
+
+def solve_info(T, *free, limits=True, aliases=False, q_seed=None, weights=None):
+    """Every candidate of one target with residuals and flags: a SolveInfo.
+
+    ``q, residual, ls, continuum`` per row (exact rows first); ``sigma_min`` per row (the smallest
+    singular value of the Jacobian with its length rows divided by SCALE: near 0 at a singular
+    configuration); ``excluded``: with ``limits`` (the default) the solutions that the joint limits
+    leave out, each with the joints outside their limits.  ``aliases`` and ``q_seed`` / ``weights`` as
+    in ``solve``.
+    """
+    q, res, ls, cont = _rows(T, free, limits)
+    q, idx = _select(q, ~ls, limits, aliases, q_seed, weights)
+    res, ls, cont = res[idx], ls[idx], cont[idx]
+    sig = _sel.sigma_min(q, twists=_TWISTS, A=_A, b=_B, home=_HOME, scale=SCALE, target=TARGET)
+    excluded = ()
+    if limits:
+        q_all, res_all, ls_all, _ = _rows(T, free, False)
+        out = _sel.excluding_joints(q_all, JOINT_TYPES, LOWER, UPPER)
+        excluded = tuple(Excluded(q_all[r], tuple(JOINT_NAMES[j] for j in np.nonzero(out[r])[0]),
+                                  float(res_all[r]), bool(ls_all[r]))
+                         for r in np.nonzero(out.any(axis=1))[0])
+    return SolveInfo(q, res, ls, cont, sig, excluded)
+
+
+def solve(T, *free, limits=True, aliases=False, q_seed=None, weights=None):
     """Every exact solution of one target inside the joint limits, one row each in JOINT_NAMES order;
-    (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits."""
+    (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits.
+
+    ``aliases=True``: a revolute joint whose range exceeds 2 pi gives one row per value of the angle
+    inside its limits (every combination; with ``limits=False`` rows are as solved).  ``q_seed``:
+    rows sorted by their distance to q_seed (radians; prismatic joints in units of SCALE; times the
+    optional per-joint ``weights``; wrapped to [-pi, pi] only with ``limits=False``); with limits,
+    without aliases, each wide-range revolute value is the alias nearest the seed.
+    """
+    if aliases or q_seed is not None:
+        q, _, ls, _ = _rows(T, free, limits)
+        q = q[~ls]
+        return _select(q, np.ones(len(q), dtype=bool), limits, aliases, q_seed, weights)[0]
     native = _native_chain()
     if native is not None:
         q = native.exact(T, free, limits)
@@ -636,6 +691,15 @@ def solve(T, *free, limits=True):
     found = _fast_one(T, free, limits, native=False)
     if found is not None:
         return found[0][~found[2]]
-    q, _, ls, _ = solve_info(T, *free, limits=limits)
+    q, _, ls, _ = _rows(T, free, limits)
     return q[~ls]
+
+
+def nearest(T, q_seed, *free, limits=True, aliases=True, weights=None):
+    """The exact solution closest to q_seed (see solve), or None when there is none.
+
+    With ``aliases`` (the default here) every in-limit alias of a wide-range joint competes.
+    """
+    q = solve(T, *free, limits=limits, aliases=aliases, q_seed=q_seed, weights=weights)
+    return q[0] if len(q) else None
 '''
