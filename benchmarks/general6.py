@@ -38,23 +38,11 @@ if str(ROOT) not in sys.path:
 
 from ikcompiler import compile_robot, load_robot  # noqa: E402
 from ikcompiler import compiler as _compiler  # noqa: E402
-from ikcompiler.model import Chain, Joint  # noqa: E402
+from ikcompiler.configs import random_6r_chain  # noqa: E402
 from subproblems import general6 as g6  # noqa: E402
 from subproblems.plan_runtime import fk_batch  # noqa: E402
-from subproblems.screw import revolute_twist  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "general6.md"
-
-
-def random_chain(seed: int) -> Chain:
-    rng = np.random.default_rng(seed)
-    w = rng.normal(size=(6, 3))
-    w /= np.linalg.norm(w, axis=1, keepdims=True)
-    r = rng.uniform(-0.5, 0.5, size=(6, 3))
-    home = np.eye(4)
-    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
-    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(w[i], r[i]), -math.pi, math.pi) for i in range(6))
-    return Chain(f"random-6r-{seed}", joints, home)
 
 
 def _gap(rows, q):
@@ -76,7 +64,7 @@ def _recovery(S, V, Q):
 
 
 def bench_arm(seed, poses, log):
-    chain = random_chain(seed)
+    chain = random_6r_chain(seed)
     tw, home = chain.twists, np.asarray(chain.home)
     t = time.perf_counter()
     solver = g6.prepare(tw, home, chain.scale)
@@ -194,7 +182,7 @@ def main(argv=None) -> int:
               "| robot | search method | search recovered | search ms/pose | search rows | general recovered "
               "| general us/pose | general rows | search only | general only | search duplicates |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
-    targets = [(random_chain(s), 1000 + s) for s in range(args.search_arms)] + [(load_robot("jaco"), 77)]
+    targets = [(random_6r_chain(s), 1000 + s) for s in range(args.search_arms)] + [(load_robot("jaco"), 77)]
     for chain, seed in targets:
         Q = np.random.default_rng(seed).uniform(-math.pi, math.pi, size=(args.search_poses, 6))
         if chain.name == "jaco":

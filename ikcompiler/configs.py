@@ -91,6 +91,26 @@ class Compiled:
     seconds: float  # compile time (all attempts)
 
 
+def random_6r_geometry(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """A general 6R arm: axis directions uniform on the sphere, axis points in a 1 m cube, a random
+    tool offset.  Returns ``(twists (6, 6), home (4, 4))``; the same seed gives the same arm bit for bit
+    (the general 6R tests and benchmark name their arms by seed)."""
+    rng = np.random.default_rng(seed)
+    w = rng.normal(size=(6, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    r = rng.uniform(-0.5, 0.5, size=(6, 3))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    return np.concatenate([-np.cross(w, r), w], axis=1), home
+
+
+def random_6r_chain(seed: int) -> Chain:
+    """:func:`random_6r_geometry` as a chain (joints j1..j6, limits (-pi, pi])."""
+    twists, home = random_6r_geometry(seed)
+    joints = tuple(Joint(f"j{i + 1}", "R", twists[i], -math.pi, math.pi) for i in range(6))
+    return Chain(f"random-6r-{seed}", joints, home)
+
+
 def free_candidates(chain: Chain) -> list[tuple[str, ...]]:
     """Free-joint choices tried for a chain with more than 6 independent joints: the 3rd joint (the
     elbow of a 7-joint arm), then the last, then the first; ``[()]`` for 6 joints or fewer."""

@@ -8,23 +8,13 @@ import math
 import numpy as np
 import pytest
 
+from ikcompiler.configs import random_6r_geometry
 from subproblems import general6 as g6
 from subproblems.core import SubproblemInputError
 from subproblems.plan_runtime import fk_batch
 
 EXACT = 1e-12  # the contract: position / size and rotation (Frobenius)
 SAME = 1e-6  # rad: the sampled joint vector is among the solutions
-
-
-def random_arm(seed: int):
-    """Axis directions uniform on the sphere, axis points in a 1 m cube, a random tool offset."""
-    rng = np.random.default_rng(seed)
-    w = rng.normal(size=(6, 3))
-    w /= np.linalg.norm(w, axis=1, keepdims=True)
-    r = rng.uniform(-0.5, 0.5, size=(6, 3))
-    home = np.eye(4)
-    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
-    return np.concatenate([-np.cross(w, r), w], axis=1), home
 
 
 def _fk(twists, home, Q):
@@ -61,7 +51,7 @@ def _check(twists, home, Q, batch):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_random_arms_every_sampled_vector_recovered_and_exact(seed):
-    twists, home = random_arm(seed)
+    twists, home = random_6r_geometry(seed)
     solver = g6.prepare(twists, home)
     Q = np.random.default_rng(100 + seed).uniform(-math.pi, math.pi, size=(80, 6))
     _check(twists, home, Q, solver.solve_batch(_fk(twists, home, Q)))
@@ -71,7 +61,7 @@ MANY_SEED, MANY_POSE = 35, 1  # a search over 40 arms x 400 poses: 12 real solut
 
 
 def test_constructed_pose_with_many_real_solutions():
-    twists, home = random_arm(MANY_SEED)
+    twists, home = random_6r_geometry(MANY_SEED)
     solver = g6.prepare(twists, home)
     Q = np.random.default_rng(1000 + MANY_SEED).uniform(-math.pi, math.pi, size=(400, 6))
     Q = Q[MANY_POSE:MANY_POSE + 1]
@@ -89,7 +79,7 @@ def test_constructed_pose_with_many_real_solutions():
 @pytest.mark.parametrize("value", ["pi", "shift-pi"])
 def test_elimination_joint_at_pi_and_at_the_shifted_infinity(value):
     """th_c = pi is the half-angle's infinity; th_c = delta + pi that of the shifted variable."""
-    twists, home = random_arm(3)
+    twists, home = random_6r_geometry(3)
     solver = g6.prepare(twists, home)
     c = solver._arr[solver.arrangement].order[2]
     Q = np.random.default_rng(5).uniform(-math.pi, math.pi, size=(40, 6))
@@ -98,7 +88,7 @@ def test_elimination_joint_at_pi_and_at_the_shifted_infinity(value):
 
 
 def test_special_angles_every_joint():
-    twists, home = random_arm(4)
+    twists, home = random_6r_geometry(4)
     solver = g6.prepare(twists, home)
     special = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
     Q = special[np.random.default_rng(6).integers(0, 4, size=(60, 6))]
@@ -106,7 +96,7 @@ def test_special_angles_every_joint():
 
 
 def test_unreachable_pose_has_no_rows():
-    twists, home = random_arm(0)
+    twists, home = random_6r_geometry(0)
     solver = g6.prepare(twists, home)
     T = np.eye(4)
     T[:3, 3] = [20.0, 0.0, 0.0]  # far outside the workspace of a 1 m arm
@@ -116,7 +106,7 @@ def test_unreachable_pose_has_no_rows():
 
 
 def test_batch_equals_scalar():
-    twists, home = random_arm(1)
+    twists, home = random_6r_geometry(1)
     solver = g6.prepare(twists, home)
     Q = np.random.default_rng(8).uniform(-math.pi, math.pi, size=(25, 6))
     T = _fk(twists, home, Q)
@@ -152,14 +142,14 @@ def test_special_geometry_matches_the_closed_form(name):
 
 
 def test_prismatic_joint_is_refused_with_a_reason():
-    twists, home = random_arm(0)
+    twists, home = random_6r_geometry(0)
     twists[2] = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
     with pytest.raises(g6.General6Error, match="joint 3 is prismatic"):
         g6.prepare(twists, home)
 
 
 def test_bad_input_is_refused():
-    twists, home = random_arm(0)
+    twists, home = random_6r_geometry(0)
     with pytest.raises(SubproblemInputError, match="6 finite twists"):
         g6.prepare(twists[:5], home)
     solver = g6.prepare(twists, home)
