@@ -455,7 +455,7 @@ def _outcomes(module, flags: dict, Ts, free_cols, batch: bool = False) -> list:
             return [(Q[i][valid[i] & ~ls[i]], cont[i][valid[i]].any()) for i in range(len(Ts))]
         out = []
         for i, T in enumerate(Ts):
-            q, _, ls, cont = module.solve_info(T, *[f[i] for f in free_cols])
+            q, _, ls, cont = module.solve_info(T, *[f[i] for f in free_cols])[:4]
             out.append((q[~ls], cont.any()))
         return out
 

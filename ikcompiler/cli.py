@@ -93,7 +93,8 @@ def _cmd_verify(args) -> int:
         print(f"  solved {done}/{total} poses", file=sys.stderr, flush=True)
 
     report = verify(
-        chain, module, samples=args.samples, seed=args.seed, progress=progress, special=args.special
+        chain, module, samples=args.samples, seed=args.seed, progress=progress, special=args.special,
+        allow_missed=args.allow_missed,
     )
     print(report.text())
     return 0 if report.ok else 1
@@ -136,10 +137,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--special", type=float, default=0.25, help="chance of a special angle 0, +-pi/2, pi per joint (0.25)"
     )
+    p.add_argument(
+        "--allow-missed", type=int, default=0, metavar="N",
+        help="missed poses tolerated before the exit code is non-zero (default 0)",
+    )
     p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("zoo", help="list the robots of the zoo")
     p.set_defaults(func=_cmd_zoo)
     __import__("ikcompiler.analysis.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc singularities
+    __import__("ikcompiler.motion.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc path, ikc trajectory
     __import__("ikcompiler.hands.cli", fromlist=["add_parser"]).add_parser(sub)  # ikc manipulate
     return parser
 

@@ -129,6 +129,9 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             "no closed-form chain: the rules found no subproblem sequence; tried (first moves):\n"
             + "\n".join("    " + s for s in report.summary(12).splitlines())
         )
+        general = _general6_plan(chain, target, free, geometry, notes)
+        if general is not None:
+            return general
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
         if found is not None:
             sub_steps, joints, cost = found
@@ -198,6 +201,37 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
 
 
 SEARCH_GRID = {1: 128, 2: 40}
+GENERAL6 = "general-6r"
+USE_GENERAL6 = True  # False: 6R chains without a closed form take the search fallback as before (tests)
+
+
+def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | None:
+    """The general 6R elimination (subproblems.general6) for a 6-revolute pose target without a
+    closed form, or None (other chains; or a geometry where it degenerates: the note says why)."""
+    from subproblems import general6
+
+    if not USE_GENERAL6 or target != "pose" or free or chain.joint_types != "RRRRRR" or chain.couplings:
+        return None
+    try:
+        solver = general6.General6(chain.twists, chain.home, chain.scale)
+    except general6.General6Error as exc:
+        notes.append(f"general 6R elimination not used: {exc}")
+        return None
+    step = {
+        "kind": "G6R",
+        "code": "G6R",
+        "solve": list(range(6)),
+        "arrangements": list(solver.usable),
+        "rule": "Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
+        "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
+        "(subproblems.general6, docs/general6.md)",
+    }
+    names = [j.name for j in chain.joints]
+    tried = "; ".join(solver.describe(k, names) for k in solver.usable)
+    notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
+    all_names = tuple(j.name for j in chain.joints)
+    return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
+                tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start):

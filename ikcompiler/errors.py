@@ -43,3 +43,8 @@ class FreeJointError(IkcError, ValueError):
 
 class CompileError(IkcError):
     """No plan could be built; the message says what was tried and why it failed."""
+
+
+class MotionError(IkcError, ValueError):
+    """A path or trajectory request that cannot be met as asked (start not on the path, limits too
+    tight for the duration, wrong number of joint values)."""

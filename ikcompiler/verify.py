@@ -1,14 +1,29 @@
-"""Round-trip and completeness checks of a compiled solver on random joint values.
+"""Round-trip and completeness checks of a compiled solver on random joint values: a check that can fail.
 
 Sample joint values inside the limits (a quarter of them snapped to the special angles 0, +-pi/2, pi),
-compute their poses with the *chain's own* forward kinematics, solve, and count: poses, solutions,
-recovered (the sampled vector is among the solutions, to 1e-6 of the robot's size; at a singular
-sampled vector, to 1e-4: a double root is only located to about the square root of the tolerance, and
-every joint vector that close reproduces the pose as well — those are counted apart as "at a double
-root"), wrong (a returned solution whose FK misses the target by more than the tolerance),
-self-motion (not recovered, but the pose is singular with a
-continuum of solutions, flagged; "unsolved" when no exact representative came back), missed (the
-rest).  The batch path is checked against the single-pose path on a subset.
+compute their poses with the *chain's own* forward kinematics, solve, and count, every number
+recomputed here from forward kinematics and the limits (nothing is taken from the solver's report):
+
+* recovered: the sampled vector is among the exact solutions, to :data:`SAME_ANGLE` rad (revolute,
+  modulo 2 pi) and :data:`SAME_LENGTH` of the robot's size (prismatic); at a singular sampled vector
+  (the Jacobian shown rank-deficient) to 100 times that, counted apart as "at a double root": a double
+  root is only located to about the square root of the precision;
+* wrong: an exact row whose FK misses the target by more than :data:`WRONG` (relative position, or
+  rotation in Frobenius norm);
+* imprecise: an exact row above the module's precision contract (``TOLERANCE``, 1e-12) but not wrong;
+* outside limits: a returned row with a value outside its joint's limits *as returned* (no modulo);
+  non-canonical: a revolute value that is not its representative in (-pi, pi] (a value within
+  ``subproblems.fast.PI_SNAP`` above -pi counts as -pi) although that representative lies inside the
+  limits;
+* duplicate: two returned rows of one pose closer than the recovery tolerance (as returned, modulo 2 pi);
+* self-motion: not recovered, but a returned row is flagged ``continuum`` and the Jacobian at the
+  sampled vector is rank-deficient (smallest normalised singular value below :data:`SINGULAR`);
+  "unsolved" when no exact representative came back;
+* missed: the rest.
+
+:attr:`VerifyReport.ok` holds when nothing is wrong, imprecise, outside the limits, non-canonical or
+duplicate, the batch and single-pose paths agree, and at most ``allow_missed`` poses are missed
+(default 0); ``ikc verify`` exits non-zero otherwise.
 """
 
 from __future__ import annotations
@@ -18,10 +33,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from subproblems.fast import PI_SNAP
+
 SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
-SAME = 1e-6  # joint distance (relative to the robot's size, at least 1) of a recovered sample
-SAME_SINGULAR = 1e-4  # the same at a singular sampled vector (a double root)
+SAME_ANGLE = 1e-6  # rad: a revolute value of a recovered sample (absolute)
+SAME_LENGTH = 1e-6  # of the robot's size: a prismatic value of a recovered sample
+SINGULAR_FACTOR = 100.0  # tolerance factor at a singular sampled vector (a double root)
 SINGULAR = 1e-7  # smallest singular value of the normalised Jacobian below which a vector is singular
+WRONG = 1e-9  # relative error of an exact row above which it is wrong
 
 
 @dataclass
@@ -35,15 +54,28 @@ class VerifyReport:
     missed: int
     self_motion: int
     self_motion_unsolved: int
-    double_root: int  # recovered only to SAME_SINGULAR, at a singular sampled vector
+    double_root: int  # recovered only to SINGULAR_FACTOR times the tolerance, at a singular sampled vector
     max_error: float
     median_error: float
     batch_mismatch: int
     scalar_checked: int
+    imprecise: int = 0  # exact rows above the module's TOLERANCE (not wrong)
+    outside_limits: int = 0  # returned rows with a value outside its limits as returned
+    non_canonical: int = 0  # returned rows with a revolute value not in (-pi, pi] where it could be
+    duplicates: int = 0  # pairs of returned rows of one pose closer than the recovery tolerance
+    allow_missed: int = 0  # missed poses tolerated by ok
 
     @property
     def ok(self) -> bool:
-        return self.wrong == 0 and self.batch_mismatch == 0
+        return (
+            self.wrong == 0
+            and self.imprecise == 0
+            and self.outside_limits == 0
+            and self.non_canonical == 0
+            and self.duplicates == 0
+            and self.batch_mismatch == 0
+            and self.missed <= self.allow_missed
+        )
 
     def text(self) -> str:
         rate = self.recovered / self.poses if self.poses else 0.0
@@ -51,11 +83,14 @@ class VerifyReport:
             f"{self.robot}: method {self.method}\n"
             f"  poses {self.poses}  solutions {self.solutions}  recovered {self.recovered} ({rate:.4%}; "
             f"{self.double_root} at a double root)  "
-            f"wrong {self.wrong}  missed {self.missed}  at a self-motion {self.self_motion} "
+            f"missed {self.missed} (allowed {self.allow_missed})  at a self-motion {self.self_motion} "
             f"(of which {self.self_motion_unsolved} with no exact representative)\n"
+            f"  wrong {self.wrong}  imprecise {self.imprecise}  outside limits {self.outside_limits}  "
+            f"non-canonical {self.non_canonical}  duplicate {self.duplicates}\n"
             f"  error of returned solutions (relative to robot size): max {self.max_error:.2e}, "
             f"median {self.median_error:.2e}\n"
-            f"  single-pose vs batch: {self.scalar_checked} poses compared, {self.batch_mismatch} differ"
+            f"  single-pose vs batch: {self.scalar_checked} poses compared, {self.batch_mismatch} differ\n"
+            f"  {'OK' if self.ok else 'FAILED'}"
         )
 
 
@@ -79,6 +114,7 @@ def sample_configurations(chain, count: int, seed: int = 0, special: float = 0.2
 
 
 def _same(a, b, kinds) -> np.ndarray:
+    """Largest joint distance of rows a from b, revolute values modulo 2 pi."""
     d = a - b
     for c, k in enumerate(kinds):
         if k == "R":
@@ -86,19 +122,65 @@ def _same(a, b, kinds) -> np.ndarray:
     return np.abs(d).max(axis=-1)
 
 
+def _recovery_distance(a, b, kinds, scale: float) -> np.ndarray:
+    """Distance of rows a from b in units of the recovery tolerance: revolute values modulo 2 pi over
+    SAME_ANGLE, prismatic ones over SAME_LENGTH * scale; <= 1 means the same joint vector."""
+    d = np.abs(np.asarray(a, dtype=float) - b)
+    for c, k in enumerate(kinds):
+        if k == "R":
+            d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi) / SAME_ANGLE
+        else:
+            d[..., c] /= SAME_LENGTH * scale
+    return d.max(axis=-1)
+
+
 VERIFY_CHUNK = 500
 
 
-def _singular(chain, q, free_cols) -> bool:
-    """Whether q is a singular configuration of the solved joints (body Jacobian, linear rows in units
-    of the robot's size, free joints' columns left out)."""
+def _singular(chain, q, free_cols, target: str = "pose") -> bool:
+    """Whether the Jacobian of the solved joints is rank-deficient at q (body Jacobian, linear rows in
+    units of the robot's size, free joints' columns left out, the target's rows only)."""
     J = np.delete(chain.body_jacobian(q), list(free_cols), axis=1)
     J[:3] /= chain.scale
-    return bool(np.linalg.svd(J, compute_uv=False).min() < SINGULAR)
+    if target == "position":
+        J = J[:3]
+    elif target == "orientation":
+        J = J[3:]
+    sv = np.linalg.svd(J, compute_uv=False)
+    rank_needed = min(J.shape)
+    return bool(len(sv) < rank_needed or sv[:rank_needed].min() < SINGULAR)
+
+
+def _errors(chain, target: str, Gs, G) -> np.ndarray:
+    """Relative errors of poses Gs against the sampled pose G: max(|dp| / size, |dR|_F) for the target."""
+    dp = np.linalg.norm(Gs[:, :3, 3] - G[:3, 3], axis=1) / chain.scale
+    if target == "position":
+        return dp
+    if target == "orientation":
+        return np.linalg.norm(Gs[:, :3, :3] - G[:3, :3], axis=(1, 2))
+    if target == "position+direction":
+        return np.maximum(dp, np.linalg.norm(Gs[:, :3, 2] - G[:3, 2], axis=1))
+    return np.maximum(dp, np.linalg.norm(Gs[:, :3, :3] - G[:3, :3], axis=(1, 2)))
+
+
+def _limit_checks(rows, kinds, lower, upper):
+    """(outside, non_canonical) counts of returned rows, checked as returned."""
+    outside = ((rows < lower) | (rows > upper)).any(axis=1)
+    non_canonical = np.zeros(len(rows), dtype=bool)
+    for c, k in enumerate(kinds):
+        if k != "R":
+            continue
+        v = rows[:, c]
+        w = np.remainder(v + math.pi, 2 * math.pi) - math.pi
+        w = np.where(w <= -math.pi + PI_SNAP, math.pi, w)  # (-pi, pi]; a value at -pi is pi
+        moved = (v <= -math.pi + PI_SNAP) | (v > math.pi)  # not in (-pi, pi] as returned
+        non_canonical |= moved & (w >= lower[c]) & (w <= upper[c])
+    return int(outside.sum()), int((non_canonical & ~outside).sum())
 
 
 def verify(
-    chain, module, samples: int = 200, seed: int = 0, scalar_checks: int = 20, progress=None, special=0.25
+    chain, module, samples: int = 200, seed: int = 0, scalar_checks: int = 20, progress=None, special=0.25,
+    allow_missed: int = 0,
 ) -> VerifyReport:
     """Sample, solve and count (see the module docstring); ``progress(done, total)`` after each chunk."""
     Q = sample_configurations(chain, samples, seed, special)
@@ -116,40 +198,35 @@ def verify(
     S, filled, ls, _, cont = (np.concatenate(x) for x in zip(*parts))
     valid = filled & ~ls
     scale = chain.scale
-    errs, wrong, recovered, solutions, self_motion, unsolved, double_root = [], 0, 0, 0, 0, 0, 0
-    tol = module.TOLERANCE * scale
+    lower, upper = np.asarray(module.LOWER, dtype=float), np.asarray(module.UPPER, dtype=float)
+    errs, recovered, solutions, self_motion, unsolved, double_root = [], 0, 0, 0, 0, 0
+    wrong = imprecise = outside = non_canonical = duplicates = 0
     for i in range(samples):
+        o, n = _limit_checks(S[i][filled[i]], kinds, lower, upper)
+        outside, non_canonical = outside + o, non_canonical + n
         sols = S[i][valid[i]]
         solutions += len(sols)
+        singular = None
         if len(sols) == 0:
-            if (cont[i] & filled[i]).any():
+            if (cont[i] & filled[i]).any() and _singular(chain, Q[i], free_pos, module.TARGET):
                 self_motion += 1
                 unsolved += 1
             continue
-        Gs = chain.fk_batch(sols)
-        if module.TARGET == "position":
-            e = np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1)
-        elif module.TARGET == "orientation":
-            e = scale * np.abs(Gs[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2))
-        elif module.TARGET == "position+direction":
-            e = np.maximum(
-                np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),
-                scale * np.abs(Gs[:, :3, 2] - G[i, :3, 2]).max(axis=1),
-            )
-        else:
-            e = np.maximum(
-                np.linalg.norm(Gs[:, :3, 3] - G[i, :3, 3], axis=1),
-                scale * np.abs(Gs[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2)),
-            )
-        errs.extend((e / scale).tolist())
-        wrong += int((e > tol).sum())
-        nearest = _same(sols, Q[i], kinds).min()
-        if nearest <= SAME * max(1.0, scale):
+        e = _errors(chain, module.TARGET, chain.fk_batch(sols), G[i])
+        errs.extend(e.tolist())
+        wrong += int((e > WRONG).sum())
+        imprecise += int(((e > module.TOLERANCE) & (e <= WRONG)).sum())
+        for a in range(1, len(sols)):
+            duplicates += int((_recovery_distance(sols[:a], sols[a], kinds, scale) <= 1.0).sum())
+        nearest = _recovery_distance(sols, Q[i], kinds, scale).min()
+        if nearest <= 1.0:
             recovered += 1
-        elif nearest <= SAME_SINGULAR * max(1.0, scale) and _singular(chain, Q[i], free_pos):
+            continue
+        singular = _singular(chain, Q[i], free_pos, module.TARGET)
+        if nearest <= SINGULAR_FACTOR and singular:
             recovered += 1
             double_root += 1
-        elif (cont[i] & valid[i]).any():
+        elif (cont[i] & valid[i]).any() and singular:
             self_motion += 1
     mismatch = 0
     n_check = min(scalar_checks, samples)
@@ -160,7 +237,7 @@ def verify(
             mismatch += 1
             continue
         for row in single:
-            if not (_same(batch, row, kinds) <= 1e-9 * max(1.0, scale)).any():
+            if not (np.abs(batch - row).max(axis=1) <= 1e-9 * max(1.0, scale)).any():  # as returned
                 mismatch += 1
                 break
     errs = np.array(errs) if errs else np.zeros(1)
@@ -179,4 +256,9 @@ def verify(
         float(np.median(errs)),
         mismatch,
         n_check,
+        imprecise=imprecise,
+        outside_limits=outside,
+        non_canonical=non_canonical,
+        duplicates=duplicates,
+        allow_missed=allow_missed,
     )

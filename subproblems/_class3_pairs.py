@@ -765,8 +765,10 @@ def _point_coincidences(pb: Pair, out: BatchResult, K: int) -> BatchResult:
     """
     # (a distance at roundoff of the scale: the same coincidence, evaluated by another forward kinematics)
     zero = np.abs(pb.D) <= ZERO_DIST * pb.scale[:, None]
-    # (an exact continuum stays: the coincidence is then not isolated either)
-    todo = zero.any(axis=1) & ~(out.continuum & ~out.ls.any(axis=1))
+    # An exact continuum of the engine is checked too: the solutions lie on the coincidence's set, so
+    # when class II finds that set finite (S3-TT with both distances 0: a linear system of full rank)
+    # the answer is finite; when class II reports a continuum itself, the engine's answer stays.
+    todo = zero.any(axis=1)
     todo = np.nonzero(todo)[0] if pb.family == "S3" else np.zeros(0, dtype=int)
     if not len(todo):
         return out

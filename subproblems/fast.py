@@ -474,6 +474,8 @@ def goal_entries(T, target: str):
                 return None
             r0, r1, r2 = a[0], a[1], a[2]
             t = (0.0, 0.0, 0.0) if target == "orientation" else (r0[3], r1[3], r2[3])
+            if target != "orientation" and [float(x) for x in a[3]] != [0.0, 0.0, 0.0, 1.0]:
+                return None  # not a rigid transform (or one off by roundoff): the checked way
             g = tuple(map(float, (r0[0], r0[1], r0[2], r1[0], r1[1], r1[2], r2[0], r2[1], r2[2], *t)))
     except (TypeError, ValueError):
         return None
@@ -492,21 +494,130 @@ def goal_entries(T, target: str):
             or abs(det - 1.0) > 1e-6
         ):
             return None
+        defect = (x0 * x0 + x1 * x1 + x2 * x2 - 1.0, y0 * y0 + y1 * y1 + y2 * y2 - 1.0,
+                  z0 * z0 + z1 * z1 + z2 * z2 - 1.0, x0 * y0 + x1 * y1 + x2 * y2,
+                  x0 * z0 + x1 * z1 + x2 * z2, y0 * z0 + y1 * z1 + y2 * z2)
+        if max(map(abs, defect)) > 1e-14:
+            return None  # a rotation to 1e-6 only: the batch path projects it onto the nearest one
     return g
+
+
+# The contract of a returned row (docs/finish.md): every value inside its joint's limits as returned; a
+# revolute value as its representative in (-pi, pi] where that lies inside the limits, else the 2 pi alias
+# inside them; a value within LIMIT_EPS outside a limit (a double root at a limit is only located to
+# about sqrt(eps)) is clamped onto the limit, and one within PI_SNAP above -pi (roundoff of a root at pi)
+# becomes pi; both change the row, so its error is measured again before it counts as exact.
+LIMIT_EPS = 1e-7
+PI_SNAP = 1e-13
+INSIDE, ADJUSTED, OUTSIDE = 0, 1, 2
+
+
+def wrap_pi(x: float) -> float:
+    """The representative of angle x in (-pi, pi]; within PI_SNAP above -pi it is pi.
+
+    >>> wrap_pi(-math.pi), wrap_pi(3 * math.pi / 2) == -math.pi / 2, wrap_pi(-math.pi + 1e-15)
+    (3.141592653589793, True, 3.141592653589793)
+    """
+    if not -math.pi < x <= math.pi:
+        x = (x + math.pi) % (2 * math.pi) - math.pi
+    return math.pi if x <= -math.pi + PI_SNAP else x
+
+
+def represent_one(q, revolute, bounds, limits: bool):
+    """Joint values q as returned, and their status: INSIDE, ADJUSTED (a value snapped or clamped:
+    measure the row again) or OUTSIDE (no representative inside the limits).
+
+    >>> represent_one([2.625], [True], [(-3.665, 1.152)], True)[0][0] == 2.625 - 2 * math.pi
+    True
+    """
+    out, status = [], INSIDE
+    two_pi = 2 * math.pi
+    for x, rev, (lo, hi) in zip(q, revolute, bounds):
+        if rev:
+            if not -math.pi < x <= math.pi:
+                x = (x + math.pi) % two_pi - math.pi
+            if x <= -math.pi + PI_SNAP:
+                if x != -math.pi:  # pi itself is an alias; a value beside it is moved
+                    status = ADJUSTED
+                x = math.pi
+        if limits and not lo <= x <= hi:
+            choices = (x, x - two_pi, x + two_pi) if rev else (x,)
+            for c in choices:
+                if lo <= c <= hi:
+                    x = c
+                    break
+            else:
+                for c in choices:
+                    if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS:
+                        x, status = min(max(c, lo), hi), ADJUSTED
+                        break
+                else:
+                    return out, OUTSIDE
+        out.append(x)
+    return out, status
+
+
+def represent(Q, kinds, lower, upper, limits: bool, clamps: bool = False):
+    """:func:`represent_one` vectorised over rows Q (..., dof): (values, adjusted, outside) arrays, and
+    with ``clamps`` also the mask (..., dof) of the values clamped onto a limit.
+
+    >>> Q, adj, out = represent(np.array([[-math.pi], [2.625], [1.5]]), "R", [-3.665], [1.152], True)
+    >>> Q[:2, 0].round(3).tolist(), adj.tolist(), out.tolist()
+    ([-3.142, -3.658], [False, False, False], [False, False, True])
+    """
+    Q = np.array(Q, dtype=float)
+    adjusted = np.zeros(Q.shape[:-1], dtype=bool)
+    outside = np.zeros(Q.shape[:-1], dtype=bool)
+    clamped = np.zeros(Q.shape, dtype=bool)
+    two_pi = 2 * math.pi
+    for j, k in enumerate(kinds):
+        x = Q[..., j]
+        if k == "R":
+            x = np.where((x > -math.pi) & (x <= math.pi), x, np.remainder(x + math.pi, two_pi) - math.pi)
+            snap = x <= -math.pi + PI_SNAP
+            adjusted |= snap & (x != -math.pi)
+            x = np.where(snap, math.pi, x)
+        if limits:
+            lo, hi = float(lower[j]), float(upper[j])
+            got = np.zeros(x.shape, dtype=bool)
+            near = np.zeros(x.shape, dtype=bool)
+            value, near_value = x.copy(), x.copy()
+            choices = (x, x - two_pi, x + two_pi) if k == "R" else (x,)
+            for c in choices[::-1]:  # the first that fits wins: assign in reverse order
+                inside = (c >= lo) & (c <= hi)
+                close = (c >= lo - LIMIT_EPS) & (c <= hi + LIMIT_EPS)
+                value = np.where(inside, c, value)
+                near_value = np.where(close, np.clip(c, lo, hi), near_value)
+                got |= inside
+                near |= close
+            x = np.where(got, value, near_value)
+            adjusted |= ~got & near
+            outside |= ~got & ~near
+            clamped[..., j] = ~got & near
+        Q[..., j] = x
+    return (Q, adjusted, outside, clamped) if clamps else (Q, adjusted, outside)
+
+
+def angle_distance(d, revolute: bool):
+    """|d| for a prismatic joint; modulo 2 pi (in [0, pi]) for a revolute one."""
+    a = np.abs(d)
+    return np.abs(np.remainder(a + math.pi, 2 * math.pi) - math.pi) if revolute else a
 
 
 def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
     """Solutions of one target from the leaves of a fast chain, or None to take the reference path.
 
     Returns rows ``(inexact, error, q, continuum)`` sorted exact first, then by error; duplicates
-    (equal modulo 2 pi) and, with ``limits``, rows outside the limits are left out.  None when a leaf
-    needs Newton steps (a tangent root, a near miss) or the reference path (:data:`DEFER`).
+    (equal modulo 2 pi) and, with ``limits``, rows outside the limits are left out; values as
+    returned (:func:`represent_one`).  None when a leaf needs Newton steps (a tangent root, a near
+    miss), a value was snapped or clamped (its error must be measured again), or the reference path
+    (:data:`DEFER`).
     """
     exact_tol, near = tol * scale, NEAR_MISS * scale
     same = 1e-9 * (scale if scale > 1.0 else 1.0)  # exact duplicates
     two_pi = 2 * math.pi
     revolute = [k == "R" for k in kinds]
-    bounds = list(zip(revolute, lower, upper))
+    bounds = list(zip(lower, upper))
     rows = []
     family_seen = False  # a self-motion leaf, inside the limits or not
     for leaf in leaves:
@@ -518,23 +629,10 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
         if flag & TANGENT_ROOT:
             same = SPLIT_ROOT  # two copies of one double root: merge them below
         family_seen = family_seen or bool(flag & FAMILY)
-        q = list(leaf[:-2])
-        for j, rev in enumerate(revolute):
-            if rev:
-                x = q[j]
-                if not -math.pi < x <= math.pi:
-                    x = (x + math.pi) % two_pi - math.pi
-                    q[j] = math.pi if x == -math.pi else x
-        if limits:
-            for v, (rev, lo, hi) in zip(q, bounds):
-                if lo - 1e-7 <= v <= hi + 1e-7:
-                    continue
-                if rev and (lo - 1e-7 <= v + two_pi <= hi + 1e-7 or lo - 1e-7 <= v - two_pi <= hi + 1e-7):
-                    continue
-                break
-            else:
-                rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
-        else:
+        q, status = represent_one(leaf[:-2], revolute, bounds, limits)
+        if status == ADJUSTED:
+            return None
+        if status == INSIDE:
             rows.append((err > exact_tol, err, q, bool(flag & FAMILY)))
     if family_seen and not any(r[3] and not r[0] for r in rows):
         # a self-motion none of whose representatives is exact inside the limits: the reference path
@@ -547,7 +645,10 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
         for other in kept:
             for a, b, rev in zip(q, other[2], revolute):
                 d = a - b if a > b else b - a
-                if d > same and not (rev and abs(d - two_pi) <= same):
+                if rev:
+                    d = d % two_pi
+                    d = two_pi - d if d > math.pi else d
+                if d > same:
                     break  # differs in this joint
             else:
                 break  # equal in every joint: a duplicate
@@ -591,9 +692,8 @@ def usable(Q, flag):
 
 
 def _same_angle(d, revolute: bool, tol: float):
-    """|d| within tol, modulo 2 pi for a revolute joint (both values already wrapped to (-pi, pi])."""
-    a = np.abs(d)
-    return (a <= tol) | (np.abs(a - 2 * math.pi) <= tol) if revolute else a <= tol
+    """|d| within tol, modulo 2 pi for a revolute joint (values may be 2 pi aliases of each other)."""
+    return angle_distance(d, revolute) <= tol
 
 
 ROUTE_DONE, ROUTE_NEWTON, ROUTE_REFERENCE = 0, 1, 2
@@ -623,20 +723,10 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
     route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
     route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON
     split = ((flag & TANGENT_ROOT) != 0).any(axis=1)  # merge the two copies of a double root
-    keep = ~empty
-    for j, k in enumerate(kinds):
-        col = Q[:, :, j]
-        if k == "R":
-            w = np.remainder(col + math.pi, 2 * math.pi) - math.pi
-            col = Q[:, :, j] = np.where(w == -math.pi, math.pi, w)
-        if limits:
-            lo, hi = lower[j] - 1e-7, upper[j] + 1e-7
-            inside = (col >= lo) & (col <= hi)
-            if k == "R":
-                inside |= ((col + 2 * math.pi >= lo) & (col + 2 * math.pi <= hi)) | (
-                    (col - 2 * math.pi >= lo) & (col - 2 * math.pi <= hi)
-                )
-            keep &= inside
+    Q, adjusted, outside = represent(Q, kinds, lower, upper, limits)
+    keep = ~empty & ~outside
+    # a value snapped or clamped changes the row: the Newton route measures it again
+    route[(route == ROUTE_DONE) & (adjusted & keep).any(axis=1)] = ROUTE_NEWTON
     # a self-motion none of whose representatives is exact inside the limits: the reference path
     route[family.any(axis=1) & ~(family & ~inexact & keep).any(axis=1)] = ROUTE_REFERENCE
     keep &= (route == ROUTE_DONE)[:, None]

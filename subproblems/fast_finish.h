@@ -135,7 +135,8 @@ static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, dou
     }
 }
 
-/* The chain's pose error of tool pose G against goal g: max(|dp|, scale max|dR|) for a pose. */
+/* The chain's pose error of tool pose G against goal g: max(|dp|, scale |dR|_F) for a pose (the
+ * precision contract: Frobenius norm of the rotation error, as plan_runtime.pose_error). */
 static double ikc_pose_error(const ikc_robot *rb, const double *G, const double *g) {
     double dp = 0.0, dr = 0.0;
     for (int k = 0; k < 3; k++) dp += (G[9 + k] - g[9 + k]) * (G[9 + k] - g[9 + k]);
@@ -143,9 +144,9 @@ static double ikc_pose_error(const ikc_robot *rb, const double *G, const double 
     for (int k = 0; k < 9; k++) {
         double d = G[k] - g[k];
         if (d != d) return NAN;
-        if (fabs(d) > dr) dr = fabs(d);
+        dr += d * d;
     }
-    dr *= rb->scale;
+    dr = rb->scale * sqrt(dr);
     if (rb->target == 1) return dp;
     if (rb->target == 2) return dr;
     return ikc_max2(dp, dr);
@@ -265,21 +266,59 @@ static double ikc_wrap(double x) {
     return w == -IKC_PI_F ? IKC_PI_F : w;
 }
 
-static int ikc_inside(double v, double lo, double hi, int rev) {
-    double a = lo - 1e-7, b = hi + 1e-7;
-    if (a <= v && v <= b) return 1;
-    if (rev && ((a <= v + IKC_TWO_PI && v + IKC_TWO_PI <= b) || (a <= v - IKC_TWO_PI && v - IKC_TWO_PI <= b)))
-        return 1;
-    return 0;
+#define IKC_LIMIT_EPS 1e-7  /* fast.LIMIT_EPS: a value this close outside a limit is clamped onto it */
+#define IKC_PI_SNAP 1e-13   /* fast.PI_SNAP: a value this close above -pi is pi */
+#define IKC_INSIDE 0
+#define IKC_ADJUSTED 1      /* a value snapped or clamped: the row's error must be measured again */
+#define IKC_OUTSIDE 2
+#define IKC_CLAMPED 3       /* a value clamped onto a limit: the other joints need Newton steps */
+
+/* fast.represent_one: joint values q (in place) as returned -- a revolute value as its representative in
+ * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status. */
+static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
+    int status = IKC_INSIDE;
+    for (int j = 0; j < rb->dof; j++) {
+        double x = q[j];
+        const int rev = rb->revolute[j];
+        if (rev) {
+            x = ikc_wrap(x);
+            if (x <= -IKC_PI_F + IKC_PI_SNAP) {
+                if (x != -IKC_PI_F && status == IKC_INSIDE) status = IKC_ADJUSTED;
+                x = IKC_PI_F;
+            }
+        }
+        const double lo = rb->lower[j], hi = rb->upper[j];
+        if (limits && !(lo <= x && x <= hi)) {
+            double c[3] = {x, x - IKC_TWO_PI, x + IKC_TWO_PI};
+            const int nc = rev ? 3 : 1;
+            int found = 0;
+            for (int k = 0; k < nc && !found; k++)
+                if (lo <= c[k] && c[k] <= hi) x = c[k], found = 1;
+            for (int k = 0; k < nc && !found; k++)
+                if (lo - IKC_LIMIT_EPS <= c[k] && c[k] <= hi + IKC_LIMIT_EPS) {
+                    x = c[k] < lo ? lo : (c[k] > hi ? hi : c[k]);
+                    found = 1;
+                    status = IKC_CLAMPED;
+                }
+            if (!found) return IKC_OUTSIDE;
+        }
+        q[j] = x;
+    }
+    return status;
 }
 
-/* Whether joint values q (any 2 pi representation of a revolute value) lie inside the limits. */
+/* Whether joint values q have a representative inside the limits (q itself unchanged). */
 static int ikc_row_inside(const ikc_robot *rb, const double *q) {
-    for (int j = 0; j < rb->dof; j++) {
-        double v = rb->revolute[j] ? ikc_wrap(q[j]) : q[j];
-        if (!ikc_inside(v, rb->lower[j], rb->upper[j], rb->revolute[j])) return 0;
-    }
-    return 1;
+    double w[rb->dof];
+    for (int j = 0; j < rb->dof; j++) w[j] = q[j];
+    return ikc_represent(rb, w, 1) != IKC_OUTSIDE;
+}
+
+/* The pose error of returned joint values q against goal g, measured on the true robot. */
+static double ikc_measure(const ikc_robot *rb, const double *g, const double *q) {
+    double G[12], J[6 * rb->dof];
+    ikc_fk_jacobian(rb, q, G, J);
+    return ikc_pose_error(rb, G, g);
 }
 
 /* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
@@ -304,18 +343,18 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
-            err[k] = ikc_newton(rb, g, w, (flag & IKC_FAMILY) ? 8 : 3);
+            /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
+            err[k] = ikc_newton(rb, g, w, 15);
             if (err[k] != err[k]) return IKC_PYTHON;
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
-        int ok = 1;
-        for (int j = 0; j < dof; j++) {
+        for (int j = 0; j < dof; j++)
             if (w[j] != w[j]) return IKC_PYTHON;
-            if (rb->revolute[j]) w[j] = ikc_wrap(w[j]);
-            if (limits && ok && !ikc_inside(w[j], rb->lower[j], rb->upper[j], rb->revolute[j])) ok = 0;
-        }
-        inexact[k] = err[k] > exact_tol;
+        const int status = ikc_represent(rb, w, limits), ok = status != IKC_OUTSIDE;
+        if (status == IKC_CLAMPED) return IKC_PYTHON;  /* Newton with the clamped joint held: Python */
+        if (status == IKC_ADJUSTED) err[k] = ikc_measure(rb, g, w);  /* the values as returned */
+        inexact[k] = !(err[k] <= exact_tol);
         if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
             family_any = 1;
             if (ok && !inexact[k]) family_exact = 1;
@@ -343,7 +382,11 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             int differs = 0;
             for (int j = 0; j < dof; j++) {
                 double d = w[j] > o[j] ? w[j] - o[j] : o[j] - w[j];
-                if (d > same && !(rb->revolute[j] && fabs(d - IKC_TWO_PI) <= same)) {
+                if (rb->revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
+                    d = fmod(d, IKC_TWO_PI);
+                    if (d > IKC_PI_F) d = IKC_TWO_PI - d;
+                }
+                if (d > same) {
                     differs = 1;
                     break;
                 }
@@ -376,6 +419,8 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
         for (int i = 0; i < 3; i++) g[9 + i] = T[4 * i + 3];
         for (int i = 12; i < 16; i++)
             if (!isfinite(T[i])) return 0;
+        for (int i = 12; i < 16; i++)  /* the bottom row of a rigid transform */
+            if (fabs(T[i] - (i == 15 ? 1.0 : 0.0)) > 1e-12) return 0;
     }
     for (int i = 0; i < 12; i++)
         if (!isfinite(g[i])) return 0;
@@ -387,6 +432,12 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
         fabs(x0 * z0 + x1 * z1 + x2 * z2) > 1e-6 || fabs(y0 * z0 + y1 * z1 + y2 * z2) > 1e-6 ||
         fabs(det - 1.0) > 1e-6)
         return 0;
+    /* orthonormal to 1e-6 but not to 1e-14: the Python path projects it onto the nearest rotation */
+    double defect[6] = {x0 * x0 + x1 * x1 + x2 * x2 - 1.0, y0 * y0 + y1 * y1 + y2 * y2 - 1.0,
+                        z0 * z0 + z1 * z1 + z2 * z2 - 1.0, x0 * y0 + x1 * y1 + x2 * y2,
+                        x0 * z0 + x1 * z1 + x2 * z2, y0 * z0 + y1 * z1 + y2 * z2};
+    for (int i = 0; i < 6; i++)
+        if (fabs(defect[i]) > 1e-14) return 2;
     return 1;
 }
 
@@ -511,7 +562,9 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
             CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0);  /* plain steps, as the Python search */
-            CF[a] = 0;
+            /* merged within IKC_SPLIT_ROOT, as the Python search: two seeds of one double root stop on
+             * its flat valley up to ~1e-7 apart */
+            CF[a] = IKC_TANGENT_ROOT;
         }
         status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
         if (status < 0) status = IKC_PYTHON;
@@ -640,7 +693,8 @@ static int ikc_solve_goal(const ikc_robot *rb, const double *g, const double *fr
 static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int limits, double *q,
                    double *res, int *ls, int *cont) {
     double g[12];
-    if (!ikc_goal_checked(rb, T, g)) return IKC_INVALID;
+    const int checked = ikc_goal_checked(rb, T, g);
+    if (checked != 1) return checked == 0 ? IKC_INVALID : IKC_PYTHON;
     return ikc_solve_goal(rb, g, fr, limits, q, res, ls, cont);
 }
 
@@ -669,8 +723,9 @@ static void *ikc_run(void *arg) {
     const int dof = rb->dof, slots = rb->slots, stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
     double g[12];
     for (int64_t i = job->start; i < job->stop; i++) {
-        if (!ikc_goal_checked(rb, job->goals + stride * i, g)) {
-            job->count[i] = IKC_INVALID;
+        const int checked = ikc_goal_checked(rb, job->goals + stride * i, g);
+        if (checked != 1) {
+            job->count[i] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
             continue;
         }
         job->count[i] = ikc_solve_goal(rb, g, job->fr + rb->nfree * i, job->limits, job->q + i * slots * dof,

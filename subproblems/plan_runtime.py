@@ -40,9 +40,22 @@ import numpy as np
 
 from subproblems._class2 import independent_paths
 from subproblems.core import solve_batch
+from subproblems.fast import angle_distance, represent
 from subproblems.screw import inverse_transform, twist_exp_batch
 
-__all__ = ["run_plan", "finish", "fk_batch", "wrap_angles"]
+__all__ = ["run_plan", "finish", "fk_batch", "wrap_angles", "InvalidTargetError", "InvalidFreeValueError"]
+
+
+class InvalidTargetError(ValueError):
+    """A target a generated module cannot take: not finite, not a rigid transform, or the wrong shape.
+
+    The generated modules import only numpy and ``subproblems``, so their errors derive from these
+    (``module.InvalidTargetError`` is a subclass); catch ``ValueError`` to catch both kinds.
+    """
+
+
+class InvalidFreeValueError(ValueError):
+    """Free joint values that are NaN or infinite, or not one per free joint."""
 
 
 def _cross(a, b) -> np.ndarray:
@@ -321,28 +334,19 @@ def fk_batch(twists, TH, home) -> np.ndarray:
 
 
 def pose_error(G, T, scale: float) -> np.ndarray:
-    """Per-row pose error: max of position error and rotation error times ``scale``."""
+    """Per-row pose error: max of the position error and ``scale`` times the rotation error (Frobenius
+    norm), so that ``error <= tol * scale`` holds a row to ``tol`` of the robot's size in position and
+    ``tol`` in rotation (the precision contract, docs/finish.md)."""
     dp = np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
-    dR = np.abs(G[:, :3, :3] - T[:, :3, :3]).max(axis=(1, 2))
+    dR = np.linalg.norm(G[:, :3, :3] - T[:, :3, :3], axis=(1, 2))
     return np.maximum(dp, scale * dR)
 
 
-def within_limits(Q, kinds, lower, upper, eps=1e-7) -> np.ndarray:
-    """Rows of Q (M, dof) inside the limits; a revolute value counts in any of its 2 pi representations.
-
-    ``eps`` forgives roundoff at a limit: a double root (a fully stretched finger at its 0 limit) is
-    only located to about sqrt(machine epsilon).
-    """
-    ok = np.ones(Q.shape[0], dtype=bool)
-    for c, k in enumerate(kinds):
-        lo, hi, v = lower[c] - eps, upper[c] + eps, Q[:, c]
-        inside = (v >= lo) & (v <= hi)
-        if k == "R":
-            inside |= ((v + 2 * math.pi >= lo) & (v + 2 * math.pi <= hi)) | (
-                (v - 2 * math.pi >= lo) & (v - 2 * math.pi <= hi)
-            )
-        ok &= inside
-    return ok
+def within_limits(Q, kinds, lower, upper, eps=None) -> np.ndarray:
+    """Rows of Q (M, dof) that have a representative inside the limits (:func:`subproblems.fast.represent`:
+    a revolute value or its 2 pi alias, or a value within ``fast.LIMIT_EPS`` of a limit, which the finish
+    clamps onto it: a double root at a limit is only located to about sqrt(machine epsilon))."""
+    return ~represent(Q, kinds, lower, upper, True)[2]
 
 
 def finish(
@@ -362,14 +366,24 @@ def finish(
     error,
     cont=None,
     limits=None,
+    A=None,
+    b=None,
+    vary=None,
+    dedupe=None,
 ):
-    """Check every candidate against its target, wrap, remove duplicates, pack into slots.
+    """Check every candidate against its target, represent, remove duplicates, pack into slots.
 
     ``error(G, T)`` measures the target error of poses G against targets (full pose, position, ...).
     Returns ``Q (N, slots, dof)``, ``valid (N, slots)``, ``ls (N, slots)``, ``residual (N, slots)``,
     ``continuum (N, slots)``.
     Candidates with NaN (an unresolved joint) are dropped, and so are candidates outside ``limits``
-    (lower, upper of the independent joints) when given.  Exact solutions come first in each slot row.
+    (lower, upper of the independent joints) when given.  The returned values are those of
+    :func:`subproblems.fast.represent` (inside the limits as returned), and the error of each row is
+    measured on exactly those values: with ``A, b, vary`` (all joints = A q_vary + b) the other joints
+    are rebuilt from them first.  A row is exact when its error is at most ``tol * scale``; exact rows
+    come first in each slot row.  ``dedupe``: the joint distance within which two rows of a target are
+    one (default 1e-9 of max(1, scale); the search fallbacks pass ``fast.SPLIT_ROOT``: Newton from two
+    seeds of one double root stops on a flat valley up to ~1e-7 apart).
     """
     dof = len(independent)
     Q = np.zeros((N, slots, dof))
@@ -379,19 +393,23 @@ def finish(
     CONT = np.zeros((N, slots), dtype=bool)
     cont = np.zeros(len(owner), dtype=bool) if cont is None else cont
     ok = ~np.isnan(TH).any(axis=1)
-    if limits is not None:  # (lower, upper) of the independent joints: other rows are not solutions
-        ind_kinds = "".join(kinds[i] for i in independent)
-        ok &= within_limits(wrap_angles(np.nan_to_num(TH), kinds)[:, list(independent)], ind_kinds, *limits)
     TH, owner, ls, cont = TH[ok], owner[ok], ls[ok], cont[ok]
+    ind_kinds = "".join(kinds[i] for i in independent)
+    lower, upper = limits if limits is not None else (np.zeros(dof), np.zeros(dof))
+    Qi, _, outside = represent(TH[:, list(independent)], ind_kinds, lower, upper, limits is not None)
+    TH, owner, ls, cont, Qi = TH[~outside], owner[~outside], ls[~outside], cont[~outside], Qi[~outside]
     if TH.shape[0] == 0:
         return Q, valid, LS, RES, CONT
     TH = wrap_angles(TH, kinds)
+    TH[:, list(independent)] = Qi
+    if A is not None:
+        TH = TH[:, list(vary)] @ np.asarray(A).T + np.asarray(b)
     err = error(fk_batch(twists, TH, home), targets[owner])
-    inexact = err > tol * scale
+    inexact = ~(err <= tol * scale)
     # order: by target, exact first, then by error
     order = np.lexsort((err, inexact, owner))
     TH, owner, err, inexact, cont = TH[order], owner[order], err[order], inexact[order], cont[order]
-    Qi = TH[:, independent]
+    Qi = TH[:, list(independent)]
     # pack candidates per target: rank within its target (rows are sorted by owner)
     first = np.searchsorted(owner, owner, side="left")
     rank = np.arange(len(owner)) - first
@@ -404,10 +422,10 @@ def finish(
     cand[owner, rank], cval[owner, rank], cerr[owner, rank], cls[owner, rank] = Qi, True, err, inexact
     ccont[owner, rank] = cont
     # duplicates: a candidate equal (angles modulo 2 pi) to an earlier valid one of the same target
-    rev = np.array([kinds[i] == "R" for i in independent])
     diff = cand[:, :, None, :] - cand[:, None, :, :]
-    diff[..., rev] = np.remainder(diff[..., rev] + math.pi, 2 * math.pi) - math.pi
-    same = np.abs(diff).max(axis=3) <= 1e-9 * max(1.0, scale)
+    for c, k in enumerate(ind_kinds):
+        diff[..., c] = angle_distance(diff[..., c], k == "R")
+    same = np.abs(diff).max(axis=3) <= (1e-9 * max(1.0, scale) if dedupe is None else dedupe)
     earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
     dup = np.any(same & earlier & cval[:, None, :], axis=2)
     keep = cval & ~dup

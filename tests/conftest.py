@@ -6,15 +6,13 @@ per-test budget scale ``settings().max_examples`` of the active profile rather t
 
 Reproducibility of ``ci``: ``derandomize=True`` seeds each test from a hash of its own function and
 already implies ``database=None`` (the ``.hypothesis/`` example database is neither read nor written),
-so the database cannot make dev and CI runs differ.  What does: Hypothesis mixes literal constants of
-every *local* module loaded in ``sys.modules`` into its draws (``1e-9``, ``1e-7`` from the solvers turn
-up as coordinates).  The pool grows as tests import more modules, so the examples a test draws depend on
-which tests ran before it, on the selection (``-k``, one file), on uncommitted local files, and on any
-edit that adds a literal anywhere in the project.  No setting switches the pool off (Hypothesis 6.170).
-The pool is worth keeping (our own thresholds make good edge values), so it is made stable instead:
-every module of ``ikcompiler`` and ``subproblems`` is imported here, before the first draw, so tests
-no longer see a pool that grows as the run goes.  What still changes draws: the set of test files
-collected (run the whole suite to reproduce CI) and any edit of a literal in the project.
+so the database cannot make dev and CI runs differ.  What else did: Hypothesis mixes the literal
+constants of every *local* module loaded in ``sys.modules`` into its draws, so any edit that added a
+literal anywhere in the project (a new package, a docstring's number) changed what every property test
+drew, and a run could fail on a solver nobody had touched.  No setting switches that pool off
+(Hypothesis 6.170), so it is replaced here by a fixed pool of the edge values our solvers care about
+(tolerance-sized offsets, special angles): the draws of a test now depend only on the test itself and
+the Hypothesis version, which ``pyproject.toml`` pins for the same reason.
 """
 
 from __future__ import annotations
@@ -38,6 +36,28 @@ def _import_all(package) -> None:
 
 _import_all(ikcompiler)
 _import_all(subproblems)
+
+
+def _fixed_constant_pool() -> None:
+    """Replace Hypothesis's pool of project literals by a fixed one (see the module docstring)."""
+    import math
+
+    from hypothesis.internal.conjecture import providers
+
+    floats = [0.0, 0.5, 1.0, 2.0, 1e3, 1e-3, math.pi, math.pi / 2, math.pi / 4]
+    floats += [10.0 ** -k for k in range(1, 17)]
+    floats += [-x for x in floats]
+    pool = providers.Constants(
+        integers=providers.SortedSet([0, 1, 2, 3, -1]),
+        floats=providers.SortedSet(floats, key=providers.float_to_int),
+        bytes=providers.SortedSet(),
+        strings=providers.SortedSet(),
+    )
+    providers._get_local_constants = lambda: pool
+    providers.CONSTANTS_CACHE.cache.clear()
+
+
+_fixed_constant_pool()
 
 settings.register_profile(
     "ci",

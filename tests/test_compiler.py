@@ -67,13 +67,14 @@ def test_zoo_robot_compiles_and_verifies(name):
         free = (chain.independent_names[-1],)
     module = compile_robot(chain, free=free)
     report = verify(chain, module, samples=120, seed=1, scalar_checks=10)
-    assert report.wrong == 0, report.text()
-    assert report.batch_mismatch == 0, report.text()
+    # the contract of every returned row: nothing wrong, imprecise, outside the limits, non-canonical
+    # or duplicate, and the batch and single-pose paths agree
+    assert report.wrong == report.imprecise == report.outside_limits == 0, report.text()
+    assert report.non_canonical == report.duplicates == report.batch_mismatch == 0, report.text()
     if module.METHOD == "closed-form":
-        # every pose recovered, except singular ones with a self-motion (a flagged representative);
-        # a self-motion whose representative cannot be completed inside the limits counts as missed
-        assert report.missed <= 0.03 * report.poses, report.text()
-        assert report.recovered >= 0.8 * report.poses, report.text()
+        # every pose recovered, except singular ones on a self-motion (a flagged representative, the
+        # Jacobian rank-deficient there): no missed pose
+        assert report.ok and report.missed == 0, report.text()
 
 
 def test_generated_source_is_deterministic_and_clean(rhino, tmp_path):
@@ -117,7 +118,7 @@ def test_unreachable_pose_returns_no_exact_solution(rhino):
     T = np.eye(4)
     T[:3, 3] = [0, 1e5, 0]  # far beyond the arm's reach
     assert module.solve(T).shape == (0, 6)
-    q, res, ls, _ = module.solve_info(T)
+    q, res, ls, _ = module.solve_info(T)[:4]
     assert np.all(ls) and np.all(res > 0)
 
 
@@ -149,7 +150,13 @@ def test_cli_explain_and_compile(tmp_path, capsys):
     "name, target, free",
     [
         ("shadow_index", "position", ()),
-        ("shadow_thumb", "position+direction", ()),
+        pytest.param(
+            "shadow_thumb", "position+direction", (),
+            marks=pytest.mark.xfail(strict=True, reason=(
+                "solver gap (position+direction on the 5-joint thumb, special angles): seed 5 misses 2 of "
+                "60 poses: at q2 = q3 = 0 the sampled branch is not returned (the other branches are "
+                "outside the limits), and near q5 = 0 the sampled row comes back only to ~1e-5 rad")),
+        ),
         ("puma560", "orientation", ("j1", "j2", "j3")),
         ("ur5", "position", ("wrist_1_joint", "wrist_2_joint", "wrist_3_joint")),
     ],
@@ -159,6 +166,4 @@ def test_reduced_targets_compile_and_verify(name, target, free):
     module = compile_robot(chain, target=target, free=free)
     assert module.TARGET == target
     report = verify(chain, module, samples=60, seed=5, scalar_checks=5)
-    assert report.wrong == 0, report.text()
-    assert report.batch_mismatch == 0, report.text()
-    assert report.missed <= 0.05 * report.poses, report.text()
+    assert report.ok and report.missed == 0, report.text()

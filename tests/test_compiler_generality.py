@@ -22,9 +22,10 @@ def test_inverted_zoo_chain_compiles_and_verifies(name):
     chain = load_robot(name).inverted()
     module = compile_robot(chain)
     report = verify(chain, module, samples=60, seed=2, scalar_checks=5)
-    assert report.wrong == 0, report.text()
+    assert report.wrong == report.imprecise == report.outside_limits == 0, report.text()
+    assert report.non_canonical == 0, report.text()
     if module.METHOD == "closed-form":
-        assert report.missed <= 0.05 * report.poses, report.text()
+        assert report.ok and report.missed == 0, report.text()
 
 
 def _dh_chain(rows, kinds) -> Chain:
@@ -55,10 +56,11 @@ def test_random_six_joint_arm_never_returns_a_wrong_solution(rows, kinds):
     chain = _dh_chain(rows, kinds)
     module = compile_robot(chain)
     report = verify(chain, module, samples=15, seed=3, scalar_checks=2)
-    assert report.wrong == 0, report.text()
+    assert report.wrong == report.imprecise == report.outside_limits == 0, report.text()
+    assert report.non_canonical == 0, report.text()
     assert report.batch_mismatch == 0, report.text()
     if module.METHOD == "closed-form":
-        assert report.missed == 0, report.text()
+        assert report.ok and report.missed == 0, report.text()
 
 
 def _calibrated(chain: Chain, eps: float, seed: int = 0) -> Chain:

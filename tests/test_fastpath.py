@@ -19,9 +19,9 @@ from ikcompiler.verify import sample_configurations
 FREE = {"panda": ("panda_joint7",)}
 COVERED = {  # zoo robots whose plans the fast path covers; the others must say FAST_PATH = False
     "arm4dof", "cylindrical", "gantry", "grasp4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
-    "shadow_index", "shadow_thumb", "stanford", "ur5", "jaco",
-}
-SEARCH = {"jaco"}  # search fallback: seeds are local minima on a grid, so the sets may differ slightly
+    "shadow_index", "shadow_thumb", "stanford", "ur5",
+}  # jaco: the general 6R elimination (METHOD general-6r), solved by subproblems.general6, no fast chain
+SEARCH = {"jaco"}  # compiled with the general 6R solver switched off: a search plan, on the fast chain
 POSES = 60
 SPLIT = 1e-4  # two copies of one tangent root can stay this far apart and both pass the pose check
 
@@ -64,9 +64,9 @@ def test_scalar_fast_path_matches_reference(name):
     _, Ts, free = _poses(module, chain)
     for k, T in enumerate(Ts):
         fr = [f[k] for f in free]
-        fast, _, fast_ls, fast_cont = module.solve_info(T, *fr)
+        fast, _, fast_ls, fast_cont = module.solve_info(T, *fr)[:4]
         module.FAST_PATH = False
-        ref, _, ref_ls, ref_cont = module.solve_info(T, *fr)
+        ref, _, ref_ls, ref_cont = module.solve_info(T, *fr)[:4]
         module.FAST_PATH = True
         fast, ref = fast[~fast_ls], ref[~ref_ls]
         if fast_cont.any() or ref_cont.any():
@@ -104,7 +104,7 @@ def test_batch_fast_path_matches_scalar_and_reference(robot):
 def test_fast_solutions_round_trip(robot):
     name, module, chain = robot
     _, Ts, free = _poses(module, chain)
-    q, res, ls, _ = module.solve_info(Ts[0], *[f[0] for f in free])
+    q, res, ls, _ = module.solve_info(Ts[0], *[f[0] for f in free])[:4]
     for row, r, flag in zip(q, res, ls):
         err = np.abs(module.fk(row) - Ts[0]).max()
         if not flag:
@@ -113,10 +113,14 @@ def test_fast_solutions_round_trip(robot):
 
 
 @pytest.mark.parametrize("name", sorted(SEARCH))
-def test_search_on_the_fast_chain_recovers_as_the_reference(name):
+def test_search_on_the_fast_chain_recovers_as_the_reference(name, monkeypatch):
     """A search plan grids its searched joints through the fast chain: on generic poses it must find
     the sampled joint vector about as often as the reference runtime, and return nothing wrong."""
+    from ikcompiler import compiler
+
+    monkeypatch.setattr(compiler, "USE_GENERAL6", False)
     module, chain = compile_robot(name), load_robot(name)
+    assert module.METHOD == "1d-search", module.METHOD
     Q = sample_configurations(chain, 80, seed=4, special=0.0)
     Ts = np.array([module.fk(q) for q in Q])
     recovered = {}

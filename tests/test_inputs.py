@@ -147,13 +147,12 @@ def test_tree_needs_a_tip_and_chains_are_selected(tmp_path):
         load_robot(path, tip="nowhere")
 
 
-def test_mimic_master_outside_chain_names_both(tmp_path):
+def test_mimic_master_outside_chain_becomes_the_chain_joint(tmp_path):
     path = tmp_path / "hand.urdf"
     path.write_text(TREE)
-    with pytest.raises(ChainSelectionError) as err:
-        load_robot(path, tip="b2")
-    msg = str(err.value)
-    assert "hand.urdf" in msg and "'jb2'" in msg and "'ja2'" in msg and "outside the chain" in msg
+    chain = load_robot(path, tip="b2")  # jb2 mimics ja2 (another finger): ja2 stands in for jb2
+    assert chain.independent_names == ("jb1", "ja2")
+    assert any("'jb2'" in n and "'ja2'" in n for n in chain.notes)
 
 
 def test_planar_joint_in_chain_is_rejected(tmp_path):

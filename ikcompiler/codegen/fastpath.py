@@ -172,7 +172,15 @@ class _Emitter:
         self._couple()
 
     # -- joint values and their motions ------------------------------------------------------------
-    def _couple(self):
+    def _couple(self, solved=()):
+        """Values of coupled joints from their masters.  A step that solved a coupled joint as if it
+        were free (a subproblem over ``finger_joint`` and two joints that mimic it) gives it the
+        master's value instead, so the leaf's forward-kinematics check sees the robot's own joint
+        vector and rejects branches that break the coupling (the reference runtime does the same)."""
+        solved = set(solved)
+        for dep, master, a, b in self.couplings:
+            if dep in solved and master in self.q:
+                self.q[dep] = self.c.lin([(a, self.q[master]), (b, 1.0)], "q")
         changed = True
         while changed:
             changed = False
@@ -300,7 +308,7 @@ class _Emitter:
             self._loop(outs, call)
             for j, name in zip(step["solve"], outs):
                 self.q[j] = name
-            self._couple()
+            self._couple(step["solve"])
             return
         if kind == "O":
             ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
@@ -314,7 +322,7 @@ class _Emitter:
                     self.q[j] = c.lin([(s, outs[col])], "q")
                 else:
                     self.sig[g] = outs[col]
-            self._couple()
+            self._couple(step["solve"])
             return
         p0 = step["p0"]
         point = c.mat_vec(self.prefix(G_u[step["trail"][0]] if step["trail"] else all_key), p0, True)
@@ -370,7 +378,7 @@ class _Emitter:
         self._loop(outs, call)
         for j, name in zip(solve, outs):
             self.q[j] = name
-        self._couple()
+        self._couple(solve)
 
     def _loop(self, outs, call):
         flag = f"f{self.c.count}"
@@ -393,7 +401,8 @@ class _Emitter:
             parts.append(c.let(f"m.sqrt({_sumsq(dp)})", "ep"))
         if self.target in ("pose", "orientation"):
             dR = [c.lin([(1.0, F[i]), (-1.0, goal[i])]) for i in range(9)]
-            parts.append(c.let(f"{_fmt(self.scale)}*m.maxabs({', '.join(_render(x) for x in dR)})", "er"))
+            # Frobenius norm of the rotation error: the precision contract (docs/finish.md)
+            parts.append(c.let(f"{_fmt(self.scale)}*m.sqrt({_sumsq(dR)})", "er"))
         err = f"m.max2({parts[0]}, {parts[1]})" if len(parts) == 2 else parts[0]
         defer = " | ".join(self.flags) if self.flags else "False"
         qs = ", ".join(_render(self.q[j]) for j in independent)

@@ -23,8 +23,12 @@ Joints {kinds} ({joint_names}); target: {target}; method: {method}.
 Derivation:
 {plan_doc}
 
-API: ``solve(T, *free)`` -> (k, n) every solution; ``solve_batch(Ts, *free)`` -> (Q, valid);
-``solve_info(T, *free)`` -> (q, residual, ls) including least-squares rows; ``fk(q)`` -> 4x4.
+API: ``solve(T, *free, limits=True, aliases=False, q_seed=None, weights=None)`` -> (k, n) every
+solution; ``nearest(T, q_seed, *free)`` -> the closest row or None; ``solve_batch(Ts, *free)`` ->
+(Q, valid); ``solve_info(T, *free)`` -> SolveInfo(q, residual, ls, continuum, sigma_min, excluded)
+including least-squares rows; ``fk(q)`` -> 4x4; ``invalid_reasons(Ts)`` -> {{index: reason}} of the
+poses a batch left empty.  Exact rows reproduce the target to TOLERANCE of SCALE (rotation: Frobenius)
+and lie inside the limits as returned (docs/finish.md); selection: docs/motion.md.
 """
 {imports}
 import numpy as np
@@ -32,6 +36,7 @@ import numpy as np
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
+from subproblems import select as _sel
 '''
 
 
@@ -74,13 +79,22 @@ def _step_source(step: dict, line: str) -> str:
     return f"    # {line}\n    {{{body}}},\n"
 
 
+# The precision contract of a returned row (docs/finish.md): a row is exact when it reproduces the
+# target to PRECISION of the robot's size in position and PRECISION in rotation (Frobenius norm),
+# measured on the true robot; rows above it after Newton steps are flagged least-squares.  It is not the
+# geometry's tolerance for structural axis relations (Tolerance.exact, 1e-9), which the compiler passes.
+PRECISION = 1e-12
+
+
 def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float, output=None) -> str:
     """The module source for ``plan`` on ``chain``.
 
     ``output`` is the robot whose joints the module returns when ``chain`` carries extra virtual joints
-    (a tool roll for position + direction targets); by default the chain itself.
+    (a tool roll for position + direction targets); by default the chain itself.  ``tol``: the
+    exactness threshold of a returned row, at most :data:`PRECISION`.
     """
     output = output or chain
+    tol = min(tol, PRECISION)
     A, b = chain.coupling_matrix()
     couplings = []
     for c in chain.couplings:
@@ -122,6 +136,12 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_KINDS = {chain.joint_types!r}\n")
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     out.append("_HOME_INV = _rt.inverse_transform(_HOME)\n")
+    if plan.method == "general-6r":
+        out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
+        out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
+                   f"{_literal(list(plan.steps[0]['arrangements']))})\n")
+    else:
+        out.append("_GENERAL6 = None  # the general 6R elimination: not this plan's method\n")
     out.append(f"_COUPLINGS = {_literal([list(c) for c in couplings])}  # (joint, master, a, b)\n")
     out.append(f"_A = np.array({_array(A)})  # all joint values = _A @ q + _B\n")
     out.append(f"_B = np.array({_array(b)})\n")
@@ -183,8 +203,10 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f'_NATIVE_SOURCE = r"""\n{native}"""\n' if native else "_NATIVE_SOURCE = None\n")
     out.append(BODY)
     text = "".join(out)
-    # math is imported only where a constant needs it (infinite joint limits), so ruff stays quiet
-    return text.replace("{imports}", "\nimport math\n" if "math.inf" in text else "", 1)
+    if plan.method == "general-6r":
+        fast = "from subproblems import fast as _fk\n"
+        text = text.replace(fast, fast + "from subproblems import general6 as _g6\n", 1)
+    return text.replace("{imports}", "\nimport math\n", 1)
 
 
 def _near_singular(plan, chain, scale: float) -> float:
@@ -198,62 +220,119 @@ def _near_singular(plan, chain, scale: float) -> float:
 
 BODY = '''
 
+class InvalidTargetError(_rt.InvalidTargetError):
+    """A target that is not a finite rigid transform of the target's shape (a ValueError)."""
+
+
+class InvalidFreeValueError(_rt.InvalidFreeValueError):
+    """A free joint value that is NaN or infinite, or the wrong number of them (a ValueError)."""
+
+
 def fk(q):
-    """Tool pose (4x4) for joint values q in JOINT_NAMES order."""
-    q = np.asarray(q, dtype=float).reshape(1, -1)
+    """Tool pose (4x4) for joint values q in JOINT_NAMES order (exactly len(JOINT_NAMES) of them)."""
+    q = np.asarray(q, dtype=float)
+    if q.shape != (len(JOINT_NAMES),):
+        raise ValueError(f"fk expects {len(JOINT_NAMES)} joint values {JOINT_NAMES}, got shape {q.shape}")
+    q = q.reshape(1, -1)
     q = np.concatenate([q, np.zeros((1, len(_VARY) - q.shape[1]))], axis=1)  # virtual joints at 0
     return _rt.fk_batch(_TWISTS, q @ _A.T + _B, _HOME)[0]
 
 
-def _targets(Ts):
-    """Validate targets; return (goals (N, 4, 4), Td (N, 4, 4)) with Td = g_d g_st(0)^-1."""
+_NOT_ROTATION = "rotation is not a rotation matrix (R^T R != I or det != 1)"
+
+
+def _check_targets(Ts):
+    """Validate targets one by one: (goals (N, 4, 4), Td (N, 4, 4), reasons (N,)), Td = g_d g_st(0)^-1.
+
+    ``reasons[i]`` is "" for a valid target, else why it is not one (its goal is replaced by the
+    identity; the callers leave its slots empty or raise).  A wrong shape raises for the whole batch.
+    A rotation orthonormal to 1e-6 but not to 1e-14 is projected onto the nearest rotation (Newton-Schulz
+    steps): the precision contract is measured against that projection.
+    """
     Ts = np.asarray(Ts, dtype=float)
     if TARGET == "orientation":
-        if Ts.shape[-2:] != (3, 3):
-            raise ValueError(f"an orientation target is a 3x3 rotation or (N, 3, 3); got shape {Ts.shape}")
+        if Ts.ndim < 2 or Ts.shape[-2:] != (3, 3):
+            raise InvalidTargetError(
+                f"an orientation target is a 3x3 rotation or (N, 3, 3); got shape {Ts.shape}")
         goals = np.broadcast_to(np.eye(4), (Ts.reshape(-1, 3, 3).shape[0], 4, 4)).copy()
         goals[:, :3, :3] = Ts.reshape(-1, 3, 3)
-        Td = goals @ _HOME_INV
     elif TARGET == "position":
-        if Ts.shape[-1:] != (3,):
-            raise ValueError(f"a position target is (3,) or (N, 3); got shape {Ts.shape}")
+        if Ts.ndim < 1 or Ts.shape[-1:] != (3,):
+            raise InvalidTargetError(f"a position target is (3,) or (N, 3); got shape {Ts.shape}")
         P = Ts.reshape(-1, 3)
         goals = np.broadcast_to(np.eye(4), (len(P), 4, 4)).copy()
         goals[:, :3, 3] = P
-        Td = goals.copy()
-        Td[:, :3, 3] = P - _HOME[:3, 3]
     else:
-        if Ts.shape[-2:] != (4, 4):
-            raise ValueError(f"a pose target is a 4x4 transform or (N, 4, 4); got shape {Ts.shape}")
-        goals = Ts.reshape(-1, 4, 4)
+        if Ts.ndim < 2 or Ts.shape[-2:] != (4, 4):
+            raise InvalidTargetError(f"a pose target is a 4x4 transform or (N, 4, 4); got shape {Ts.shape}")
+        goals = Ts.reshape(-1, 4, 4).copy()
+    reasons = np.full(len(goals), "", dtype=object)
+    finite = np.isfinite(goals).all(axis=(1, 2))
+    reasons[~finite] = "contains NaN or infinity"
+    if TARGET in ("pose", "position+direction"):
+        bottom = np.abs(goals[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > 1e-12
+        reasons[finite & bottom] = "bottom row is not [0, 0, 0, 1]"
+    if TARGET != "position":
+        R = np.where(finite[:, None, None], goals[:, :3, :3], np.eye(3))
+        defect = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
+        skew = (defect > 1e-6) | (np.abs(np.linalg.det(R) - 1) > 1e-6)
+        reasons[(reasons == "") & skew] = _NOT_ROTATION
+        fix = (reasons == "") & (defect > 1e-14)
+        if fix.any():
+            X = R[fix]
+            for _ in range(3):  # X (3 I - X^T X) / 2: quadratic convergence from a 1e-6 defect
+                X = X @ (3 * np.eye(3) - np.swapaxes(X, 1, 2) @ X) / 2
+            goals[np.nonzero(fix)[0], :3, :3] = X
+    bad = reasons != ""
+    goals[bad] = np.eye(4)
+    if TARGET == "position":
+        Td = goals.copy()
+        Td[:, :3, 3] = goals[:, :3, 3] - _HOME[:3, 3]
+    else:
         Td = goals @ _HOME_INV
-    if not np.all(np.isfinite(goals)):
-        raise ValueError("target contains NaN or infinity")
-    if TARGET in ("pose", "orientation", "position+direction"):
-        R = goals[:, :3, :3]
-        ortho = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
-        if np.any(ortho > 1e-6) or np.any(np.abs(np.linalg.det(R) - 1) > 1e-6):
-            raise ValueError("target rotation is not a rotation matrix (R^T R != I or det != 1)")
+    return goals, Td, reasons
+
+
+def _targets(Ts):
+    """Validated targets (goals, Td) as :func:`_check_targets`; the first invalid one raises."""
+    goals, Td, reasons = _check_targets(Ts)
+    bad = np.nonzero(reasons != "")[0]
+    if len(bad):
+        where = "target" if len(goals) == 1 else f"target {bad[0]} of {len(goals)} (see invalid_reasons())"
+        raise InvalidTargetError(f"{where} {reasons[bad[0]]}")
     return goals, Td
+
+
+def invalid_reasons(Ts):
+    """{index: reason} of the targets that are not valid (NaN or infinity, a bottom row not [0, 0, 0, 1],
+    a rotation that is not one to 1e-6); ``solve_batch`` and ``solve_batch_info`` leave their slots
+    empty (all False) instead of failing the batch.  A wrong shape raises."""
+    reasons = _check_targets(Ts)[2]
+    return {int(i): str(reasons[i]) for i in np.nonzero(reasons != "")[0]}
 
 
 def _error(G, goals):
     if TARGET == "position":
         return np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-    if TARGET == "orientation":  # radians-like, scaled to lengths like the pose error
-        return SCALE * np.abs(G[:, :3, :3] - goals[:, :3, :3]).max(axis=(1, 2))
+    if TARGET == "orientation":  # Frobenius norm, scaled to lengths like the pose error
+        return SCALE * np.linalg.norm(G[:, :3, :3] - goals[:, :3, :3], axis=(1, 2))
     if TARGET == "position+direction":  # the tool origin and its z axis; the roll is free
         dp = np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-        return np.maximum(dp, SCALE * np.abs(G[:, :3, 2] - goals[:, :3, 2]).max(axis=1))
+        return np.maximum(dp, SCALE * np.linalg.norm(G[:, :3, 2] - goals[:, :3, 2], axis=1))
     return _rt.pose_error(G, goals, SCALE)
 
 
 def _init(N, free):
     if len(free) != len(FREE_JOINTS):
-        raise ValueError(f"expected {len(FREE_JOINTS)} free joint values {FREE_JOINTS}, got {len(free)}")
+        raise InvalidFreeValueError(
+            f"expected {len(FREE_JOINTS)} free joint values {FREE_JOINTS}, got {len(free)}")
     init = np.full((N, len(_KINDS)), np.nan)
     for pos, value in zip(_FREE, free):
-        init[:, _INDEPENDENT[pos]] = np.broadcast_to(np.asarray(value, dtype=float), (N,))
+        v = np.broadcast_to(np.asarray(value, dtype=float), (N,))
+        if not np.all(np.isfinite(v)):
+            raise InvalidFreeValueError(
+                f"free joint {JOINT_NAMES[pos]!r}: value NaN or infinite; give a finite value")
+        init[:, _INDEPENDENT[pos]] = v
     return init
 
 
@@ -314,6 +393,9 @@ def _candidates(goals, Td, init):
         TH = np.where(fixed, init[owner], TH)
         TH = _newton(TH, goals[owner], step["iters"])
         ls = cont = np.zeros(len(TH), dtype=bool)
+    elif METHOD == "general-6r":
+        TH, owner = _GENERAL6.rows(goals)
+        ls = cont = np.zeros(len(TH), dtype=bool)
     elif _SEARCH:
         step = {"search": _SEARCH, "grid": _GRID, "steps": _STEPS, "home": _HOME, "scale": SCALE,
                 "target": _SOLVE_TARGET}
@@ -344,13 +426,44 @@ def _complete(TH, owner, ls, cont, goals, limits):
     if len(TH):
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
         err = _error(_rt.fk_batch(_TWISTS, np.nan_to_num(TH), _HOME), goals[owner])
+        # At a double root Newton converges only linearly (the residual falls about 4x a step): rows
+        # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > TOLERANCE * SCALE) & (err < 1e-4 * SCALE)
-        if near.any():
+        for _ in range(5):
+            if not near.any():
+                break
             TH[near] = _newton(TH[near], goals[owner[near]], 3)
+            err[near] = _error(_rt.fk_batch(_TWISTS, TH[near], _HOME), goals[owner[near]])
+            near &= err > 1e-3 * TOLERANCE * SCALE  # as the C finish: on to well inside the precision
+        if limits:
+            TH = _clamped_onto_limits(TH, owner, goals)
     return _rt.finish(TH, owner, ls, len(goals), twists=_TWISTS, kinds=_KINDS, home=_HOME,
                       independent=_INDEPENDENT, targets=goals, scale=SCALE, tol=TOLERANCE,
                       slots=MAX_SOLUTIONS, error=_error, cont=cont,
-                      limits=(LOWER, UPPER) if limits else None)
+                      limits=(LOWER, UPPER) if limits else None, A=_A, b=_B, vary=_VARY,
+                      dedupe=_fk.SPLIT_ROOT if _SEARCH or METHOD == "numerical" else None)
+
+
+def _clamped_onto_limits(TH, owner, goals):
+    """Rows with a value just outside a limit (a double root at a limit is located to sqrt(eps) only):
+    the value clamped onto the limit, then Newton steps on the other joints (the clamped and free ones
+    held), so that the row as returned is exact or flagged, never outside its limits."""
+    ind = list(_INDEPENDENT)
+    ok = ~np.isnan(TH).any(axis=1)
+    Qr, _, out, clamped = _fk.represent(np.nan_to_num(TH[:, ind]), JOINT_TYPES, LOWER, UPPER, True,
+                                        clamps=True)
+    rows = ok & ~out & clamped.any(axis=1)
+    if not rows.any():
+        return TH
+    TH = TH.copy()
+    TH[np.ix_(rows, ind)] = Qr[rows]
+    TH[rows] = TH[rows][:, list(_VARY)] @ _A.T + _B
+    for pattern in np.unique(clamped[rows], axis=0):
+        sel = np.nonzero(rows & (clamped == pattern).all(axis=1))[0]
+        hold = tuple(_FREE) + tuple(int(j) for j in np.nonzero(pattern)[0])
+        TH[sel] = _rt.polish(TH[sel], goals[owner[sel]], twists=_TWISTS, home=_HOME, A=_A, b=_B,
+                             independent=_VARY, target=_SOLVE_TARGET, iters=3, hold=hold)
+    return TH
 
 
 def _reference_chunk(goals, Td, init, limits):
@@ -439,16 +552,29 @@ def _native_batch(Ts, free, limits):
     raw = Ts.reshape((-1,) + shape)
     init = _init(len(raw), free)
     parts, code = native.many(raw, _free_columns(init), limits)
-    python = code < 0
-    if python.any():  # targets the C finish cannot settle alone (or invalid: _targets raises there)
+    from subproblems.native import PYTHON
+
+    python = code == PYTHON  # invalid targets (code INVALID) keep their empty slots
+    if python.any():  # targets the C finish cannot settle alone
         idx = np.nonzero(python)[0]
-        goals, Td = _targets(raw[idx])
+        goals, Td, reasons = _check_targets(raw[idx])
         # the C did the fast path's work already: what is left is for the reference runtime (a search
         # plan keeps its own Python search, which the reference runtime would redo much slower)
         settle = _solve_chunk if (_SEARCH or _POLISH) else _reference_chunk  # _POLISH: the continuation
-        for whole, part in zip(parts, settle(goals, Td, init[idx], limits)):
+        done = _without_invalid(settle(goals, Td, init[idx], limits), reasons)
+        for whole, part in zip(parts, done):
             whole[idx] = part
     return parts
+
+
+def _without_invalid(parts, reasons):
+    """Empty the slots of the invalid targets (reasons != "")."""
+    bad = np.asarray(reasons != "", dtype=bool)
+    if not bad.any():
+        return parts
+    Q, valid, ls, res, cont = (np.array(x) for x in parts)
+    Q[bad], valid[bad], ls[bad], res[bad], cont[bad] = 0.0, False, False, np.inf, False
+    return Q, valid, ls, res, cont
 
 
 def _solve_chunk(goals, Td, init, limits):
@@ -492,6 +618,7 @@ def _fast_one(T, free, limits, native=True):
             return found
     rows = _python_one(T, free, limits)
     if rows is None:
+        _targets(np.asarray(T, dtype=float)[None])  # one invalid target raises (a batch marks it instead)
         return None
     q = np.array([r[2] for r in rows], dtype=float).reshape(len(rows), len(JOINT_NAMES))
     ls = np.array([r[0] for r in rows], dtype=bool)
@@ -507,6 +634,8 @@ def _python_one(T, free, limits):
         free = tuple(float(f) for f in free)
     except (TypeError, ValueError):
         return None
+    if not all(map(math.isfinite, free)):
+        _init(1, free)  # raises the documented error
     if goal is None:
         return None
     return _fk.finish_one(_fast_chain(_fk.SCALAR, goal, free), **_finish_kwargs(limits))
@@ -524,9 +653,10 @@ def solve_batch_info(Ts, *free, limits=True, chunk=4096):
     done = _native_batch(Ts, free, limits)
     if done is not None:
         return done
-    goals, Td = _targets(Ts)
+    goals, Td, reasons = _check_targets(Ts)
     init = _init(len(goals), free)
-    parts = [_solve_chunk(goals[i:i + chunk], Td[i:i + chunk], init[i:i + chunk], limits)
+    parts = [_without_invalid(_solve_chunk(goals[i:i + chunk], Td[i:i + chunk], init[i:i + chunk], limits),
+                              reasons[i:i + chunk])
              for i in range(0, len(goals), chunk)]
     if not parts:
         n = len(JOINT_NAMES)
@@ -541,8 +671,11 @@ def solve_batch(Ts, *free, limits=True):
     return Q, valid & ~ls
 
 
-def solve_info(T, *free, limits=True):
-    """All candidates of one target with residuals and flags: (q, residual, ls, continuum)."""
+SolveInfo, Excluded = _sel.SolveInfo, _sel.Excluded  # what solve_info returns (subproblems/select.py)
+
+
+def _rows(T, free, limits):
+    """(q, residual, ls, continuum) of one target, exact rows first."""
     found = _fast_one(T, free, limits)
     if found is not None:
         return found
@@ -551,9 +684,58 @@ def solve_info(T, *free, limits=True):
     return Q[0][v], res[0][v], ls[0][v], cont[0][v]
 
 
-def solve(T, *free, limits=True):
+def _select(q, keep, limits, aliases, q_seed, weights):
+    """Alias expansion and seed ordering of rows q (k, n): (rows, index into the original rows)."""
+    idx = np.arange(len(q))
+    if aliases and limits:
+        q, idx = _sel.aliases(q, JOINT_TYPES, LOWER, UPPER)
+    if q_seed is not None:
+        if limits and not aliases:  # the in-limit alias the seed reaches with least motion
+            q = _sel.nearest_alias(q, q_seed, JOINT_TYPES, LOWER, UPPER)
+        dist = _sel.distance(q, q_seed, JOINT_TYPES, SCALE, weights, wrap=not limits)
+        # exact rows first (keep False last), then by distance
+        order = np.lexsort((dist, ~keep[idx]))
+        q, idx = q[order], idx[order]
+    return q, idx
+
+
+def solve_info(T, *free, limits=True, aliases=False, q_seed=None, weights=None):
+    """Every candidate of one target with residuals and flags: a SolveInfo.
+
+    ``q, residual, ls, continuum`` per row (exact rows first); ``sigma_min`` per row (the smallest
+    singular value of the Jacobian with its length rows divided by SCALE: near 0 at a singular
+    configuration); ``excluded``: with ``limits`` (the default) the solutions that the joint limits
+    leave out, each with the joints outside their limits.  ``aliases`` and ``q_seed`` / ``weights`` as
+    in ``solve``.
+    """
+    q, res, ls, cont = _rows(T, free, limits)
+    q, idx = _select(q, ~ls, limits, aliases, q_seed, weights)
+    res, ls, cont = res[idx], ls[idx], cont[idx]
+    sig = _sel.sigma_min(q, twists=_TWISTS, A=_A, b=_B, home=_HOME, scale=SCALE, target=TARGET)
+    excluded = ()
+    if limits:
+        q_all, res_all, ls_all, _ = _rows(T, free, False)
+        out = _sel.excluding_joints(q_all, JOINT_TYPES, LOWER, UPPER)
+        excluded = tuple(Excluded(q_all[r], tuple(JOINT_NAMES[j] for j in np.nonzero(out[r])[0]),
+                                  float(res_all[r]), bool(ls_all[r]))
+                         for r in np.nonzero(out.any(axis=1))[0])
+    return SolveInfo(q, res, ls, cont, sig, excluded)
+
+
+def solve(T, *free, limits=True, aliases=False, q_seed=None, weights=None):
     """Every exact solution of one target inside the joint limits, one row each in JOINT_NAMES order;
-    (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits."""
+    (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits.
+
+    ``aliases=True``: a revolute joint whose range exceeds 2 pi gives one row per value of the angle
+    inside its limits (every combination; with ``limits=False`` rows are as solved).  ``q_seed``:
+    rows sorted by their distance to q_seed (radians; prismatic joints in units of SCALE; times the
+    optional per-joint ``weights``; wrapped to [-pi, pi] only with ``limits=False``); with limits,
+    without aliases, each wide-range revolute value is the alias nearest the seed.
+    """
+    if aliases or q_seed is not None:
+        q, _, ls, _ = _rows(T, free, limits)
+        q = q[~ls]
+        return _select(q, np.ones(len(q), dtype=bool), limits, aliases, q_seed, weights)[0]
     native = _native_chain()
     if native is not None:
         q = native.exact(T, free, limits)
@@ -562,6 +744,15 @@ def solve(T, *free, limits=True):
     found = _fast_one(T, free, limits, native=False)
     if found is not None:
         return found[0][~found[2]]
-    q, _, ls, _ = solve_info(T, *free, limits=limits)
+    q, _, ls, _ = _rows(T, free, limits)
     return q[~ls]
+
+
+def nearest(T, q_seed, *free, limits=True, aliases=True, weights=None):
+    """The exact solution closest to q_seed (see solve), or None when there is none.
+
+    With ``aliases`` (the default here) every in-limit alias of a wide-range joint competes.
+    """
+    q = solve(T, *free, limits=limits, aliases=aliases, q_seed=q_seed, weights=weights)
+    return q[0] if len(q) else None
 '''

@@ -12,7 +12,9 @@ Mapping (docs/design.md section 2):
   the joint frame's origin; a prismatic joint gives ``v = R a``; fixed joints only move the frames;
 - limits come from ``<limit>``; a continuous joint gets (-pi, pi] (the IK wraps angles there); a
   revolute joint without ``<limit>`` gets (-pi, pi] and a prismatic one no bounds, each with a note;
-- ``<mimic joint= multiplier= offset=>`` becomes a :class:`Coupling`; the master must be in the chain;
+- ``<mimic joint= multiplier= offset=>`` becomes a :class:`Coupling`.  A master outside the chain (a
+  gripper's finger pad chain whose joints all follow ``finger_joint``) becomes the chain's independent
+  joint under its own name: see :func:`_external_masters`;
 - planar and floating joints inside the chain are rejected (:class:`UnsupportedJointError`).
 
 Default base: the root link.  Default tip: the only leaf link below the base reached through at least
@@ -28,6 +30,7 @@ import numpy as np
 
 from ikcompiler.errors import ChainSelectionError, RobotInputError, UnsupportedJointError
 from ikcompiler.model import Chain, Coupling, Joint
+from subproblems.screw import transform_twist, twist_exp
 
 MOVING = {"revolute": "R", "continuous": "R", "prismatic": "T"}
 KNOWN_TYPES = {"revolute", "continuous", "prismatic", "fixed", "planar", "floating"}
@@ -43,21 +46,41 @@ def _floats(text: str | None, n: int) -> bool:
         return False
 
 
-def _strict_parse(path: Path):
-    """Parse the XML with lxml (strict) and check every joint element; returns the root element."""
+# Errors libxml2 reports that leave the URDF content intact: a prefix such as ``drake:`` on an element
+# URDF ignores anyway (airo-models' Robotiq 2F-85), and an XML declaration with version "0.0" (pybullet's
+# data).  Every other error is fatal.
+HARMLESS_XML_ERRORS = {"NS_ERR_UNDEFINED_NAMESPACE", "ERR_UNKNOWN_VERSION"}
+
+
+def parse_xml(path: Path | str):
+    """The root element of an XML file, parsed strictly except for :data:`HARMLESS_XML_ERRORS`;
+    malformed XML raises :class:`RobotInputError` with the file and line."""
     from lxml import etree
 
     src = str(path)
+    parser = etree.XMLParser(remove_blank_text=True, resolve_entities=False, recover=True)
     try:
-        tree = etree.parse(src, etree.XMLParser(remove_blank_text=True, resolve_entities=False))
-    except etree.XMLSyntaxError as exc:
+        tree = etree.parse(src, parser)
+    except etree.XMLSyntaxError as exc:  # even recovery failed
         line = exc.lineno if exc.lineno else None
         raise RobotInputError(
             f"malformed XML: {exc.msg}", source=src, where=f"line {line}" if line else None
         ) from exc
     except OSError as exc:
         raise RobotInputError(f"cannot read the file ({exc})", source=src) from exc
+    for err in parser.error_log:
+        if err.type_name not in HARMLESS_XML_ERRORS:
+            raise RobotInputError(f"malformed XML: {err.message}", source=src, where=f"line {err.line}")
     root = tree.getroot()
+    if root is None:
+        raise RobotInputError("malformed XML: no root element", source=src)
+    return root
+
+
+def _strict_parse(path: Path):
+    """Parse the XML with lxml (strict) and check every joint element; returns the root element."""
+    src = str(path)
+    root = parse_xml(path)
     if root.tag != "robot":
         raise RobotInputError(
             f"the root element is <{root.tag}>, a URDF needs <robot>",
@@ -216,17 +239,7 @@ def load_urdf(path: Path | str, *, base: str | None = None, tip: str | None = No
                     0.0 if j.mimic.offset is None else float(j.mimic.offset),
                 )
             )
-    in_chain = {jt.name for jt in joints}
-    for c in couplings:
-        if c.master not in in_chain:
-            j = joint_by_name[c.joint]
-            if c.master in joint_by_name:
-                m = joint_by_name[c.master]
-                what = "a fixed joint" if m.type == "fixed" else f"outside the chain {base!r} -> {tip!r}"
-                msg = f"joint {c.joint!r} mimics joint {c.master!r} (line {lines.get(c.master, '?')}), {what}"
-            else:
-                msg = f"joint {c.joint!r} mimics joint {c.master!r}, which does not exist"
-            raise ChainSelectionError(msg, source=src, where=where(j))
+    joints, couplings, g = _external_masters(joints, couplings, g, joint_by_name, lines, notes, src)
     if not joints:
         raise ChainSelectionError(f"no moving joint between {base!r} and {tip!r}", source=src)
     return Chain(
@@ -276,3 +289,101 @@ def _default_tip(base: str, children: dict[str, list], src: str) -> str:
         f"the tree below {base!r} has {len(candidates)} tips; name one (--tip): {', '.join(candidates)}",
         source=src,
     )
+
+
+def _follow_mimics(name: str, joint_by_name: dict, in_chain: set[str], src: str, where: str):
+    """``(master, a, b)`` with ``th = a * th[master] + b``, following mimics outside the chain until a
+    joint of the chain or a joint that mimics nothing (the external master) is reached."""
+    a, b, seen = 1.0, 0.0, set()
+    while name not in in_chain:
+        j = joint_by_name.get(name)
+        if j is None:
+            raise ChainSelectionError(f"mimics joint {name!r}, which does not exist", source=src, where=where)
+        if j.type not in MOVING:
+            raise ChainSelectionError(
+                f"mimics joint {name!r}, a {j.type} joint: a master must be revolute, continuous or "
+                "prismatic",
+                source=src,
+                where=where,
+            )
+        if j.mimic is None or name in seen:
+            if name in seen:
+                raise ChainSelectionError(f"mimic cycle through joint {name!r}", source=src, where=where)
+            break
+        seen.add(name)
+        m_a = 1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier)
+        m_b = 0.0 if j.mimic.offset is None else float(j.mimic.offset)
+        a, b, name = a * m_a, a * m_b + b, j.mimic.joint
+    return name, a, b
+
+
+def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src):
+    """Make every master joint outside the chain the chain's independent joint, under its own name.
+
+    Take the first chain joint j1 driven by an external master M: ``th1 = a1 q + b1`` with ``a1 = +-1``
+    (a unit twist cannot be scaled).  Then ``exp(xi1 th1) = exp(a1 xi1 q) E`` with ``E = exp(xi1 b1)``, and
+    carrying E past the later joints (``E exp(xi th) = exp(Ad_E xi th) E``) gives the chain joint M with
+    twist ``a1 xi1``, every later twist ``Ad_E xi`` and the home pose ``E g_st(0)``; the other joints
+    driven by M couple to it with their own (a, b).  M's limits are its own (a follower's are not
+    imposed, as for any mimic joint; a disagreement is noted).
+
+    >>> from ikcompiler.model import Coupling, Joint
+    >>> from subproblems.screw import revolute_twist
+    >>> j = Joint("pad", "R", revolute_twist([0, 0, 1], [0, 0, 0]), -0.8, 0.0)
+    >>> class M:  # a stand-in for yourdfpy's joint: the external master "finger_joint"
+    ...     type, mimic, limit = "revolute", None, type("L", (), {"lower": 0.0, "upper": 0.8})()
+    >>> out, cs, _ = _external_masters([j], [Coupling("pad", "finger_joint", -1.0, 0.0)], np.eye(4),
+    ...                                {"finger_joint": M}, {}, [], "g.urdf")
+    >>> out[0].name, out[0].lower, out[0].upper, out[0].axis.tolist(), cs
+    ('finger_joint', 0.0, 0.8, [-0.0, -0.0, -1.0], [])
+    """
+    in_chain = {jt.name for jt in joints}
+    resolved: dict[str, tuple[str, float, float]] = {}
+    for c in couplings:
+        where = f"line {lines.get(c.joint, '?')}, joint {c.joint!r}"
+        m, a, b = _follow_mimics(c.master, joint_by_name, in_chain, src, where)
+        resolved[c.joint] = (m, c.a * a, c.a * b + c.b)
+    external = [m for m, _, _ in resolved.values() if m not in in_chain]
+    if not external:
+        return joints, [Coupling(j, m, a, b) for j, (m, a, b) in resolved.items()], home
+    joints, home = list(joints), np.asarray(home, dtype=float)
+    for master in dict.fromkeys(external):  # each external master once, in order of first use
+        driven = [i for i, jt in enumerate(joints) if resolved.get(jt.name, ("",))[0] == master]
+        unit = [i for i in driven if abs(abs(resolved[joints[i].name][1]) - 1.0) <= 1e-12]
+        if not unit:
+            names = ", ".join(
+                f"{joints[i].name!r} (multiplier {resolved[joints[i].name][1]:g})" for i in driven
+            )
+            raise ChainSelectionError(
+                f"the joints {names} all mimic joint {master!r} outside the chain with a multiplier other "
+                "than +-1: none of them can stand for the master; choose a chain through the master",
+                source=src,
+                where=f"line {lines.get(master, '?')}, joint {master!r}",
+            )
+        i1 = unit[0]
+        j1 = joints[i1]
+        _, a1, b1 = resolved.pop(j1.name)
+        for name, (m, a, b) in list(resolved.items()):  # joints that mimic j1 itself now follow M
+            if m == j1.name:
+                resolved[name] = (master, a * a1, a * b1 + b)
+        lower, upper = _limits(joint_by_name[master], j1.kind, notes)
+        lo1, hi1 = sorted(((j1.lower - b1) / a1, (j1.upper - b1) / a1))
+        if lo1 > lower + 1e-12 or hi1 < upper - 1e-12:
+            # as for every mimic joint, the follower's own limits are not imposed (files often give a
+            # follower the master's range whatever the multiplier, PR2's gripper: [0, 0.548] at -1)
+            notes.append(
+                f"the limits of joint {j1.name!r} allow {master!r} in [{lo1:g}, {hi1:g}] only; "
+                f"{master!r}'s own limits [{lower:g}, {upper:g}] are used"
+            )
+        E = twist_exp(j1.twist, b1)
+        joints[i1] = Joint(master, j1.kind, a1 * j1.twist, lower, upper)
+        for k in range(i1 + 1, len(joints)):
+            jt = joints[k]
+            joints[k] = Joint(jt.name, jt.kind, transform_twist(E, jt.twist), jt.lower, jt.upper)
+        home = E @ home
+        in_chain.add(master)
+        notes.append(
+            f"joint {j1.name!r} follows joint {master!r} outside the chain ({j1.name} = {a1:g} * {master} "
+            f"+ {b1:g}): {master!r} is the chain's independent joint, limits [{lower:g}, {upper:g}]"
+        )
+    return joints, [Coupling(j, m, a, b) for j, (m, a, b) in resolved.items()], home

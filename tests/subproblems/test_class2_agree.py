@@ -129,7 +129,13 @@ def test_s2_rr_nearly_parallel_axes_return_both_planar_roots(tilt):
 def test_s2_rrr_exact_row_not_moved_by_a_looser_copy():
     """Lattice geometry at scale 1e3, drawn (a, -pi/2, pi) at a singular configuration (audit S2-RRR
     lattice #68 seed 3): the scalar row is exact, the batch row 3e-11 off; their union must not walk
-    along the near-null direction (it came back 1.8e-6 off, residual 3.9e-12)."""
+    along the near-null direction (it came back 1.8e-6 off, residual 3.9e-12).
+
+    The bound is 1e-8, not 1e-9: the data fix this root only to ~1e-8.  Measured (numpy 2.4.6): both
+    paths return a row 2.35e-9 from the drawn one whose residual (1e-12 at scale 1e3) and smallest
+    singular value (1.7e-16) equal the drawn vector's to roundoff, and neither grows along the offset
+    between them; refining onto the fold (refine_singular, 10-100 iterations) does not move it.  An
+    earlier numpy happened to land within 1e-9."""
     tw = np.array(
         [
             [0.0, 0.0, 1000.0, 0.0, 1.0, 0.0],
@@ -150,6 +156,6 @@ def test_s2_rrr_exact_row_not_moved_by_a_looser_copy():
     r = solve("S2-RRR", tw, p=p, q=q)
     b = solve_batch("S2-RRR", tw[None], p=p[None], q=q[None])
     for rows in (r.q, b.q[0][b.valid[0]]):
-        assert min(np.abs(np.remainder(rows - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-9
+        assert min(np.abs(np.remainder(rows - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-8
         for row in rows:
             assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9 * 1e3 * 5

@@ -10,6 +10,7 @@ vectorised paths agree).  Budgets follow the active hypothesis profile (``HYPOTH
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -169,8 +170,10 @@ def _general_points(draw):
     return np.array([draw(_vec), draw(_vec)])
 
 
+# Strict, and in the thorough profile only: in the ci profile these tests pass and must keep passing.
 _MULTIPLE_ROOT_GAP = pytest.mark.xfail(
-    strict=False,
+    os.environ.get("HYPOTHESIS_PROFILE", "ci") == "thorough",
+    strict=True,
     reason="known gap (thorough profile only): instances ill-conditioned in their data (a point ~1e-8 "
     "from an axis, an axis ~1e-5 from a point's plane: a value fixed only to ~1e-4 by the 1e-9 "
     "tolerance, a near-continuum) return an exact row that is not the drawn one; the clusters of "

@@ -1,0 +1,632 @@
+"""Every inverse-kinematics solution of a general 6R chain by algebraic elimination (docs/general6.md).
+
+The problem: joint values ``th`` with ``exp(xi_1 th_1) ... exp(xi_6 th_6) M = T`` for six revolute twists
+``xi_i = (v_i, w_i)`` (space frame, home pose ``M``) and a target ``T``.  Write ``X_i = exp(xi_i th_i)``
+and ``G = T M^-1``.  The method is Raghavan and Roth's, in Manocha and Canny's eigenvalue form, derived
+here in product-of-exponentials terms so that no Denavit-Hartenberg frames are needed.
+
+**1. Split.**  With the joints in the order (a, b, c, d, e, f) of a chosen *arrangement*, the line of
+joint f (a point ``p_f`` on it and its direction ``w_f``) is fixed by ``X_f``, so
+
+    X_c X_d X_e (p_f, w_f)  =  X_b^-1 X_a^-1 (G p_f, R_G w_f)          (6 scalar equations: p, l)
+
+**2. Fourteen equations.**  From the point ``p`` and direction ``l`` of either side form the 14
+quantities ``p, l, p.p, p.l, p x l, (p.p) l - 2 (p.l) p``.  With the origin on the outer axis (b on the
+right, c on the left) the outer rotation only rotates the vectors and leaves the scalars alone, and the
+inner rotation enters once, so every quantity is *linear* in (1, cos, sin) of each joint: the right side
+lies in the span of (1, c_a, s_a) x (1, c_b, s_b) and the left side in that of (1, c_c, s_c) x (1, c_d,
+s_d) x (1, c_e, s_e).  Moving the origin maps the 14 quantities by a constant invertible matrix (the
+extra terms of ``(p.p) l - 2 (p.l) p`` recombine as ``t x (p x l)``), so this holds in any frame.
+Because the functions are exactly trigonometric of degree one per joint, their coefficients are
+computed by interpolation on the grid {0, 2 pi / 3, 4 pi / 3} per joint: 27 points for the left side
+(robot constants, once per robot) and 9 for the right side (per target).  This is
+
+    A(th_c) u(th_d, th_e)  =  B m(th_a, th_b),        A: 14 x 9, linear in (1, c_c, s_c);  B: 14 x 8
+
+(the constant column of the right side moved to the left).
+
+**3. Eliminate a, b.**  The 6 left null vectors ``N`` of B (its SVD) give ``N^T A(th_c) u = 0``: six
+equations in the 9 products of (1, c_d, s_d) and (1, c_e, s_e).  The tangent half-angles ``x = tan(th /
+2)`` turn them into polynomials: 6 equations in the monomials ``x_d^i x_e^j`` (i, j <= 2) with
+coefficients quadratic in ``x_c``; multiplied by ``x_d`` they give 6 more, 12 equations in the 12
+monomials ``x_d^i x_e^j`` (i <= 3, j <= 2): ``(M_0 + M_1 x_c + M_2 x_c^2) v = 0``.
+
+**4. Eigenproblem.**  ``det(M(x_c)) = 0`` has degree 24: the 16 solutions and 8 spurious roots at
+``x_c = +-i`` (they come from the half-angle factors).  It is the 24 x 24 companion eigenproblem
+``[[0, I], [-L^-1 M_0, -L^-1 M_1]]`` with ``L = M_2``.  ``L`` is singular exactly when ``th_c = pi``
+solves the pose; so the elimination joint is shifted, ``th_c = phi + delta``, with ``delta`` chosen per
+target among fixed values so that ``L`` is well conditioned (a Moebius change of the variable ``x_c``).
+Eigenvalues whose angle ``delta + 2 atan(y)`` has an imaginary part above ``IMAG_TOL`` are dropped
+(the spurious ``y = +-i`` and genuinely complex roots); near-real ones are kept as candidates.
+
+**5. Back-substitution.**  The eigenvector holds ``x_d^i x_e^j``: ``th_d = 2 atan2(x_d^(i+1) x_e^j,
+x_d^i x_e^j)`` read from the pair of largest magnitude (valid at ``x_d = inf``), likewise ``th_e``;
+then ``m = B^+ A(th_c) u`` gives (c_a, s_a) and (c_b, s_b) from its rank-one structure, and ``th_f``
+from the remaining rotation about ``w_f``.
+
+**6. Polish.**  Every candidate gets Newton steps on the true robot (all six joints) until the pose
+error is at most ``1e-12`` of the robot size (position) and ``1e-12`` (rotation, Frobenius); candidates
+that do not get there (near-real complex roots) are dropped, duplicates (double roots, a root found
+twice) merged.  Unreachable poses give no rows and ``reachable`` False.
+
+**Special geometry.**  Parallel or intersecting axes can make B lose rank or the pencil M singular
+(``det M(x) == 0`` for every x).  :func:`prepare` tries the arrangements (the joint order forward, and
+reversed, i.e. the inverse chain ``X_6^-1 ... X_1^-1 = G^-1``) on sample poses and keeps the first whose
+pencil is regular and which recovers every sampled joint vector; otherwise it raises
+:class:`General6Error`.
+
+>>> import numpy as np
+>>> rng = np.random.default_rng(1)
+>>> w = rng.normal(size=(6, 3)); w /= np.linalg.norm(w, axis=1, keepdims=True)
+>>> r = rng.uniform(-0.5, 0.5, size=(6, 3))
+>>> twists = np.concatenate([-np.cross(w, r), w], axis=1)
+>>> g6 = prepare(twists, np.eye(4))
+>>> q = np.array([0.3, -1.2, 2.0, 0.4, -0.7, 2.9])
+>>> rows = g6.solve(g6.fk(q))
+>>> bool(np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1).min() < 1e-9)
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from subproblems.core import SubproblemError, SubproblemInputError
+
+__all__ = ["General6", "General6Error", "Batch", "prepare", "solve", "solve_batch", "MAX_SOLUTIONS"]
+
+MAX_SOLUTIONS = 16
+IMAG_TOL = 2e-3  # |imaginary part| of a candidate angle kept for Newton (near-real roots)
+NEAR_REAL = 1e-9  # a kept candidate with a larger imaginary part makes its target doubtful
+EXACT = 1e-12  # accepted pose error: position / size and rotation (Frobenius)
+NEWTON_ITERS = 6
+SAME = 1e-6  # polished rows closer than this (rad, max over joints) are one solution: verify's tolerance
+SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
+LEADING_OK = 1e-9  # |det L| / prod(row norms of L) above which the leading matrix is used as is
+
+_GRID = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3])
+_PHI = np.stack([np.ones(3), np.cos(_GRID), np.sin(_GRID)], axis=1)  # PHI[p, t] = b_t(grid_p)
+_INV3 = np.linalg.inv(_PHI)
+_INV9 = np.linalg.inv(np.kron(_PHI, _PHI))
+_INV27 = np.linalg.inv(np.kron(np.kron(_PHI, _PHI), _PHI))
+# (1, cos, sin) times (1 + x^2) in powers of x = tan(th / 2): rows t, columns power
+_HALF = np.array([[1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [0.0, 2.0, 0.0]])
+_HALF9 = np.kron(_HALF, _HALF)  # trig product (t*3+u) -> monomial x_d^i x_e^j (i*3+j)
+
+
+class General6Error(SubproblemError):
+    """The elimination does not apply: not six revolute joints, or its matrices degenerate."""
+
+
+@dataclass(frozen=True)
+class Batch:
+    """Solutions of N targets: Q (N, 16, 6) joint values in (-pi, pi], valid (N, 16), residual (N, 16)
+    (pose error relative to the size, recomputed by forward kinematics), reachable (N,)."""
+
+    Q: np.ndarray
+    valid: np.ndarray
+    residual: np.ndarray
+    reachable: np.ndarray
+
+
+# ----------------------------------------------------------------------------------------------- rigid
+def _cross(a, b):
+    """a x b over the last axis (broadcast); cheaper than numpy.cross on small stacks."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def _rodrigues(w, th):
+    """Rotations (..., 3, 3) about unit axes w (..., 3) by th (...): c I + s [w] + (1 - c) w w^T."""
+    w = np.asarray(w, dtype=float)
+    th = np.asarray(th, dtype=float)
+    s, c = np.sin(th)[..., None], np.cos(th)[..., None]
+    x, y, z = w[..., 0:1], w[..., 1:2], w[..., 2:3]
+    v = 1 - c
+    R = np.concatenate([
+        c + v * x * x, v * x * y - s * z, v * x * z + s * y,
+        v * x * y + s * z, c + v * y * y, v * y * z - s * x,
+        v * x * z - s * y, v * y * z + s * x, c + v * z * z,
+    ], axis=-1)
+    return R.reshape(R.shape[:-1] + (3, 3))
+
+
+def _exp(w, r, th):
+    """Transforms (..., 4, 4) of rotations by th about the lines (point r, direction w)."""
+    R = _rodrigues(w, th)
+    g = np.zeros(R.shape[:-2] + (4, 4))
+    g[..., :3, :3] = R
+    g[..., :3, 3] = r - (R @ np.asarray(r, dtype=float)[..., None])[..., 0]
+    g[..., 3, 3] = 1.0
+    return g
+
+
+def _inv(g):
+    h = np.zeros_like(g)
+    Rt = np.swapaxes(g[..., :3, :3], -1, -2)
+    h[..., :3, :3] = Rt
+    h[..., :3, 3] = -(Rt @ g[..., :3, 3, None])[..., 0]
+    h[..., 3, 3] = 1.0
+    return h
+
+
+def _fourteen(p, l):
+    """The 14 Raghavan-Roth quantities of a point p and direction l (..., 3) -> (..., 14)."""
+    pp = np.einsum("...i,...i->...", p, p)[..., None]
+    pl = np.einsum("...i,...i->...", p, l)[..., None]
+    return np.concatenate([p, l, pp, pl, _cross(p, l), pp * l - 2 * pl * p], axis=-1)
+
+
+# ----------------------------------------------------------------------------------------- arrangement
+@dataclass(frozen=True)
+class _Arrangement:
+    """One joint order for the elimination, in normalised coordinates (origin at the axes' centroid,
+    lengths divided by the robot size)."""
+
+    order: tuple[int, ...]  # original joint index at each position a..f
+    sign: float  # +1: the chain as given; -1: its inverse (twists negated, target inverted)
+    conj: int  # the first `conj` joints are moved ahead of the rest: their axes are mapped by the target
+    w: np.ndarray  # (6, 3) axis directions in arrangement order
+    r: np.ndarray  # (6, 3) axis points
+    A: np.ndarray  # (14, 3, 9) left side: quantity, (1, c_c, s_c), (1,c_d,s_d) x (1,c_e,s_e)
+    E: np.ndarray  # (9, 4, 4) X_b^-1 X_a^-1 on the (a, b) grid
+    u: np.ndarray  # unit vector normal to w_f (reads th_f)
+
+
+def _arrangement(w, r, sign, conj) -> _Arrangement:
+    """Joint order: the chain (sign +1) or its inverse (-1), its last ``conj`` joints moved ahead."""
+    base = list(range(6)) if sign > 0 else list(range(5, -1, -1))
+    order = base[6 - conj:] + base[:6 - conj]
+    w = sign * w[list(order)]
+    r = r[list(order)]
+    th = np.stack(np.meshgrid(_GRID, _GRID, _GRID, indexing="ij"), axis=-1).reshape(27, 3)
+    X = _exp(w[2], r[2], th[:, 0]) @ _exp(w[3], r[3], th[:, 1]) @ _exp(w[4], r[4], th[:, 2])
+    p = np.einsum("kij,j->ki", X[:, :3, :3], r[5]) + X[:, :3, 3]
+    lv = X[:, :3, :3] @ w[5]
+    A = (_INV27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
+    ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
+    E = _inv(_exp(w[1], r[1], ab[:, 1])) @ _inv(_exp(w[0], r[0], ab[:, 0]))
+    u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
+    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u))
+
+
+def _axes(arr: _Arrangement, H):
+    """Axes (N, 6, 3) directions and points of the arrangement for targets H (N, 4, 4) of its chain:
+    a joint moved ahead of the others, ``X_j -> H X_j H^-1``, has its axis mapped by H."""
+    N = len(H)
+    W = np.broadcast_to(arr.w, (N, 6, 3)).copy()
+    R = np.broadcast_to(arr.r, (N, 6, 3)).copy()
+    for k in range(arr.conj):
+        W[:, k] = H[:, :3, :3] @ arr.w[k]
+        R[:, k] = np.einsum("nij,j->ni", H[:, :3, :3], arr.r[k]) + H[:, :3, 3]
+    return W, R
+
+
+def _grid_ab(W, R):
+    """X_b^-1 X_a^-1 (N, 9, 4, 4) on the (a, b) interpolation grid for per-target axes."""
+    ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
+    Xb = _exp(W[:, None, 1], R[:, None, 1], ab[None, :, 1])
+    Xa = _exp(W[:, None, 0], R[:, None, 0], ab[None, :, 0])
+    return _inv(Xb) @ _inv(Xa)
+
+
+class General6:
+    """A prepared general 6R solver for one robot; see the module docstring.
+
+    ``solve(T)`` -> (k, 6) exact solutions; ``solve_batch(Ts)`` -> :class:`Batch`; ``fk(q)`` -> 4x4.
+    """
+
+    def __init__(self, twists, home, scale: float | None = None, arrangement=None):
+        """``arrangement``: None (choose on sample poses, ~0.1 s), or the index or list of indices of
+        the arrangements to use, in order (``General6(...).usable`` of an earlier instance)."""
+        tw = np.asarray(twists, dtype=float)
+        if tw.shape != (6, 6) or not np.all(np.isfinite(tw)):
+            raise SubproblemInputError(f"general6 needs 6 finite twists (6, 6); got shape {tw.shape}")
+        w = tw[:, 3:]
+        nw = np.linalg.norm(w, axis=1)
+        if np.any(nw < 1e-9):
+            k = int(np.argmin(nw))
+            raise General6Error(
+                f"general6 solves 6R chains; joint {k + 1} is prismatic (w = 0): use the compiler's "
+                "search fallback or name it a free joint"
+            )
+        w = w / nw[:, None]
+        r = np.cross(w, tw[:, :3])  # the foot of each axis nearest the origin
+        self.home = np.asarray(home, dtype=float)
+        self.center = r.mean(axis=0)
+        size = float(np.max(np.linalg.norm(np.vstack([r, self.home[:3, 3]]) - self.center, axis=1)))
+        self.scale = float(scale) if scale else max(size, 1e-9)
+        self._s = max(size, 1e-9)  # internal normalisation length
+        self.w, self.r = w, (r - self.center) / self._s
+        self.twists = np.concatenate([-np.cross(w, r), w], axis=1)
+        self.Mn = self._norm(self.home[None])[0]
+        self._arr = [_arrangement(self.w, self.r, sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
+        if arrangement is None:
+            self.usable = [0]
+            self.usable = self._choose()
+        else:
+            self.usable = [int(k) for k in np.atleast_1d(arrangement)]
+        self.arrangement = self.usable[0]
+
+    # --------------------------------------------------------------------------------- kinematics
+    def fk(self, q) -> np.ndarray:
+        """Tool pose(s) of joint values q (6,) or (M, 6)."""
+        q = np.asarray(q, dtype=float)
+        g = self._fk_norm(q.reshape(-1, 6))
+        out = g.copy()
+        out[:, :3, 3] = g[:, :3, 3] * self._s + self.center
+        return out.reshape(q.shape[:-1] + (4, 4))
+
+    def _fk_norm(self, Q):
+        g = np.broadcast_to(np.eye(4), (len(Q), 4, 4))
+        for i in range(6):
+            g = g @ _exp(self.w[i], self.r[i], Q[:, i])
+        return g @ self.Mn
+
+    def _norm(self, T):
+        """Tool poses (N, 4, 4) in normalised coordinates (origin at the centroid, lengths / size)."""
+        out = T.copy()
+        out[:, :3, 3] = (T[:, :3, 3] - self.center) / self._s
+        return out
+
+    def _error(self, g, Tn):
+        """Pose error of normalised tool poses: max(position / size, Frobenius rotation)."""
+        dp = np.linalg.norm(g[:, :3, 3] - Tn[:, :3, 3], axis=1) * (self._s / self.scale)
+        dR = np.linalg.norm(g[:, :3, :3] - Tn[:, :3, :3], axis=(1, 2))
+        return np.maximum(dp, dR)
+
+    # ------------------------------------------------------------------------------ elimination
+    def _pencil(self, arr: _Arrangement, Gn):
+        """Per target: B's constant column (N, 14), pinv(B') (N, 8, 14), C (N, 6, 3, 9), B' rank ratio."""
+        Gn = Gn if arr.sign > 0 else _inv(Gn)
+        y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
+        m = Gn[:, :3, :3] @ arr.w[5]
+        if arr.conj:
+            E = _grid_ab(*_axes(arr, Gn))
+            p = np.einsum("nkij,nj->nki", E[..., :3, :3], y) + E[..., :3, 3]
+            lv = np.einsum("nkij,nj->nki", E[..., :3, :3], m)
+        else:
+            p = np.einsum("kij,nj->nki", arr.E[:, :3, :3], y) + arr.E[None, :, :3, 3]
+            lv = np.einsum("kij,nj->nki", arr.E[:, :3, :3], m)
+        B = np.einsum("kq,nqj->nkj", _INV9, _fourteen(p, lv))  # (N, 9 coeffs, 14)
+        B = np.swapaxes(B, 1, 2)  # (N, 14, 9)
+        U, s, Vh = np.linalg.svd(B[:, :, 1:], full_matrices=True)
+        Nl = U[:, :, 8:]  # (N, 14, 6)
+        C = np.einsum("nqe,qtj->netj", Nl, arr.A)
+        C[:, :, 0, 0] -= np.einsum("nqe,nq->ne", Nl, B[:, :, 0])  # the right side's constant column
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sinv = np.where(s > 1e-13 * s[:, :1], 1.0 / s, 0.0)
+        pinv = np.einsum("nji,nj,nkj->nik", Vh, sinv, U[:, :, :8])
+        return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
+
+    @staticmethod
+    def _matrices(C, delta):
+        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2)."""
+        cd, sd = np.cos(delta)[:, None, None], np.sin(delta)[:, None, None]
+        C0, C1, C2 = C[:, :, 0], C[:, :, 1], C[:, :, 2]
+        Ct = np.stack([C0, C1 * cd + C2 * sd, C2 * cd - C1 * sd], axis=1)  # (N, 3 trig, 6, 9)
+        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ _HALF9  # (N, 3 powers, 6, 9 monomials)
+        N = len(C)
+        M = np.zeros((N, 3, 12, 12))
+        for i in range(3):
+            M[:, :, :6, 3 * i:3 * i + 3] = P[:, :, :, 3 * i:3 * i + 3]
+            M[:, :, 6:, 3 * i + 3:3 * i + 6] = P[:, :, :, 3 * i:3 * i + 3]
+        scale = np.linalg.norm(M, axis=(1, 3), keepdims=True)  # rows of equal weight
+        return M / np.where(scale > 0, scale, 1.0)
+
+    def _candidates(self, arr: _Arrangement, Gn):
+        """Candidate joint vectors (original order) and their owners from the eigenproblem."""
+        N = len(Gn)
+        B0, pinv, C, brank = self._pencil(arr, Gn)
+        delta = np.full(N, SHIFTS[0])
+        M = self._matrices(C, delta)
+        good = _leading_ok(M[:, 2])
+        for d in SHIFTS[1:]:
+            if good.all():
+                break
+            bad = np.nonzero(~good)[0]
+            M2 = self._matrices(C[bad], np.full(len(bad), d))
+            ok = _leading_ok(M2[:, 2])
+            take = bad[ok]
+            M[take], delta[take], good[take] = M2[ok], d, True
+        L = M[:, 2]
+        K = np.zeros((N, 24, 24))
+        K[:, :12, 12:] = np.eye(12)
+        rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, 12, 24)
+        with np.errstate(all="ignore"):
+            K[:, 12:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(12), rhs)
+            lam = np.linalg.eigvals(np.nan_to_num(K))
+            th_c = delta[:, None] + 2 * np.arctan(lam)
+        keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
+        # a near-real complex pair: a double root split by rounding (or a genuine pair close to real)
+        split = (keep & (np.abs(th_c.imag) > NEAR_REAL)).any(axis=1)
+        own, idx = np.nonzero(keep)
+        th_c = th_c.real[own, idx]
+        # no well-conditioned shift, B' loses rank, or a split double root: ask the other orders too
+        doubt = ~good | (brank < 1e-9) | split
+        if not len(own):  # no real root: the pose is unreachable
+            return np.zeros((0, 6)), own, doubt
+        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
+        th_d = _read_ratio(v[:, :3, :], v[:, 1:, :])
+        th_e = _read_ratio(v[:, :, :2], v[:, :, 1:])
+        tc = np.stack([np.ones_like(th_c), np.cos(th_c), np.sin(th_c)], axis=1)
+        ud = np.stack([np.ones_like(th_d), np.cos(th_d), np.sin(th_d)], axis=1)
+        ue = np.stack([np.ones_like(th_e), np.cos(th_e), np.sin(th_e)], axis=1)
+        u = (ud[:, :, None] * ue[:, None, :]).reshape(-1, 9)
+        rhs = np.einsum("qtj,nt->nqj", arr.A, tc)
+        rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
+        mab = np.einsum("niq,nq->ni", pinv[own], rhs)
+        Kab = np.concatenate([np.ones((len(mab), 1)), mab], axis=1).reshape(-1, 3, 3)
+        th_a = np.arctan2(np.einsum("ni,ni->n", Kab[:, 2], Kab[:, 0]),
+                          np.einsum("ni,ni->n", Kab[:, 1], Kab[:, 0]))
+        th_b = np.arctan2(np.einsum("ni,ni->n", Kab[:, :, 2], Kab[:, :, 0]),
+                          np.einsum("ni,ni->n", Kab[:, :, 1], Kab[:, :, 0]))
+        th = np.stack([th_a, th_b, th_c, th_d, th_e], axis=1)
+        Gk = Gn[own] if arr.sign > 0 else _inv(Gn[own])
+        W, R = _axes(arr, Gk) if arr.conj else (arr.w[None], arr.r[None])
+        X = np.broadcast_to(np.eye(4), (len(th), 4, 4))
+        for k in range(5):
+            X = X @ _exp(W[:, k], R[:, k], th[:, k])
+        Rf = np.swapaxes(X[:, :3, :3], 1, 2) @ Gk[:, :3, :3]
+        Ru = Rf @ arr.u
+        th_f = np.arctan2(_cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
+        th = np.concatenate([th, th_f[:, None]], axis=1)
+        Q = np.empty_like(th)
+        Q[:, list(arr.order)] = th
+        return Q, own, doubt
+
+    # ----------------------------------------------------------------------------------- polish
+    def _newton(self, Q, Gn, iters=NEWTON_ITERS):
+        """Newton steps on all six joints toward normalised targets; returns (best Q, its error).
+
+        Near a singular configuration (a double root) the plain step is amplified by the tiny singular
+        value; those rows take the truncated least-squares step instead, and every row keeps the best
+        iterate it met."""
+        Q = Q.copy()
+        best, best_err = Q.copy(), np.full(len(Q), np.inf)
+        active = np.ones(len(Q), dtype=bool)
+        for it in range(iters + 1):
+            idx = np.nonzero(active)[0]
+            if not len(idx):
+                break
+            g, J = self._jacobian(Q[idx])
+            err = self._error(g, Gn[idx])
+            better = err < best_err[idx]
+            best[idx[better]], best_err[idx[better]] = Q[idx[better]], err[better]
+            done = err <= 0.05 * EXACT
+            active[idx[done]] = False
+            if it == iters:
+                break
+            idx, g, J = idx[~done], g[~done], J[~done]
+            T = Gn[idx]
+            e_pos = T[:, :3, 3] - g[:, :3, 3]
+            Rt, Tt = np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)
+            e_rot = 0.5 * _cross(Rt, Tt).sum(axis=1)
+            e = np.concatenate([e_pos, e_rot], axis=1)
+            with np.errstate(all="ignore"):
+                try:
+                    dq = np.linalg.solve(J, e[..., None])[..., 0]
+                except np.linalg.LinAlgError:  # an exactly singular Jacobian somewhere
+                    dq = np.full(e.shape, np.inf)
+                size = np.abs(e).max(axis=1)
+                wild = ~np.isfinite(dq).all(axis=1) | (np.abs(dq).max(axis=1) > 1e3 * size + 1e-3)
+                if wild.any():
+                    dq[wild] = np.einsum("nij,nj->ni", np.linalg.pinv(J[wild], rcond=1e-7), e[wild])
+            step = np.abs(dq).max(axis=1)
+            dq *= np.minimum(1.0, 0.5 / np.maximum(step, 1e-300))[:, None]  # a far candidate: bounded steps
+            Q[idx] += np.nan_to_num(dq)
+        return best, best_err
+
+    def _jacobian(self, Q):
+        """Tool poses (normalised) and the space Jacobian of the tool origin and rotation (M, 6, 6)."""
+        g = np.broadcast_to(np.eye(4), (len(Q), 4, 4))
+        W, V = np.zeros((len(Q), 6, 3)), np.zeros((len(Q), 6, 3))
+        for i in range(6):
+            W[:, i] = g[:, :3, :3] @ self.w[i]
+            r = np.einsum("nij,j->ni", g[:, :3, :3], self.r[i]) + g[:, :3, 3]
+            V[:, i] = _cross(r, W[:, i])  # v = -w x r of the moved axis
+            g = g @ _exp(self.w[i], self.r[i], Q[:, i])
+        g = g @ self.Mn
+        V += _cross(W, g[:, None, :3, 3])  # velocity of the tool origin: v + w x p
+        return g, np.concatenate([V, W], axis=2).transpose(0, 2, 1)
+
+    # ------------------------------------------------------------------------------------ solve
+    def _solve_norm(self, Tn, arrangement=None):
+        """Solutions of normalised targets.
+
+        The preferred arrangement first.  A target is *doubtful* when no shift gave a well-conditioned
+        leading matrix, B' lost rank, or a candidate stalled short of exact (the sign of a double root,
+        where eigenvectors are poorly determined); doubtful targets are re-solved with the other usable
+        arrangements and with two slightly rotated copies of the target (a double root splits, a
+        degenerate pencil becomes regular), and every candidate, pooled, is polished toward the true
+        target: Newton and the final check decide."""
+        N = len(Tn)
+        Gn = Tn @ _inv(self.Mn)
+        order = self.usable if arrangement is None else [arrangement]
+        Qc, own, doubt = self._candidates(self._arr[order[0]], Gn)
+        Qc, err = self._newton(Qc, Tn[own])
+        stalled = np.zeros(N, dtype=bool)
+        stalled[own[(err > EXACT) & (err < 1e-3)]] = True
+        todo = np.nonzero(doubt | stalled)[0]
+        if len(todo) and arrangement is None:
+            Qs, owns = [Qc], [own]
+            rot = [_exp(_PERTURB[i], np.zeros(3), 1e-4)[None] for i in range(2)]
+            for k in order[1:]:
+                Qk, ok_, _ = self._candidates(self._arr[k], Gn[todo])
+                Qs.append(Qk)
+                owns.append(todo[ok_])
+            for R in rot:
+                for k in order[:2]:
+                    Qk, ok_, _ = self._candidates(self._arr[k], R @ Gn[todo])
+                    Qs.append(Qk)
+                    owns.append(todo[ok_])
+            more, mown = np.concatenate(Qs[1:]), np.concatenate(owns[1:])
+            more, merr = self._newton(more, Tn[mown], iters=3 * NEWTON_ITERS)
+            Qc, own = np.concatenate([Qc, more]), np.concatenate([own, mown])
+            err = np.concatenate([err, merr])
+        ok = err <= EXACT
+        Qc, own, err = _wrap(Qc[ok]), own[ok], err[ok]
+        return _pack(Qc, own, err, N)
+
+    def solve_batch(self, Ts) -> Batch:
+        """Every solution of N targets (N, 4, 4): a :class:`Batch` of up to 16 rows each."""
+        Ts = np.asarray(Ts, dtype=float).reshape(-1, 4, 4)
+        if not np.all(np.isfinite(Ts)):
+            raise SubproblemInputError("general6: target contains NaN or infinity")
+        return self._solve_norm(self._norm(Ts))
+
+    def describe(self, k: int, names=None) -> str:
+        """One line on arrangement ``k``: its joint order and elimination variable."""
+        arr = self._arr[k]
+        names = names or [f"joint {i + 1}" for i in range(6)]
+        order = ", ".join(names[i] for i in arr.order)
+        how = "chain" if arr.sign > 0 else "inverse chain"
+        moved = f", {arr.conj} moved ahead" if arr.conj else ""
+        return f"#{k} {how} ({order}{moved}; eliminated {names[arr.order[2]]})"
+
+    def rows(self, Ts):
+        """The exact solutions of N targets as flat rows: (Q (M, 6), owner (M,) target index)."""
+        b = self.solve_batch(Ts)
+        n, k = np.nonzero(b.valid)
+        return b.Q[n, k], n
+
+    def solve(self, T) -> np.ndarray:
+        """Every exact solution (k, 6) of one target 4x4; (0, 6) when the pose is unreachable."""
+        b = self.solve_batch(np.asarray(T, dtype=float)[None])
+        return b.Q[0][b.valid[0]]
+
+    def _choose(self, count: int = 12, seed: int = 5) -> list[int]:
+        """Arrangements whose pencil is regular, those recovering the most sampled joint vectors first."""
+        rng = np.random.default_rng(seed)
+        Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
+        Tn = self._fk_norm(Q)
+        Gn = Tn @ _inv(self.Mn)
+        why, found = [], []
+        for k, arr in enumerate(self._arr):
+            _, _, C, _ = self._pencil(arr, Gn)
+            M = self._matrices(C, np.full(count, SHIFTS[0]))
+            x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
+            sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
+            if np.median(sv[:, -1] / sv[:, 0]) < 1e-10:
+                why.append(f"order {arr.order} ({arr.conj} moved ahead): the 12 x 12 pencil is singular")
+                continue
+            b = self._solve_norm(Tn, k)
+            d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
+            hit = int((np.where(b.valid, d, np.inf).min(axis=1) < 1e-6).sum())
+            found.append((-hit, k))
+            why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {hit} of {count} samples")
+        if not found or -min(found)[0] < count // 2:
+            raise General6Error(
+                "general6: the elimination degenerates on this geometry (" + "; ".join(why) + "); "
+                "the compiler falls back to its search"
+            )
+        self.why = tuple(why)
+        return [k for _, k in sorted(found)]
+
+
+def _leading_ok(L):
+    """Leading matrices far enough from singular: |det| / product of row norms (Hadamard ratio)."""
+    sign, logdet = np.linalg.slogdet(L)
+    rows = np.log(np.maximum(np.linalg.norm(L, axis=2), 1e-300)).sum(axis=1)
+    return (sign != 0) & (logdet - rows > math.log(LEADING_OK))
+
+
+_PROBE = np.random.default_rng(12).normal(size=12)
+_PERTURB = np.random.default_rng(13).normal(size=(2, 3))
+_PERTURB /= np.linalg.norm(_PERTURB, axis=1, keepdims=True)
+
+
+def _null_vectors(M, y):
+    """Null vectors (K, 12) of the pencils M (K, 3, 12, 12) at real roots y (K,): two steps of inverse
+    iteration; y is moved by ~1e-11 so that an exact root cannot make the factorisation singular."""
+    big = np.abs(y) > 1
+    yi = np.where(big, 1 / np.where(big, y, 1), y)
+    yi = yi + 1e-11 * np.where(yi >= 0, 1, -1)
+    # |y| <= 1: M0 + y M1 + y^2 M2; |y| > 1 (with yi = 1 / y): yi^2 M0 + yi M1 + M2, the same null vector
+    c0 = np.where(big, yi * yi, 1.0)[:, None, None]
+    c2 = np.where(big, 1.0, yi * yi)[:, None, None]
+    P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
+    z = np.broadcast_to(_PROBE, (len(y), 12))[..., None]
+    with np.errstate(all="ignore"):
+        for _ in range(2):
+            try:
+                z = np.linalg.solve(P, z)
+            except np.linalg.LinAlgError:  # an exactly singular P in the stack: the SVD's null vectors
+                z = np.linalg.svd(P)[2][:, -1, :, None]
+                break
+            z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), 1e-300)
+    return np.nan_to_num(z[..., 0])
+
+
+def _read_ratio(den, num):
+    """th = 2 atan2(num, den) from the (den, num) pair of largest magnitude: (M, ...) -> (M,)."""
+    den, num = den.reshape(len(den), -1), num.reshape(len(num), -1)
+    k = np.argmax(den * den + num * num, axis=1)
+    i = np.arange(len(den))
+    return 2 * np.arctan2(num[i, k], den[i, k])
+
+
+def _wrap(Q):
+    """Revolute values in (-pi, pi]."""
+    Q = np.mod(Q + math.pi, 2 * math.pi) - math.pi
+    return np.where(Q <= -math.pi, Q + 2 * math.pi, Q)
+
+
+def _angle_gap(a, b):
+    """|a - b| modulo 2 pi, in [0, pi]."""
+    return np.abs(np.mod(a - b + math.pi, 2 * math.pi) - math.pi)
+
+
+def _pack(Q, own, err, N) -> Batch:
+    """Distinct rows per target into (N, 16) slots, best residual first among duplicates."""
+    order = np.lexsort((err, own))
+    Q, own, err = Q[order], own[order], err[order]
+    starts = np.searchsorted(own, np.arange(N + 1))
+    count = np.diff(starts)
+    slot = np.arange(len(own)) - starts[own]
+    out_q = np.zeros((N, MAX_SOLUTIONS, 6))
+    out_v = np.zeros((N, MAX_SOLUTIONS), dtype=bool)
+    out_e = np.full((N, MAX_SOLUTIONS), np.inf)
+    small = count[own] <= MAX_SOLUTIONS  # targets with more exact rows (duplicates) go one by one
+    if small.any():
+        K = int(count[count <= MAX_SOLUTIONS].max())
+        q = np.zeros((N, K, 6))
+        v = np.zeros((N, K), dtype=bool)
+        e = np.full((N, K), np.inf)
+        q[own[small], slot[small]], v[own[small], slot[small]], e[own[small], slot[small]] = (
+            Q[small], True, err[small])
+        d = _angle_gap(q[:, :, None, :], q[:, None, :, :]).max(axis=3)
+        earlier = np.tril(np.ones((K, K), dtype=bool), -1)  # [i, j]: j before i
+        v &= ~(earlier & (d <= SAME) & v[:, None, :]).any(axis=2)
+        rank = np.cumsum(v, axis=1) - 1
+        n, k = np.nonzero(v & (rank < MAX_SOLUTIONS))
+        out_q[n, rank[n, k]], out_v[n, rank[n, k]], out_e[n, rank[n, k]] = q[n, k], True, e[n, k]
+    for n in np.nonzero(count > MAX_SOLUTIONS)[0]:
+        keep: list[int] = []
+        rows = Q[starts[n]:starts[n + 1]]
+        for i in range(len(rows)):
+            if len(keep) < MAX_SOLUTIONS and all(_angle_gap(rows[i], rows[j]).max() > SAME for j in keep):
+                keep.append(i)
+        out_q[n, :len(keep)] = rows[keep]
+        out_v[n, :len(keep)] = True
+        out_e[n, :len(keep)] = err[starts[n]:starts[n + 1]][keep]
+    return Batch(out_q, out_v, out_e, out_v.any(axis=1))
+
+
+def prepare(twists, home, scale: float | None = None) -> General6:
+    """A :class:`General6` solver for the robot (6 revolute twists (v, w), home pose 4x4)."""
+    return General6(twists, home, scale)
+
+
+def solve(twists, home, T) -> np.ndarray:
+    """Every solution (k, 6) of one target; prepare the robot once with :func:`prepare` for many."""
+    return prepare(twists, home).solve(T)
+
+
+def solve_batch(twists, home, Ts) -> Batch:
+    """Every solution of N targets (N, 4, 4)."""
+    return prepare(twists, home).solve_batch(Ts)

@@ -1,0 +1,79 @@
+"""A fixed sample of the configuration zoo (``ikcompiler.configs``), held to the zoo's bar: every chain
+compiles, returns no wrong row, and recovers every sampled joint vector (self-motions excluded), except
+that a structurally redundant chain (generic Jacobian rank below its joint count) is only checked for
+wrong rows.  The whole zoo: ``python benchmarks/configurations.py`` (docs/realrobots.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ikcompiler import configs
+from ikcompiler.verify import verify
+
+SAMPLE = [
+    ("R", "modular", 0),
+    ("T", "general", 0),
+    ("TT", "general", 1),
+    ("RRR", "modular", 0),
+    ("RTR", "general", 0),
+    ("TRT", "modular", 1),
+    ("RRRR", "general", 0),
+    ("TRRT", "modular", 0),
+    ("RRRTT", "general", 0),
+    ("RRRRRR", "modular", 2),
+    ("TRRRRR", "modular", 1),
+    ("RRTRRR", "modular", 5),  # 1-D search
+]
+KNOWN_GAPS = {
+    ("RRTRRR", "modular", 5): "1-D search incomplete (measured 2026-12-01, after main's stricter verify): "
+    "misses 1 of 40 random poses (seed 2), the sampled vector not among 152 exact rows",
+}
+
+
+def _rank(chain) -> int:
+    rng = np.random.default_rng(0)
+    best = 0
+    for _ in range(5):
+        q = rng.uniform(chain.lower, chain.upper)
+        J = chain.space_jacobian(q).copy()
+        J[:3] /= chain.scale
+        best = max(best, int(np.linalg.matrix_rank(J, tol=1e-8)))
+    return best
+
+
+def _params():
+    out = []
+    for key in SAMPLE:
+        marks = [pytest.mark.xfail(strict=True, reason=KNOWN_GAPS[key])] if key in KNOWN_GAPS else []
+        out.append(pytest.param(*key, marks=marks, id=f"{key[0]}-{key[1]}-{key[2]}"))
+    return out
+
+
+def test_joint_strings_are_all_126():
+    strings = configs.joint_strings()
+    assert len(strings) == len(set(strings)) == 126
+    assert strings[0] == "R" and strings[-1] == "TTTTTT"
+
+
+def test_generator_is_seeded_and_modular_axes_are_along_or_across_links():
+    a, b = configs.modular_chain("RTRRT", seed=3), configs.modular_chain("RTRRT", seed=3)
+    assert np.array_equal(a.twists, b.twists) and np.array_equal(a.home, b.home)
+    for j in a.joints:  # every modular axis is a coordinate axis of the (right-angle) link frames
+        assert np.isclose(np.abs(j.axis).max(), 1.0)
+
+
+@pytest.mark.parametrize("kinds,geometry,seed", _params())
+def test_zoo_sample_compiles_and_verifies(kinds, geometry, seed):
+    chain = configs.modular_chain(kinds, seed=seed, geometry=geometry)
+    compiled = configs.compile_chain(chain)
+    module = compiled.module
+    redundant = _rank(chain) < chain.dof
+    for rep in (
+        verify(chain, module, samples=10, seed=1, special=1.0, scalar_checks=3),
+        verify(chain, module, samples=40, seed=2, special=0.0, scalar_checks=3),
+    ):
+        text = f"{chain.name} ({module.METHOD}, redundant {redundant}): {rep.text()}"
+        assert rep.wrong == 0 and rep.batch_mismatch == 0, text
+        if not redundant:
+            assert rep.recovered == rep.poses - rep.self_motion, text
