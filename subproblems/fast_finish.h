@@ -61,6 +61,10 @@ typedef struct {
      * degenerate geometry it cannot settle: it solves the joints in another order */
     ikc_chain_fn chain_alt;
     int leaves_alt;
+    /* snapped plans: a corrected leaf whose weakest singular value (subproblems.continuation
+     * near_singular) is below this, or a least-squares leaf missing by less than this times the
+     * scale, hands the target to the Python continuation */
+    double near_singular;
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
@@ -572,21 +576,108 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
     return status;
 }
 
+/* Smallest singular value of the true robot's Jacobian at q (rows of the target, lengths relative to
+ * the size, prismatic columns times the size, free joints left out) by inverse iteration on J^T J:
+ * the C form of subproblems.continuation._weakest, for its threshold test only. */
+static double ikc_weakest(const ikc_robot *rb, const double *q) {
+    const int dof = rb->dof;
+    double G[12], J[6 * dof];
+    ikc_fk_jacobian(rb, q, G, J);
+    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0, col[dof];
+    for (int j = 0; j < dof; j++)
+        if (!rb->is_free[j]) col[m++] = j;
+    if (m == 0) return INFINITY;
+    double JtJ[m][m], x[m];
+    for (int a = 0; a < m; a++) {
+        for (int c = 0; c < m; c++) {
+            double s = 0.0;
+            for (int r = r0; r < r1; r++) {
+                double f = r < 3 ? 1.0 / (rb->scale * rb->scale) : 1.0;
+                s += f * J[r * dof + col[a]] * J[r * dof + col[c]];
+            }
+            double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
+            JtJ[a][c] = s * ua * uc;
+        }
+        x[a] = 1.0 / sqrt((double)m) * (1.0 + 0.1 * a);
+    }
+    double lambda = INFINITY;
+    for (int it = 0; it < 30; it++) {
+        double M[m][m + 1], y[m], norm = 0.0;
+        for (int a = 0; a < m; a++) {
+            for (int c = 0; c < m; c++) M[a][c] = JtJ[a][c];
+            M[a][m] = x[a];
+        }
+        if (!ikc_solve_linear(m, M, y)) return 0.0;
+        for (int a = 0; a < m; a++) norm += y[a] * y[a];
+        norm = sqrt(norm);
+        if (!(norm > 0.0) || norm != norm) return 0.0;
+        double next = 1.0 / norm;  /* |x| = 1: an upper bound of lambda_min that converges to it */
+        for (int a = 0; a < m; a++) x[a] = y[a] / norm;
+        if (fabs(next - lambda) <= 1e-3 * next) {
+            lambda = next;
+            break;
+        }
+        lambda = next;
+    }
+    return sqrt(lambda > 0.0 ? lambda : 0.0);
+}
+
+/* Joint distance of two rows: revolute values modulo 2 pi, prismatic ones relative to the size. */
+static double ikc_row_distance(const ikc_robot *rb, const double *x, const double *y) {
+    double m = 0.0;
+    for (int j = 0; j < rb->dof; j++) {
+        double d = fabs(x[j] - y[j]);
+        if (rb->revolute[j]) {
+            d = fmod(d, IKC_TWO_PI);
+            if (d > IKC_PI_F) d = IKC_TWO_PI - d;
+        } else {
+            d /= rb->scale;
+        }
+        if (!(d <= m)) m = d;  /* NaN wins */
+    }
+    return m;
+}
+
+#define IKC_MAX_MOVE 0.25      /* subproblems.continuation.MAX_MOVE */
+#define IKC_SEPARATE 1e-6      /* subproblems.continuation.SEPARATE */
+
 /* A snapped plan (the module's _POLISH branch): leaves of the snapped robot's chain, each corrected by
- * Newton steps on the true robot, then the finish.  Count or IKC_PYTHON (a leaf near a degenerate
- * geometry of the snapped robot). */
+ * Newton steps on the true robot, then the finish.  The correction is kept only where it is
+ * certainly the leaf's own solution (subproblems.continuation, docs/calibrated.md): every exact leaf
+ * converged, moved less than IKC_MAX_MOVE, no two distinct leaves ended on one solution, no corrected
+ * leaf near a singular configuration, no least-squares leaf that nearly reaches the target (a pair of
+ * solutions may be born there).  Otherwise IKC_PYTHON: the Python continuation takes the target.
+ * Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
-    double Q[L * dof], E[L];
-    int F[L];
+    const double exact = rb->tol * rb->scale;
+    double Q[L * dof], E[L], Q0[L * dof];
+    int F[L], good[L];
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
+        good[k] = 0;
         if (F[k] & IKC_DEFER) return IKC_PYTHON;
         if (F[k] & IKC_EMPTY) continue;
+        if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
+            if (E[k] <= rb->near_singular * rb->scale) return IKC_PYTHON;
+        } else {
+            good[k] = 1;
+        }
+        for (int j = 0; j < dof; j++) Q0[k * dof + j] = Q[k * dof + j];
         E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
+        if (good[k]) {
+            if (!(E[k] <= exact)) return IKC_PYTHON;
+            if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return IKC_PYTHON;
+            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return IKC_PYTHON;
+        }
     }
+    for (int a = 0; a < n; a++)
+        for (int c = a + 1; c < n; c++)
+            if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&
+                ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) > IKC_SEPARATE)
+                return IKC_PYTHON;  /* a collision: one branch went to the other's solution */
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     return k < 0 ? IKC_PYTHON : k;
 }

@@ -165,7 +165,10 @@ def test_batch_native_matches_python_and_is_complete(name):
     fr = np.stack(free, axis=1) if free else np.zeros((len(Ts), 0))
     _, code = nc.many(Ts, fr, True)
     assert not (code == native.INVALID).any(), name
-    assert (code == native.PYTHON).mean() <= 0.2, (name, (code == native.PYTHON).mean())
+    # a calibrated robot also hands over the targets whose correction is not certain (a near-singular
+    # corrected leaf, a collision, a near-miss leaf: subproblems.continuation, docs/calibrated.md)
+    handed = 0.35 if name == CALIBRATED else 0.2
+    assert (code == native.PYTHON).mean() <= handed, (name, (code == native.PYTHON).mean())
     continuum = np.zeros(len(Ts), dtype=bool)  # a self-motion, inside the limits or not
     missed = 0
     for limits in (False, True):
@@ -184,7 +187,9 @@ def test_batch_native_matches_python_and_is_complete(name):
                 assert found or module._SEARCH or name == CALIBRATED, (name, k, Q[k], mine)
     # a search seeds Newton steps from grid minima and a calibrated robot's Newton steps may slip to a
     # neighbour branch near a singularity (test_compiler_generality): most poses, as the Python path
-    assert missed <= (0.25 if name == CALIBRATED else 0.1) * len(Ts), (name, missed)
+    # the calibrated robot: measured 2 of 200 since the continuation (25% allowed before), both samples
+    # at a near-self-motion of the snapped robot (docs/calibrated.md)
+    assert missed <= (0.01 if name == CALIBRATED else 0.1) * len(Ts), (name, missed)
 
 
 @pytest.mark.parametrize("name", ROBOTS)

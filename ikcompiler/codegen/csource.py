@@ -214,7 +214,7 @@ def _translate(python_source: str, name: str, c_name: str, dof: int):
 
 def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
                    tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0,
-                   polish: int = 0, alternative: str | None = None) -> str | None:
+                   polish: int = 0, alternative: str | None = None, near_singular: float = 0.0) -> str | None:
     """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
 
     ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
@@ -224,7 +224,8 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
     alternative chain (the C finish runs it where the chain cannot settle a target), or None.
     ``search`` joints gridded over ``grid`` values each (a search plan:
     the chain takes their values after the free ones).  ``polish``: Newton steps on the true robot for
-    every leaf of a snapped plan (the chain itself runs on the snapped robot).
+    every leaf of a snapped plan (the chain itself runs on the snapped robot); ``near_singular``: the
+    weakest singular value below which such a leaf's target goes to the Python continuation.
     """
     if target not in TARGET_CODES:
         return None
@@ -248,7 +249,8 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         f"    {TARGET_CODES[target]},",
         f"    ikc_revolute_, ikc_lower_, ikc_upper_, {_number(scale)}, {_number(tol)}, ikc_chain,",
         f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid},",
-        f"    {polish}, {'ikc_chain_alt' if alt else 'NULL'}, {alt[1] if alt else 0}}};",
+        f"    {polish}, {'ikc_chain_alt' if alt else 'NULL'}, {alt[1] if alt else 0},",
+        f"    {_number(near_singular)}}};",
     ]
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",

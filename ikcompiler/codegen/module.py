@@ -33,6 +33,7 @@ and lie inside the limits as returned (docs/finish.md); selection: docs/motion.m
 {imports}
 import numpy as np
 
+from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
 from subproblems import select as _sel
@@ -152,6 +153,7 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_FREE = {tuple(free_idx)!r}  # positions of the free joints in JOINT_NAMES\n")
     out.append(f"_N_GROUPS = {plan.n_groups}\n")
     out.append(f"_POLISH = {10 if plan.snapped else 0}  # Newton steps on the true robot (snapped plans)\n")
+    out.append("_VARY_KINDS = ''.join(_KINDS[j] for j in _VARY)\n")
     out.append(f"_SEARCH = {_literal(list(plan.search))}  # joints gridded by the search fallback\n")
     out.append(f"_GRID = {plan.grid}\n")
     out.append("_STEPS = [\n")
@@ -190,7 +192,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
                                 upper=output.upper, free=free_idx,
                                 target=plan.target, scale=scale, tol=tol, slots=slots, twists=chain.twists,
                                 home=np.asarray(chain.home, float), A=A, b=b, search=len(plan.search),
-                                grid=plan.grid, polish=10 if plan.snapped else 0)
+                                grid=plan.grid, polish=10 if plan.snapped else 0,
+                                near_singular=_near_singular(plan, chain, scale))
     out.append(
         "\n\n# Native backend: the fast chain above in C (the same arithmetic), built with the machine's C\n"
         "# compiler on first use and cached (subproblems.native); without a compiler, or with NATIVE set\n"
@@ -204,6 +207,15 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
         fast = "from subproblems import fast as _fk\n"
         text = text.replace(fast, fast + "from subproblems import general6 as _g6\n", 1)
     return text.replace("{imports}", "\nimport math\n", 1)
+
+
+def _near_singular(plan, chain, scale: float) -> float:
+    """The C finish's threshold for handing a snapped plan's target to the Python continuation."""
+    if not (plan.snapped and plan.plan_twists):
+        return 0.0
+    from subproblems.continuation import near_singular
+
+    return near_singular(np.asarray(plan.plan_twists, float), np.asarray(chain.twists, float), scale)
 
 
 BODY = '''
@@ -330,6 +342,45 @@ def _newton(TH, goals, iters):
                       target=_SOLVE_TARGET, iters=iters, hold=_FREE)
 
 
+def _correct(TH, owner, goals):
+    """Snapped plan: carry the snapped robot's candidates to the true robot by continuation in the
+    geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md).  Targets
+    where the count may differ (rescue seeds were needed) are also given to the general 6R solver of
+    the true robot when there is one (6 revolute joints, pose target): its rows join the candidates."""
+    report = {}
+    TH, owner = _ct.correct(TH, goals[owner], owner, twists0=_PLAN_TWISTS, twists1=_TWISTS, home=_HOME,
+                            A=_A, b=_B, independent=_VARY, kinds=_VARY_KINDS, target=_SOLVE_TARGET,
+                            hold=_FREE, scale=SCALE, tol=TOLERANCE, plain=_POLISH, report=report)
+    doubt = report.get("uncertain", ())
+    solver = _general6() if len(doubt) else None
+    if solver is not None:
+        TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
+        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, np.asarray(doubt)[own2]])
+    return TH, owner
+
+
+_G6 = []  # the general 6R solver of the true robot for doubtful targets: [General6] or [None]
+
+
+def _general6():
+    """The true robot's general 6R solver (subproblems.general6, built on first use), or None when
+    the robot is no plain 6R pose chain or the package has no general solver."""
+    if not _G6:
+        solver = None
+        if _KINDS == "RRRRRR" and _SOLVE_TARGET == "pose" and not FREE_JOINTS and not _COUPLINGS:
+            try:
+                from subproblems import general6
+            except ImportError:
+                general6 = None
+            if general6 is not None:
+                try:
+                    solver = general6.General6(_TWISTS, _HOME, SCALE)
+                except general6.General6Error:
+                    solver = None
+        _G6.append(solver)
+    return _G6[0]
+
+
 def _candidates(goals, Td, init):
     """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum)."""
     N = len(goals)
@@ -364,7 +415,9 @@ def _candidates(goals, Td, init):
             # on every joint pull it onto a nearby exact solution of the continuum.
             TH[cont] = _newton(TH[cont], goals[owner[cont]], 60)
         if _POLISH and len(TH):
-            TH = _newton(TH, goals[owner], _POLISH)
+            TH, owner = _correct(TH, owner, goals)
+            extra = np.zeros(len(TH) - len(ls), dtype=bool)
+            ls, cont = np.concatenate([ls, extra]), np.concatenate([cont, extra])
     return TH, owner, ls, cont
 
 
@@ -507,7 +560,7 @@ def _native_batch(Ts, free, limits):
         goals, Td, reasons = _check_targets(raw[idx])
         # the C did the fast path's work already: what is left is for the reference runtime (a search
         # plan keeps its own Python search, which the reference runtime would redo much slower)
-        settle = _solve_chunk if _SEARCH else _reference_chunk
+        settle = _solve_chunk if (_SEARCH or _POLISH) else _reference_chunk  # _POLISH: the continuation
         done = _without_invalid(settle(goals, Td, init[idx], limits), reasons)
         for whole, part in zip(parts, done):
             whole[idx] = part
@@ -533,7 +586,7 @@ def _solve_chunk(goals, Td, init, limits):
         Q, _, flag = _fast_leaves(goals, init)
         defer = (flag & _fk.DEFER).any(axis=1)
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
-        TH = _newton(Q[rows, leaf] @ _A.T + _B, goals[rows], _POLISH)
+        TH, rows = _correct(Q[rows, leaf] @ _A.T + _B, rows, goals)
         none = np.zeros(len(TH), dtype=bool)
         parts = list(_complete(TH, rows, none, none, goals, limits))
     else:

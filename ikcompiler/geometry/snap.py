@@ -62,7 +62,9 @@ def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[
                     f"axes of {', '.join(names[j] for j in run)} snapped to meet at one point "
                     f"(missed by {miss:.1e} of the robot's size)"
                 )
-        i = run[-1] + 1
+        # a run of three or more is done; a shorter one may end where the next run starts (j3 meets
+        # j4, and j4, j5, j6 form the wrist): try again from the next joint
+        i = run[-1] + 1 if len(run) >= 3 else i + 1
     # Consecutive pairs that nearly meet outside such runs (UR-type wrists: 4-5 and 5-6 meet, not all
     # three): shift one axis (one not in a snapped run) parallel to itself through the other's point.
     for i in range(chain.n - 1):

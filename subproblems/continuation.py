@@ -1,0 +1,380 @@
+"""Carry the solutions of a snapped robot over to the true (calibrated) robot without losing any.
+
+A calibrated robot misses its design relations by a little; the compiler derives its closed form on
+the *snapped* robot, where they hold exactly (``ikcompiler/geometry/snap.py``), so the closed form
+returns the snapped robot's solutions for the target.  Each is then carried to the true robot along
+the geometry homotopy
+
+    robot(s), s in [0, 1]: every axis direction w(s) = unit(w0 + s (w1 - w0)), every axis point
+    p(s) = p0 + s (p1 - p0) (prismatic: the direction alone); robot(0) snapped, robot(1) true,
+
+with the target fixed: steps in s, Newton corrections at each (predictor: the previous joint values).
+A step is accepted only when its Newton iterates *certify* convergence to the path's own point
+(every correction at most half the previous one, the first one no bigger than ``MAX_MOVE``, the error
+ending inside the tolerance); otherwise the step in s is halved (near a singular point the branches
+come close, and a long step would jump to the neighbour's branch).  With a first step s = 0 -> 1 this
+is plain Newton from the snapped answer plus the certificate, so a well-separated pose costs what
+plain Newton costs; only poses whose branches come close pay for more steps.
+
+:func:`correct` is what a generated module calls (docs/calibrated.md states the policy and its
+measurements): track every row; then rows of one target that started apart but ended on the same
+solution (a *collision*: one branch was lost) are re-tracked from their snapped answers with short
+steps; collisions that remain are reported, never hidden (the caller dedupes them and counts them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems.plan_runtime import _cross
+from subproblems.screw import twist_exp_batch
+
+MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
+MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
+MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
+SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
+# Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
+# solutions anywhere on the circle.
+RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
+NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
+SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
+RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
+NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
+
+
+def _lines(twists):
+    """Directions w (n, 3), points p (n, 3) (closest to the origin) and prismatic mask of twists (n, 6)."""
+    twists = np.asarray(twists, dtype=float)
+    v, w = twists[:, :3], twists[:, 3:]
+    prismatic = ~np.any(w != 0.0, axis=1)
+    p = np.cross(w, v)  # for a unit w and v = -w x p: w x v = p - (w.p) w
+    return np.where(prismatic[:, None], v, w), np.where(prismatic[:, None], 0.0, p), prismatic
+
+
+def homotopy_twists(twists0, twists1, s):
+    """Twists of robot(s) for each row's s (M,): (M, n, 6); see the module docstring.
+
+    >>> t0 = np.array([[0, 0, 0, 0, 0, 1.0]])
+    >>> t1 = np.array([[0, -1.0, 0, 1.0, 0, 0]])  # the x axis through (0, 0, 1)
+    >>> homotopy_twists(t0, t1, np.array([0.0, 1.0]))[:, 0].round(12).tolist()
+    [[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], [0.0, -1.0, 0.0, 1.0, 0.0, 0.0]]
+    """
+    d0, p0, prismatic = _lines(twists0)
+    d1, p1, _ = _lines(twists1)
+    s = np.asarray(s, dtype=float)[:, None, None]
+    d = d0 + s * (d1 - d0)
+    d = d / np.linalg.norm(d, axis=2, keepdims=True)
+    p = p0 + s * (p1 - p0)
+    v = np.cross(p, d)  # -w x p
+    return np.where(prismatic[None, :, None], np.concatenate([d, 0 * d], axis=2),
+                    np.concatenate([v, d], axis=2))
+
+
+def _fk_jacobian(tw, full, home, A):
+    """Tool poses G (M, 4, 4) and space Jacobian (M, 6, dof) with per-row twists tw (M, n, 6) or one
+    set of twists (n, 6) for every row."""
+    M, n = full.shape
+    shared = tw.ndim == 2
+    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
+    cols = np.zeros((M, 6, n))
+    for i in range(n):
+        R, t = G[:, :3, :3], G[:, :3, 3]
+        xi = tw[i] if shared else tw[:, i]
+        w = R @ xi[3:] if shared else np.einsum("mij,mj->mi", R, xi[:, 3:])
+        v = (R @ xi[:3] if shared else np.einsum("mij,mj->mi", R, xi[:, :3])) + _cross(t, w)
+        cols[:, :3, i], cols[:, 3:, i] = v, w
+        G = G @ twist_exp_batch(xi, full[:, i])
+    G = G @ home
+    p = G[:, :3, 3]
+    v, w = cols[:, :3, :], cols[:, 3:, :]
+    J = np.concatenate([v + _cross(np.swapaxes(w, 1, 2), p[:, None, :]).swapaxes(1, 2), w], axis=1)
+    return G, J @ A
+
+
+def _residual(G, goals, target, scale):
+    """Error vector (position, then rotation times the scale) of the rows' poses G toward goals."""
+    e_pos = goals[:, :3, 3] - G[:, :3, 3]
+    Rt, Rdt = np.swapaxes(G[:, :3, :3], 1, 2), np.swapaxes(goals[:, :3, :3], 1, 2)
+    e_rot = 0.5 * _cross(Rt, Rdt).sum(axis=1)
+    if target == "position":
+        return e_pos, slice(0, 3)
+    if target == "orientation":
+        return e_rot, slice(3, 6)
+    return np.concatenate([e_pos, e_rot], axis=1), slice(0, 6)
+
+
+def _newton_step(tw, Q, goals, robot, damping=1e-12):
+    """One damped Gauss-Newton step for every row: (new Q, step size, error before the step)."""
+    A, b, home, target, hold, scale, unit = robot
+    G, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
+    e, rows = _residual(G, goals, target, scale)
+    J = J[:, rows, :]
+    if hold:
+        J[:, :, hold] = 0.0
+    err = np.abs(e).max(axis=1)
+    if target != "position":
+        err = np.maximum(np.abs(e[:, :3]).max(axis=1) if target == "pose" else 0.0,
+                         scale * np.abs(e[:, -3:]).max(axis=1))
+    col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
+    Js = J / col[:, None, :]
+    JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
+    dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
+    return Q + dq, np.abs(dq / unit).max(axis=1), err
+
+
+def _track(Q, goals, twists0, twists1, robot, tol, first_step, max_move):
+    """Track rows Q (M, dof) of robot(0) to robot(1); returns (Q at s = 1, converged mask)."""
+    M = len(Q)
+    s = np.zeros(M)
+    ds = np.full(M, float(first_step))
+    done = np.zeros(M, dtype=bool)
+    failed = np.zeros(M, dtype=bool)
+    Q = Q.copy()
+    for _ in range(MAX_ROUNDS):
+        act = np.nonzero(~done & ~failed)[0]
+        if not len(act):
+            break
+        s_new = np.minimum(s[act] + ds[act], 1.0)
+        if np.all(s_new == 1.0):
+            tw = np.asarray(twists1, dtype=float)
+        else:
+            tw = homotopy_twists(twists0, twists1, s_new)
+        X, g = Q[act], goals[act]
+        ok = np.ones(len(act), dtype=bool)
+        err = np.full(len(act), np.inf)
+        last = np.full(len(act), np.inf)
+        live = np.arange(len(act))  # rows still iterating: settled or refused rows drop out
+        for it in range(7):
+            twl = tw if tw.ndim == 2 else tw[live]
+            Xn, step, err[live] = _newton_step(twl, X[live], g[live], robot)
+            settled = err[live] <= tol
+            if it == 6:
+                break  # err is that of X: the certificate below needs no further step
+            certified = (step <= max_move) if it == 0 else (step <= 0.5 * last[live]) | (step <= 1e-13)
+            ok[live] &= certified | settled
+            move = ~settled & ok[live]
+            X[live[move]] = Xn[move]
+            last[live] = step
+            live = live[move]
+            if not len(live):
+                break
+        ok &= np.isfinite(err) & (err <= tol)
+        good, bad = act[ok], act[~ok]
+        Q[good] = X[ok]
+        s[good] = s_new[ok]
+        ds[good] = np.minimum(2.0 * ds[good], 1.0)
+        done[good] = s[good] >= 1.0
+        ds[bad] *= 0.5
+        failed[bad] = ds[bad] < MIN_STEP
+    return Q, done  # rows still on the way after MAX_ROUNDS count as failed
+
+
+def _collisions(Q0, Q, owner, ok, revolute, scale):
+    """Rows that share a target, started apart and ended on the same solution (both rows flagged)."""
+    hit = np.zeros(len(Q), dtype=bool)
+    rows = np.nonzero(ok)[0]
+    order = rows[np.argsort(owner[rows], kind="stable")]
+    for d in range(1, len(order)):  # pairs d apart in the sorted order; a target has few rows
+        i, j = order[:-d], order[d:]
+        same = owner[i] == owner[j]
+        if not same.any():
+            break
+        i, j = i[same], j[same]
+        met = _apart(Q[i], Q[j], revolute, scale) <= SEPARATE
+        met &= _apart(Q0[i], Q0[j], revolute, scale) > SEPARATE
+        hit[i[met]] = hit[j[met]] = True
+    return hit
+
+
+def _apart(x, y, revolute, scale):
+    """Row-wise joint distance: revolute values modulo 2 pi, prismatic ones relative to the size."""
+    d = np.abs(x - y)
+    d = np.where(revolute, np.abs(np.remainder(d + np.pi, 2 * np.pi) - np.pi), d / scale)
+    return d.max(axis=-1)
+
+
+def _plain(Q, goals, twists1, robot, iters, tol=0.0, damping=1e-12):
+    """Plain Newton steps on the true robot; rows stop once their error is at most ``tol``."""
+    tw = np.asarray(twists1, dtype=float)
+    Q = Q.copy()
+    live = np.arange(len(Q))
+    for _ in range(iters):
+        Xn, _, err = _newton_step(tw, Q[live], goals[live], robot, damping)
+        more = ~(err <= tol)
+        Q[live[more]] = Xn[more]
+        live = live[more]
+        if not len(live):
+            break
+    return Q
+
+
+def _weakest(Q, tw, robot):
+    """Smallest singular value of the Jacobian (rows of the target; lengths relative to the size,
+    free joints' columns left out) and its joint direction (in joint units, largest entry 1)."""
+    A, b, home, target, hold, scale, unit = robot
+    _, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
+    J = J.copy()
+    J[:, :3, :] /= scale  # lengths relative to the size, angles as they are
+    J = J[:, {"position": slice(0, 3), "orientation": slice(3, 6)}.get(target, slice(0, 6)), :]
+    keep = [c for c in range(J.shape[2]) if c not in hold]
+    _, sv, Vt = np.linalg.svd(J[:, :, keep] * unit[keep])
+    n = np.zeros((len(Q), J.shape[2]))
+    n[:, keep] = Vt[:, -1, :] * unit[keep]
+    return sv[:, -1], n / np.abs(n / unit).max(axis=1, keepdims=True)
+
+
+def near_singular(twists0, twists1, scale) -> float:
+    """Weakest singular value below which a corrected row gets rescue seeds: ``SINGULAR_FACTOR``
+    times the change in geometry, at most ``NEAR_SINGULAR`` (a calibrated robot's solutions move by
+    about change / singular value; branches closer than that may be born, lost or swapped).  The same
+    number times the scale is the largest miss of a least-squares leaf that gets seeds (the target
+    moves by about the change: a pair of solutions may be born within it)."""
+    return min(NEAR_SINGULAR, SINGULAR_FACTOR * _geometry_change(twists0, twists1, scale))
+
+
+def _rescue(Q, goals, owner, twists1, robot, tol, iters=12):
+    """Extra candidates around near-singular rows: Newton from seeds along the weakest direction.
+
+    Near a fold of the solution set (an elbow almost stretched) the snapped robot and the true one
+    may have different numbers of real solutions: a pair is born or dies within ~sqrt(eps) of the
+    fold, and near a self-motion of the snapped robot the true one has isolated solutions along it.
+    Those solutions lie along the Jacobian's weakest direction from the row; plain Newton from seeds
+    there finds them (checked by the caller like every candidate, duplicates removed by its dedupe).
+    """
+    _, n = _weakest(Q, np.asarray(twists1, dtype=float), robot)
+    seeds = np.concatenate([Q[:, None, :] + t * n[:, None, :] for t in RESCUE_SEEDS], axis=1)
+    k = len(RESCUE_SEEDS)
+    X = seeds.reshape(-1, Q.shape[1])
+    g = np.repeat(goals, k, axis=0)
+    X = _plain(X, g, twists1, robot, iters, tol)
+    return X, np.repeat(owner, k)
+
+
+
+
+def _geometry_change(twists0, twists1, scale):
+    """How far the snapped robot is from the true one: largest change of a direction (rad) or of an
+    axis point (relative to the size)."""
+    d0, p0, _ = _lines(twists0)
+    d1, p1, _ = _lines(twists1)
+    return float(max(np.abs(d1 - d0).max(), np.abs(p1 - p0).max() / scale))
+
+
+def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
+    """Rows of X (owners own) that reach their goal within tol and are no row of Q (owners owner) nor
+    another row of X already: keys rounded to 1e-7 (the caller's dedupe catches keys split by it)."""
+    tw = np.asarray(twists1, dtype=float)
+    _, _, err = _newton_step(tw, X, goals, robot)
+    keep = np.isfinite(err) & (err <= tol)
+    X, own = X[keep], own[keep]
+    if not len(X):
+        return X, own
+
+    def keys(Z, o):
+        Z = np.where(revolute, np.remainder(Z + np.pi, 2 * np.pi) - np.pi, Z / robot[5])
+        return np.concatenate([o[:, None].astype(float), np.round(Z / 1e-7)], axis=1)
+
+    finite = np.all(np.isfinite(Q), axis=1)
+    old = {tuple(k) for k in keys(Q[finite], owner[finite])}
+    _, first = np.unique(keys(X, own), axis=0, return_index=True)
+    first = np.sort(first)
+    fresh = np.array([tuple(k) not in old for k in keys(X[first], own[first])], dtype=bool)
+    pick = first[fresh]
+    # at most RESCUE_KEEP new rows a target, the best first (near a self-motion of the snapped robot
+    # many points of the true robot's near-continuum reproduce the target; the finish's cost grows
+    # with the square of a target's candidates)
+    pick = pick[np.lexsort((err[keep][pick], own[pick]))]
+    rank = np.arange(len(pick)) - np.searchsorted(own[pick], own[pick], side="left")
+    pick = pick[rank < RESCUE_KEEP]
+    return X[pick], own[pick]
+
+
+
+def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
+            hold=(), scale=1.0, tol=1e-9, plain=10, report=None):
+    """Snapped robot's candidate rows TH (M, n: every joint) -> the true robot's, for goals (M, 4, 4);
+    ``owner`` (M,): which target each row solves (rows of one target are checked for collisions).
+
+    ``twists0``: the snapped robot's twists (the chain the rows solve), ``twists1``: the true robot's;
+    all joint values are ``A @ q + b`` with q the ``independent`` columns of TH; ``kinds``: their joint
+    types; ``hold``: positions in ``independent`` that keep their values (free joints).  Rows that are
+    no exact solution of the snapped robot (least-squares leaves), and rows whose tracking fails (a
+    turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
+    their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
+    when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
+    colliding after the re-tracking; the caller's dedupe merges them), ``rescued`` and ``uncertain``:
+    the owners of the rows that got rescue seeds (targets where the count may differ between the
+    snapped and the true robot; a complete solver of the true robot may be asked about them).
+
+    Returns ``(TH', owner')``: the corrected rows, in order, then extra candidate rows (rescue seeds
+    around near-singular rows, see :func:`_rescue`) with their owners.
+
+    >>> t0 = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])  # planar 2R, links 1 and 1
+    >>> t1 = t0.copy(); t1[1, :3] = [0, -1.001, 0]  # the true second axis is at x = 1.001
+    >>> home = np.eye(4); home[0, 3] = 2.0
+    >>> goal = np.eye(4); goal[:2, 3] = [0.0, 1.5]
+    >>> h = 0.7227342478  # acos(0.75): the snapped arm's half elbow angle
+    >>> snapped = [[np.pi / 2 - h, 2 * h], [np.pi / 2 + h, -2 * h]]
+    >>> q, own = correct(np.array(snapped), np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
+    ...             A=np.eye(2), b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0)
+    >>> from subproblems.plan_runtime import fk_batch
+    >>> q = q[:2]  # the two tracked rows (rescue rows may follow)
+    >>> bool(np.abs(fk_batch(t1, q, home)[:, :3, 3] - goal[:3, 3]).max() < 1e-12)  # both on the true arm
+    True
+    >>> bool(q[0, 1] > 0 > q[1, 1])  # elbow up and elbow down: two distinct solutions
+    True
+    """
+    independent = list(independent)
+    A = np.asarray(A, dtype=float)  # all joint values = A @ q + b, q the independent ones
+    revolute = np.array([k == "R" for k in kinds])
+    unit = np.where(revolute, 1.0, scale)
+    robot = (A, np.asarray(b, dtype=float), np.asarray(home, dtype=float), target, list(hold), scale, unit)
+    goals = np.asarray(goals, dtype=float)
+    TH = np.asarray(TH, dtype=float)
+    Q0 = TH[:, independent]
+    owner = np.arange(len(TH)) if owner is None else np.asarray(owner)
+    Q = Q0.copy()
+    ok = np.zeros(len(TH), dtype=bool)
+    etol = 1e-3 * tol * scale
+    usable = np.all(np.isfinite(Q0), axis=1)
+    err0_all = np.full(len(Q0), np.inf)
+    if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
+        tw0 = np.asarray(twists0, dtype=float)
+        _, _, err0_all[usable] = _newton_step(tw0, Q0[usable], goals[usable], robot)
+        usable &= err0_all <= tol * scale
+    idx = np.nonzero(usable)[0]
+    if len(idx):
+        Q[idx], ok[idx] = _track(Q0[idx], goals[idx], twists0, twists1, robot, etol, 1.0, MAX_MOVE)
+    hit = _collisions(Q0, Q, owner, ok, revolute, scale)
+    again = np.nonzero(hit)[0]
+    if len(again):  # a lost branch: re-track the rows involved with short steps and small moves
+        Q[again], ok[again] = _track(Q0[again], goals[again], twists0, twists1, robot, etol, 1.0 / 64,
+                                     0.1 * MAX_MOVE)
+    left = _collisions(Q0, Q, owner, ok, revolute, scale)
+    finite = np.all(np.isfinite(Q0), axis=1)
+    rest = np.nonzero(~ok & finite)[0]
+    if len(rest) and plain:
+        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, 1e-3 * etol)
+    # Rows whose count may differ between the snapped and the true robot: failed or colliding
+    # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
+    threshold = near_singular(twists0, twists1, scale)
+    seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
+    look = np.nonzero(finite & ~seed)[0]
+    if len(look):
+        sv, _ = _weakest(Q[look], np.asarray(twists1, dtype=float), robot)
+        seed[look[~(sv >= threshold)]] = True
+    extra = np.nonzero(seed)[0]
+    own = owner
+    if len(extra):
+        X, own_x = _rescue(np.where(ok[extra, None], Q[extra], Q0[extra]), goals[extra], owner[extra],
+                           twists1, robot, 1e-3 * etol)
+        X, own_x = _new_solutions(X, own_x, np.repeat(goals[extra], len(RESCUE_SEEDS), axis=0), Q, owner,
+                                  twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
+        Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
+    if report is not None:
+        report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
+                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]))
+    return Q @ A.T + b, own
+
+
+__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "SEPARATE"]

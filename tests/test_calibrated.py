@@ -1,0 +1,205 @@
+"""Calibrated robots (axes and points perturbed from a structured design) lose no solution.
+
+The compiler snaps near-relations and derives its closed form on the snapped robot; every solution
+is carried to the true robot by the continuation of subproblems/continuation.py (docs/calibrated.md).
+Held here: every sampled joint vector is among the exact solutions (revolute values to 1e-6 rad),
+every returned solution reproduces its target on the true robot (forward kinematics recomputed here)
+to 1e-9 of the size, and a hand-made Doosan-like arm (CAD-rounded: one axis off parallel by 2e-4 rad,
+wrist axes missing one another by 5e-5 of the size) returns every solution the ideal arm has.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+
+import numpy as np
+import pytest
+
+from ikcompiler import load_robot
+from ikcompiler.compiler import compile_robot
+from ikcompiler.geometry.perturb import perturb_chain
+from ikcompiler.model import Chain, Joint
+from ikcompiler.verify import sample_configurations
+from subproblems.continuation import correct, homotopy_twists
+from subproblems.screw import revolute_twist
+
+SAME = 1e-6  # rad (revolute) / of the size (prismatic): a recovered sample
+
+
+def _distance(a, b, kinds, scale):
+    d = np.abs(np.asarray(a, float) - np.asarray(b, float))
+    for c, k in enumerate(kinds):
+        if k == "R":
+            d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi)
+        else:
+            d[..., c] /= scale
+    return d.max(axis=-1)
+
+
+def _check(chain, module, Q, native):
+    """(recovered, wrong, counts) of the module on the poses of the sampled vectors Q (limits off)."""
+    module.NATIVE = native
+    G = chain.fk_batch(Q)
+    S, valid, ls, _, _ = module.solve_batch_info(G, limits=False)
+    kinds = [chain.joints[i].kind for i in chain.independent]
+    recovered, wrong, counts = 0, 0, []
+    for i in range(len(Q)):
+        sols = S[i][valid[i] & ~ls[i]]
+        counts.append(len(sols))
+        if not len(sols):
+            continue
+        E = chain.fk_batch(sols)
+        err = np.maximum(np.linalg.norm(E[:, :3, 3] - G[i, :3, 3], axis=1),
+                         chain.scale * np.abs(E[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2)))
+        wrong += int((err > 1e-9 * chain.scale).sum())
+        recovered += bool(_distance(sols, Q[i], kinds, chain.scale).min() <= SAME)
+    return recovered, wrong, counts
+
+
+def _doosan_like(calibrated: bool) -> Chain:
+    """A 6R arm of the Doosan / Puma type: shoulder j2 parallel to elbow j3, j4 parallel to j1 at home,
+    a spherical wrist j4-j5-j6 offset 0.1 from the base axis.  Calibrated: j4 tilted by 2e-4 rad off
+    that parallel and j5 shifted so that the wrist axes miss one another by 5e-5 of the size."""
+    tilt, miss = (2e-4, 5e-5) if calibrated else (0.0, 0.0)
+    ideal = Chain("doosan-like", tuple(
+        Joint(f"j{i + 1}", "R", revolute_twist(w, p), -math.pi, math.pi)
+        for i, (w, p) in enumerate([
+            ((0, 0, 1), (0, 0, 0)), ((0, 1, 0), (0, 0, 0.15)), ((0, 1, 0), (0, 0, 0.56)),
+            ((0, 0, 1), (0, 0.1, 0)), ((0, 1, 0), (0, 0, 1.08)), ((0, 0, 1), (0, 0.1, 0)),
+        ])
+    ), np.array([[1, 0, 0, 0], [0, 1, 0, 0.1], [0, 0, 1, 1.2], [0, 0, 0, 1.0]]))
+    if not calibrated:
+        return ideal
+    joints = list(ideal.joints)
+    j4, j5 = joints[3], joints[4]
+    tilted = revolute_twist((0, math.sin(tilt), math.cos(tilt)), j4.point)
+    joints[3] = Joint("j4", "R", tilted, j4.lower, j4.upper)
+    shifted = revolute_twist(j5.axis, j5.point + (miss * ideal.scale, 0, 0))
+    joints[4] = Joint("j5", "R", shifted, j5.lower, j5.upper)
+    return Chain("doosan-like (calibrated)", tuple(joints), ideal.home)
+
+
+@pytest.fixture(scope="module")
+def doosan():
+    true, ideal = _doosan_like(True), _doosan_like(False)
+    return true, compile_robot(true), ideal, compile_robot(ideal)
+
+
+@pytest.mark.parametrize("native", [True, False], ids=["C", "python"])
+def test_doosan_like_arm_returns_every_solution_of_the_ideal_arm(doosan, native):
+    true, module, ideal, ideal_module = doosan
+    assert "snapped" in module.PLAN
+    Q = sample_configurations(true, 60, seed=5, special=0.0)
+    recovered, wrong, counts = _check(true, module, Q, native)
+    _, _, ideal_counts = _check(ideal, ideal_module, Q, False)  # the ideal arm's count at the same pose
+    assert wrong == 0
+    assert recovered == len(Q)
+    assert counts == ideal_counts
+    assert sum(c == 8 for c in counts) >= 40  # most poses have all 8 (2 arms x 2 elbows x 2 wrists)
+
+
+def test_doosan_like_arm_keeps_both_wrist_branches(doosan):
+    """The issue's case (for each arm branch only one wrist branch came back: 4 of 8): every solution of
+    the ideal arm has its own calibrated counterpart, one to one."""
+    true, module, ideal, ideal_module = doosan
+    T = true.fk(np.array([0.4, -0.6, 1.1, 0.9, 1.2, -0.5]))
+    ideal_rows = ideal_module.solve(T, limits=False)
+    assert len(ideal_rows) == 8
+    for native in (True, False):
+        module.NATIVE = native
+        rows = module.solve(T, limits=False)
+        assert len(rows) == 8
+        nearest = [int(np.argmin(_distance(ideal_rows, r, "RRRRRR", true.scale))) for r in rows]
+        assert sorted(nearest) == list(range(8)), (rows, ideal_rows)
+        assert all(_distance(ideal_rows[k], r, "RRRRRR", true.scale) < 0.05 for k, r in zip(nearest, rows))
+
+
+ARMS = ["puma560", "ur5", "kr6_r700", "prob", "rhino"]
+_MODULES: dict = {}
+
+
+def _perturbed(name, eps):
+    """The perturbed arm (seed 3) and its compiled module, compiled once per test session."""
+    if (name, eps) not in _MODULES:
+        chain = perturb_chain(load_robot(name), eps, seed=3)
+        _MODULES[name, eps] = chain, compile_robot(chain)
+    return _MODULES[name, eps]
+
+
+# Not met today, with the measured reason (benchmarks/results/calibrated.md, docs/calibrated.md).  The
+# general 6R solver (subproblems.general6, issue 10 item 1, another branch) settles some: measured on
+# this branch merged with it, the 2e-3 arms (solved as general 6R) and ur5 at special angles (its
+# doubtful targets go to the general solver) recover every sample; those markers apply without it.
+HAVE_GENERAL6 = importlib.util.find_spec("subproblems.general6") is not None
+SEARCH = ("misses of about 2e-3 exceed the snap tolerance 1e-3: no closed form on the snapped robot, "
+          "solved by the 1-D search (incomplete; the general 6R solver replaces it: issue 10 item 1)")
+KNOWN_GENERIC = {(name, 2e-3): SEARCH for name in ("puma560", "ur5", "kr6_r700", "prob") if not HAVE_GENERAL6}
+SINGULAR = ("sampled vector at a singular configuration of the ideal arm (special angle: wrist or elbow "
+            "aligned): the calibrated arm has a near-self-motion there and Newton does not resolve it")
+KNOWN_SPECIAL = {(name, 1e-4): SINGULAR for name in ("prob", "rhino") + (() if HAVE_GENERAL6 else ("ur5",))}
+
+
+@pytest.mark.parametrize("eps", [1e-8, 1e-6, 1e-4, 2e-3])
+@pytest.mark.parametrize("name", ARMS)
+def test_perturbed_zoo_arm_recovers_every_generic_sample(name, eps, request):
+    if (name, eps) in KNOWN_GENERIC:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_GENERIC[name, eps]))
+    chain, module = _perturbed(name, eps)
+    Q = sample_configurations(chain, 20, seed=7, special=0.0)
+    recovered, wrong, _ = _check(chain, module, Q, True)
+    assert wrong == 0
+    assert recovered == len(Q), f"{name} perturbed by {eps:g}: {recovered} of {len(Q)} recovered"
+
+
+@pytest.mark.parametrize("name", ARMS)
+def test_perturbed_zoo_arm_at_special_angles(name, request):
+    """A quarter of the joint values at 0, +-pi/2, pi (wrists and elbows aligned), perturbed by 1e-4."""
+    if (name, 1e-4) in KNOWN_SPECIAL:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_SPECIAL[name, 1e-4]))
+    chain, module = _perturbed(name, 1e-4)
+    Q = sample_configurations(chain, 30, seed=7, special=0.25)
+    recovered, wrong, _ = _check(chain, module, Q, True)
+    assert wrong == 0
+    assert recovered == len(Q), f"{name} at special angles: {recovered} of {len(Q)} recovered"
+
+
+def test_homotopy_ends_at_both_robots():
+    chain = load_robot("ur5")
+    bent = perturb_chain(chain, 1e-3, seed=1)
+    tw = homotopy_twists(chain.twists, bent.twists, np.array([0.0, 0.5, 1.0]))
+    assert np.abs(tw[0] - chain.twists).max() < 1e-12
+    assert np.abs(tw[2] - bent.twists).max() < 1e-12
+    assert np.allclose(np.linalg.norm(tw[1, :, 3:], axis=1), 1.0)
+
+
+def test_collisions_flag_rows_that_started_apart_and_met():
+    from subproblems.continuation import _collisions
+
+    Q0 = np.array([[0.0, 0.5], [0.0, -0.5], [1.0, 0.0], [2.0, 0.0]])
+    Q = np.array([[0.1, 0.2], [0.1, 0.2 + 2 * math.pi], [1.0, 0.0], [0.1, 0.2]])  # rows 0, 1 met (mod 2 pi)
+    hit = _collisions(Q0, Q, np.array([0, 0, 0, 1]), np.ones(4, dtype=bool), np.array([True, True]), 1.0)
+    assert hit.tolist() == [True, True, False, False]  # row 3 has another owner
+
+
+def test_correct_keeps_both_elbows_near_a_stretched_arm():
+    """Near a fold (the elbow pair close together) both snapped rows come back as two solutions."""
+    t0 = np.array([[0, 0, 0, 0, 0, 1.0], [0, -1.0, 0, 0, 0, 1.0]])  # planar 2R, links 1 and 1
+    t1 = t0.copy()
+    t1[1, :3] = [0, -1.02, 0]  # the true elbow is 2% further out
+    home = np.eye(4)
+    home[0, 3] = 2.0
+    goal = np.eye(4)
+    goal[:2, 3] = [1.9, 0.0]  # near the stretched arm: the elbow pair is close together
+    h = math.acos(1.9 / 2)
+    snapped = np.array([[-h, 2 * h], [h, -2 * h]])
+    report = {}
+    q, own = correct(snapped, np.array([goal, goal]), [0, 0], twists0=t0, twists1=t1, home=home,
+                     A=np.eye(2), b=np.zeros(2), independent=(0, 1), kinds="RR", target="position", scale=2.0,
+                     report=report)
+    from subproblems.plan_runtime import fk_batch
+
+    P = fk_batch(t1, q, home)[:, :3, 3]
+    exact = np.linalg.norm(P - goal[:3, 3], axis=1) < 1e-12
+    distinct = {round(float(x), 6) for x in q[exact, 1]}
+    assert len(distinct) == 2, (q, report)
