@@ -13,6 +13,8 @@ the left side at ``q_true``:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from subproblems import max_solutions, solve, solve_batch
@@ -21,6 +23,12 @@ from tests.strategies import angle_distance, contains_solution
 
 TOL = 1e-9
 RESIDUAL_TOL = TOL  # an exact row of a pair solver: its equations hold to TOL of the instance scale
+
+
+def distance(v) -> float:
+    """``|v|`` without underflow (``np.linalg.norm`` squares first: a point 2.5e-247 from another read
+    as distance 0, an instance inconsistent in its own data)."""
+    return math.hypot(*np.asarray(v, dtype=float))
 
 
 def fk_point(twists, th, p) -> np.ndarray:
@@ -38,7 +46,7 @@ def signed_residuals(code, tw, qrow, inputs) -> np.ndarray:
     for k in range(len(D)):
         x = fk_point(tw, qrow, P[k])
         if code.startswith("S3"):
-            out.append(np.linalg.norm(x - np.atleast_2d(inputs["q"])[k]) - D[k])
+            out.append(distance(x - np.atleast_2d(inputs["q"])[k]) - D[k])
         else:
             h = np.atleast_2d(inputs["h"])[k]
             hn = np.linalg.norm(h)

@@ -21,7 +21,7 @@ from subproblems import codes, max_solutions, solve, solve_batch
 from subproblems.screw import prismatic_twist, revolute_twist
 from tests.strategies import contains_solution, joint_values, twist_lists
 
-from ._checks3 import check_instance, fk_point, random_twists
+from ._checks3 import check_instance, distance, fk_point, random_twists
 
 EXAMPLES = settings().max_examples
 _coord = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)
@@ -57,7 +57,7 @@ def test_one_joint_roundtrip(code, data):
     tw, _ = data.draw(twist_lists(kinds))
     th = data.draw(joint_values(kinds))
     p, q = data.draw(points(tw)), data.draw(points(tw))
-    d = float(np.linalg.norm(fk_point(tw, th, p) - q))
+    d = float(distance(fk_point(tw, th, p) - q))
     r = check_instance(code, kinds, tw, {"p": p, "q": q, "d": d}, th)
     assert 1 <= len(r.q) <= 2
 
@@ -133,7 +133,7 @@ def test_one_joint_batch_many(code):
         th = rng.uniform(-2, 2, n)
     tw = tw[:, None, :]
     p, q = rng.normal(size=(n, 3)), rng.normal(size=(n, 3))
-    d = np.array([np.linalg.norm(fk_point(tw[i], [th[i]], p[i]) - q[i]) for i in range(n)])
+    d = np.array([distance(fk_point(tw[i], [th[i]], p[i]) - q[i]) for i in range(n)])
     d[::5] += 3.0
     b = solve_batch(code, tw, p=p, q=q, d=d)
     assert b.vectorised and b.q.shape == (n, max_solutions(code), 1)
@@ -191,7 +191,7 @@ def test_pair_roundtrip(code, data):
     tw, _ = data.draw(twist_lists(kinds))
     th = data.draw(joint_values(kinds))
     P, Q = _general_points(data.draw), _general_points(data.draw)
-    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     r = check_instance(code, kinds, tw, {"p": P, "q": Q, "d": D}, th)
     assert len(r.q) <= max_solutions(code)
 
@@ -205,7 +205,7 @@ def test_pair_roundtrip_degenerate_points(code, data):
     tw, _ = data.draw(twist_lists(kinds))
     th = data.draw(joint_values(kinds))
     P, Q = data.draw(point_pairs(tw)), data.draw(point_pairs(tw))
-    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     r = check_instance(code, kinds, tw, {"p": P, "q": Q, "d": D}, th)
     assert len(r.q) <= max_solutions(code)
 
@@ -218,7 +218,7 @@ def test_pair_unreachable(code, data):
     tw, _ = data.draw(twist_lists(kinds))
     P, Q = data.draw(point_pairs(tw)), data.draw(point_pairs(tw))
     th = data.draw(joint_values(kinds))
-    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     if "T" in kinds:
         D[1] = -1.0  # a prismatic joint reaches far spheres: make one distance impossible
     else:
@@ -235,7 +235,7 @@ def test_pair_counts_reach_the_bound():
         tw = np.array([revolute_twist(rng.normal(size=3), rng.normal(size=3)) for _ in range(2)])
         th = rng.uniform(-3, 3, 2)
         P, Q = rng.normal(size=(2, 3)), rng.normal(size=(2, 3))
-        D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+        D = np.array([distance(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
         r = solve("S3-RR", tw, p=P, q=Q, d=D)
         assert len(r.q) <= 8 and not r.ls.any()
         seen = max(seen, len(r.q))
@@ -248,21 +248,21 @@ def test_pair_continuum_cases():
     # q_1, q_2 on the first axis: th_1 free (representative 0), th_2 from the two distances
     P = np.array([[0.0, 1.0, 1.0], [0.0, 0.0, 2.0]])
     Q = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 5.0]])
-    D = np.array([np.linalg.norm(fk_point([z, x], [0.7, 0.4], P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point([z, x], [0.7, 0.4], P[k]) - Q[k]) for k in range(2)])
     r = solve("S3-RR", [z, x], p=P, q=Q, d=D)
     assert r.continuum and not r.ls.any() and r.residual.max() < 1e-9 and r.q[0, 0] == 0.0
     # parallel prismatic joints: only their sum matters
     t1, t2 = prismatic_twist([1, 0, 0]), prismatic_twist([-1, 0, 0])
     P = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     Q = np.array([[3.0, 0.0, 0.0], [1.0, 2.0, 0.0]])
-    D = np.array([np.linalg.norm(fk_point([t1, t2], [0.5, -1.0], P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point([t1, t2], [0.5, -1.0], P[k]) - Q[k]) for k in range(2)])
     r = solve("S3-TT", [t1, t2], p=P, q=Q, d=D)
     assert r.continuum and not r.ls.any() and r.residual.max() < 1e-9
 
 
 def _pair_instance(code, tw, th, P, Q):
     tw, P, Q = np.array(tw), np.array(P), np.array(Q)
-    D = np.array([np.linalg.norm(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
+    D = np.array([distance(fk_point(tw, th, P[k]) - Q[k]) for k in range(2)])
     return tw, {"p": P, "q": Q, "d": D}
 
 
@@ -397,7 +397,7 @@ def test_pair_batch_many(code):
     th = rng.uniform(-math.pi, math.pi, (n, 2))
     P, Q = rng.normal(size=(n, 2, 3)), rng.normal(size=(n, 2, 3))
     D = np.array(
-        [[np.linalg.norm(fk_point(tw[i], th[i], P[i, k]) - Q[i, k]) for k in range(2)] for i in range(n)]
+        [[distance(fk_point(tw[i], th[i], P[i, k]) - Q[i, k]) for k in range(2)] for i in range(n)]
     )
     D[::6, 0] = -1.0
     b = solve_batch(code, tw, p=P, q=Q, d=D)
