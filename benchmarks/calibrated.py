@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import math
 import os
 import platform
 import sys
@@ -39,21 +38,10 @@ from ikcompiler.compiler import compile_robot  # noqa: E402
 from ikcompiler.geometry.perturb import perturb_chain  # noqa: E402
 from ikcompiler.geometry.relations import Tolerance  # noqa: E402
 from ikcompiler.geometry.snap import snap_chain  # noqa: E402
-from ikcompiler.verify import sample_configurations  # noqa: E402
+from ikcompiler.verify import joint_distance, sample_configurations  # noqa: E402
 
 ARMS = ("puma560", "ur5", "kr6_r700", "prob", "rhino")
 SIZES = (1e-8, 1e-6, 1e-4, 1e-3, 2e-3)
-
-
-def _distance(a, b, kinds, scale):
-    """Joint distance: revolute values modulo 2 pi in rad, prismatic ones relative to the size."""
-    d = np.abs(a - b)
-    for c, k in enumerate(kinds):
-        if k == "R":
-            d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi)
-        else:
-            d[..., c] /= scale
-    return d.max(axis=-1)
 
 
 def _exact_rows(module, G, limits=False, native=True):
@@ -98,7 +86,7 @@ def measure(chain, poses: int, seed: int, special: float = 0.25, plain: bool = F
                     chain.scale * np.abs(E[:, :3, :3] - G[i, :3, :3]).max(axis=(1, 2)),
                 )
                 wrong += int((err > 1e-9 * chain.scale).sum())
-                if _distance(sols, Q[i], kinds, chain.scale).min() <= 1e-6:
+                if joint_distance(sols, Q[i], kinds, chain.scale).min() <= 1e-6:
                     recovered += 1
             if ref_module is not None:
                 if cont_ref[i].any():  # a self-motion of the snapped robot: no count to compare with

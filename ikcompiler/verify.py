@@ -122,6 +122,18 @@ def _same(a, b, kinds) -> np.ndarray:
     return np.abs(d).max(axis=-1)
 
 
+def joint_distance(a, b, kinds, scale: float) -> np.ndarray:
+    """Largest joint distance of rows a from b: revolute values modulo 2 pi in rad, prismatic ones
+    relative to the robot's size ``scale`` (what "the same joint vector" means in the tests)."""
+    d = np.abs(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+    for c, k in enumerate(kinds):
+        if k == "R":
+            d[..., c] = np.abs(np.remainder(d[..., c] + math.pi, 2 * math.pi) - math.pi)
+        else:
+            d[..., c] /= scale
+    return d.max(axis=-1)
+
+
 def _recovery_distance(a, b, kinds, scale: float) -> np.ndarray:
     """Distance of rows a from b in units of the recovery tolerance: revolute values modulo 2 pi over
     SAME_ANGLE, prismatic ones over SAME_LENGTH * scale; <= 1 means the same joint vector."""
