@@ -26,20 +26,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems import tolerances as tol
+from subproblems.angles import wrap_array
 from subproblems.plan_runtime import _cross
 from subproblems.screw import twist_exp_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
 MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
-SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
+SEPARATE = tol.CONTINUATION_SAME_SOLUTION  # subproblems/tolerances.py
 # Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
 # solutions anywhere on the circle.
 RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
 NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
 SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
-NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
+NEAR_MISS_NEWTON = tol.CONTINUATION_NEAR_MISS
 
 
 def _lines(twists):
@@ -271,7 +273,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
         return X, own
 
     def keys(Z, o):
-        Z = np.where(revolute, np.remainder(Z + np.pi, 2 * np.pi) - np.pi, Z / robot[5])
+        Z = np.where(revolute, wrap_array(Z), Z / robot[5])
         return np.concatenate([o[:, None].astype(float), np.round(Z / 1e-7)], axis=1)
 
     finite = np.all(np.isfinite(Q), axis=1)
