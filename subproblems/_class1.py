@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from subproblems import tolerances as tol
+from subproblems import tolerances
 from subproblems.angles import wrap_array, wrap_joints
 from subproblems.core import BatchResult, Solution
 from subproblems.rotation import (
@@ -48,15 +48,15 @@ from subproblems.rotation import (
 from subproblems.screw import adjoint, fk, fk_batch, inverse_transform, twist_exp, twist_exp_batch
 
 # Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
-EXACT_TOL = tol.EXACT
-POLISH_TOL = tol.S1_POLISH
-DEDUP_TOL = tol.S1_SAME_SOLUTION
-RANK_TOL = tol.S1_DEPENDENT_SLIDES
-FREE_TOL = tol.S1_ZERO_LENGTH
-NEAR_TOL = tol.S1_NEAR_PARALLEL
-NEAR_POLISH_TOL = tol.S1_NEAR_POLISH
-MERGE_SPAN = tol.S1_DOUBLE_ROOT_SPAN
-DOUBLE_ROOT_ULPS = tol.S1_DOUBLE_ROOT_ULPS
+EXACT_TOL = tolerances.EXACT
+POLISH_TOL = tolerances.S1_POLISH
+DEDUP_TOL = tolerances.S1_SAME_SOLUTION
+RANK_TOL = tolerances.S1_DEPENDENT_SLIDES
+FREE_TOL = tolerances.S1_ZERO_LENGTH
+NEAR_TOL = tolerances.S1_NEAR_PARALLEL
+NEAR_POLISH_TOL = tolerances.S1_NEAR_POLISH
+MERGE_SPAN = tolerances.S1_DOUBLE_ROOT_SPAN
+DOUBLE_ROOT_ULPS = tolerances.S1_DOUBLE_ROOT_ULPS
 
 TWO_PI = 2.0 * math.pi
 _TAU5 = TWO_PI * np.arange(5) / 5.0

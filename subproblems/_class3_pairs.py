@@ -87,32 +87,32 @@ from __future__ import annotations
 
 import numpy as np
 
-from subproblems import tolerances as tol
+from subproblems import tolerances
 from subproblems._class3 import EXACT_TOL, TINY
 from subproblems.angles import wrap_array
 from subproblems.core import BatchResult, Solution, solve_batch
 
 # Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
-DEDUP_TOL = tol.S3P_SAME_SOLUTION
-ZERO_TOL = tol.S3P_ZERO_ELIMINANT
-M_FLOOR = tol.S3P_TENSOR_FLOOR
-FREE_REL = tol.S3P_FREE_VALUE
+DEDUP_TOL = tolerances.S3P_SAME_SOLUTION
+ZERO_TOL = tolerances.S3P_ZERO_ELIMINANT
+M_FLOOR = tolerances.S3P_TENSOR_FLOOR
+FREE_REL = tolerances.S3P_FREE_VALUE
 LM_ITERS = 40
-ZERO_DIST = tol.S3P_ZERO_DISTANCE
-APEX_TOL = tol.S3P_APEX
-RESEED_TOL = tol.S3P_RESEED
+ZERO_DIST = tolerances.S3P_ZERO_DISTANCE
+APEX_TOL = tolerances.S3P_APEX
+RESEED_TOL = tolerances.S3P_RESEED
 LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer, at most (_polish_lsq)
 NEWTON_ITERS = 24
-MERGE_TOL = tol.S3P_MULTIPLE_ROOT
+MERGE_TOL = tolerances.S3P_MULTIPLE_ROOT
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
-ROUNDOFF = tol.S3P_ROUNDOFF
-FOLD_SV = tol.S3P_FOLD_SINGULAR
-FOLD_FLAT = tol.S3P_FOLD_FLAT
+ROUNDOFF = tolerances.S3P_ROUNDOFF
+FOLD_SV = tolerances.S3P_FOLD_SINGULAR
+FOLD_FLAT = tolerances.S3P_FOLD_FLAT
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
 FOLD_ITERS = 8
 MIN_UNIT = 2.0**-500  # smallest unit of length an instance is solved in (Pair.normalised)
-CLUSTER_TOL = tol.S3P_CLUSTER
-RANK_TOL = tol.S3P_RANK
+CLUSTER_TOL = tolerances.S3P_CLUSTER
+RANK_TOL = tolerances.S3P_RANK
 
 
 # --------------------------------------------------------------------------------- parametrisation

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from subproblems import tolerances as tol
+from subproblems import tolerances
 from subproblems.angles import wrap_array
 from subproblems.plan_runtime import _cross
 from subproblems.screw import twist_exp_batch
@@ -34,14 +34,14 @@ from subproblems.screw import twist_exp_batch
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
 MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
-SEPARATE = tol.CONTINUATION_SAME_SOLUTION  # subproblems/tolerances.py
+SEPARATE = tolerances.CONTINUATION_SAME_SOLUTION  # subproblems/tolerances.py
 # Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
 # solutions anywhere on the circle.
 RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
 NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
 SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
-NEAR_MISS_NEWTON = tol.CONTINUATION_NEAR_MISS
+NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS
 
 
 def _lines(twists):

@@ -45,17 +45,17 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from subproblems import tolerances as tol
+from subproblems import tolerances
 from subproblems.angles import wrap, wrap_array
 
 TANGENT_ROOT, FAMILY, DEFER, EMPTY = 1, 2, 4, 8
-NEAR = tol.FAST_DEGENERATE  # tolerances in subproblems/tolerances.py (docs/design.md section 10)
+NEAR = tolerances.FAST_DEGENERATE  # tolerances in subproblems/tolerances.py (docs/design.md section 10)
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
-TANGENT = tol.FAST_TANGENT
+TANGENT = tolerances.FAST_TANGENT
 NEAR2 = NEAR * NEAR
-SPLIT_ROOT = tol.FAST_SPLIT_ROOT
-TINY = tol.TINY
+SPLIT_ROOT = tolerances.FAST_SPLIT_ROOT
+TINY = tolerances.TINY
 
 SCALAR = SimpleNamespace(
     sin=math.sin,
@@ -457,7 +457,7 @@ def reference(m, code, twists, inputs):
 # ---------------------------------------------------------------------------------------------------
 # the end of a generated fast path: measure, wrap, limit, deduplicate, pack
 
-NEAR_MISS = tol.NEAR_MISS  # candidates missing by less need Newton steps
+NEAR_MISS = tolerances.NEAR_MISS  # candidates missing by less need Newton steps
 
 
 def goal_entries(T, target: str):
@@ -510,8 +510,8 @@ def goal_entries(T, target: str):
 # inside them; a value within LIMIT_EPS outside a limit (a double root at a limit is only located to
 # about sqrt(eps)) is clamped onto the limit, and one within PI_SNAP above -pi (roundoff of a root at pi)
 # becomes pi; both change the row, so its error is measured again before it counts as exact.
-LIMIT_EPS = tol.LIMIT_SLACK
-PI_SNAP = tol.PI_SNAP
+LIMIT_EPS = tolerances.LIMIT_SLACK
+PI_SNAP = tolerances.PI_SNAP
 INSIDE, ADJUSTED, OUTSIDE = 0, 1, 2
 
 

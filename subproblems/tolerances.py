@@ -63,6 +63,16 @@ ZERO_AXIS = 1e-12
 #: revolute twist zero to this: inputs that are not twists are refused (absolute).
 TWIST_UNIT = 1e-9
 
+#: Robot files: a 4x4 matrix must be rigid to this (``rigid_residual``; write rpy for rounded data).
+INPUT_RIGID = 1e-9
+#: Robot files: an rpy angle within this (relative) of a multiple of 90 degrees is one (exact cos/sin).
+INPUT_RIGHT_ANGLE = 1e-15
+#: URDF: an axis whose length differs from 1 by more than this is normalised with a note.
+INPUT_UNIT_NOTE = 1e-12
+#: URDF mimic joints: a multiplier within this of +-1 can stand for its master; a follower's limits
+#: contain the master's when they do to this.
+INPUT_MIMIC = 1e-12
+
 # -------------------------------------------------------------------------- class I (S1-*), _class1.py
 
 #: Candidates with a residual below this (relative) are polished before the exactness check.
@@ -244,6 +254,13 @@ VERIFY_SAME_LENGTH = 1e-6
 VERIFY_SINGULAR = 1e-7
 #: verify: an exact row whose relative error exceeds this is wrong (the structural tolerance).
 VERIFY_WRONG = EXACT
+#: The S2-RR step's two axes are parallel when ``|w1 x w2|`` is at most this in every sampled
+#: configuration (absolute; ``geometry.facts.step_axes``, the fast kernel's choice) ...
+RR_AXES_PARALLEL = EXACT
+#: ... they meet when their common normal is at most EXACT times the size and they are farther than
+#: this from parallel (absolute) in every configuration (the meeting-axes kernel divides by
+#: ``|w1 x w2|``); otherwise they are skew and the reference solver takes them.
+RR_AXES_MEET_ANGLE = 1e-6
 #: Lines whose normal-equation matrix has a condition number above this are (nearly) all parallel:
 #: they have no unique common point (``geometry.relations.lines_meet``; a ratio).
 LINES_MEET_CONDITION = 1e8

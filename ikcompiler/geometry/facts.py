@@ -22,12 +22,6 @@ SEED = 3
 #: How many configurations a relation is judged on (the rules' samples; enough: a relation that does
 #: not persist fails on a random configuration with probability one).
 COUNT = 4
-#: S2-RR axes: parallel when ``|w1 x w2|`` is at most this in every configuration (absolute) ...
-RR_PARALLEL = tol.EXACT
-#: ... they meet when their common normal is at most ``EXACT`` times the size and they are not within
-#: this of parallel (absolute) in every configuration; otherwise skew (the fast kernel for meeting axes
-#: divides by ``|w1 x w2|``).
-RR_MEET_ANGLE = 1e-6
 
 
 def configurations(kinds: str, scale: float, count: int = COUNT, seed: int = SEED) -> np.ndarray:
@@ -58,10 +52,10 @@ def step_axes(step, twists, kinds, scale: float, th) -> str | None:
     r1, r2 = np.cross(w1, tw[:, 0, :3]), np.cross(w2, tw[:, 1, :3])
     n12 = np.cross(w1, w2)
     nn = np.linalg.norm(n12, axis=1)
-    if np.all(nn <= RR_PARALLEL):
+    if np.all(nn <= tol.RR_AXES_PARALLEL):
         return "parallel"
     gap = np.abs(np.sum((r2 - r1) * n12, axis=1)) / np.maximum(nn, tol.TINY)
-    return "meet" if np.all((gap <= tol.EXACT * scale) & (nn > RR_MEET_ANGLE)) else "skew"
+    return "meet" if np.all((gap <= tol.EXACT * scale) & (nn > tol.RR_AXES_MEET_ANGLE)) else "skew"
 
 
 def record_step_facts(steps, twists, kinds, scale: float) -> list[dict]:

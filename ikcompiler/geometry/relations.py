@@ -16,13 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from subproblems import tolerances as tol
+from subproblems import tolerances
 
 
 @dataclass(frozen=True)
 class Tolerance:
-    exact: float = tol.EXACT
-    snap: float = tol.SNAP
+    exact: float = tolerances.EXACT
+    snap: float = tolerances.SNAP
 
 
 def lines_meet(lines, scale: float) -> tuple[np.ndarray | None, float]:
@@ -36,7 +36,7 @@ def lines_meet(lines, scale: float) -> tuple[np.ndarray | None, float]:
         P = np.eye(3) - np.outer(w, w)
         A += P
         b += P @ r
-    if np.linalg.cond(A) > tol.LINES_MEET_CONDITION:
+    if np.linalg.cond(A) > tolerances.LINES_MEET_CONDITION:
         return None, np.inf
     x = np.linalg.solve(A, b)
     miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - r))) for w, r in lines)
