@@ -256,10 +256,15 @@ def solution_slots(plan: Plan) -> int:
 
 def compile_source(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> str:
     """The generated module's source text."""
+    tol = tol or Tolerance()
+    return plan_source(compile_plan(chain, target=target, free=free, tol=tol), chain, tol=tol)
+
+
+def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> str:
+    """The module source of a plan already made for ``chain`` (e.g. read back with ``Plan.from_json``)."""
     from ikcompiler import __version__
 
     tol = tol or Tolerance()
-    plan = compile_plan(chain, target=target, free=free, tol=tol)
     solved = with_tool_roll(chain) if plan.virtual else chain
     return generate(
         plan,
