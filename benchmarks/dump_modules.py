@@ -2,12 +2,14 @@
 folder, so two checkouts can be compared byte for byte: a refactoring that must not change the
 compiler's behaviour (docs/design.md section 12) shows up as an empty `diff -r`.
 
-    python benchmarks/dump_modules.py OUT_DIR        # then: diff -r OUT_A OUT_B
+    python benchmarks/dump_modules.py OUT_DIR [--configurations]   # then: diff -r OUT_A OUT_B
 
 Cases: every zoo robot with its default target; the README's variants (panda with a free joint,
 shadow_index position, shadow_thumb position + direction, puma560 orientation); jaco with the general
 6R solver turned off (the 1-D search fallback); and two drawn general chains, TRRRRR (the 2-D search
-fallback) and TTTTR (no closed form, no search: the numerical fallback).  Run it with the checkout to
+fallback) and TTTTR (no closed form, no search: the numerical fallback); four zoo arms perturbed by
+1e-6 of their size (snapped plans); with ``--configurations`` also the configuration zoo's 126 joint
+strings in both geometries, seed 0 (``ikcompiler.configs``; a few minutes).  Run it with the checkout to
 compare installed or on PYTHONPATH: it imports the `ikcompiler` found first (and prints where).
 """
 
@@ -49,7 +51,8 @@ def general_chain(kinds: str, seed: int = 11):
     return Chain(f"general_{kinds.lower()}", tuple(joints), home)
 
 
-def cases():
+def cases(configurations: bool = False):
+    from ikcompiler.configs import joint_strings, modular_chain, perturbed
     from ikcompiler.inputs import load_robot
     from ikcompiler.inputs.zoo import zoo_names
 
@@ -60,6 +63,13 @@ def cases():
     yield "jaco_search", (lambda: load_robot("jaco")), "pose", (), False
     for kinds in ("TRRRRR", "TTTTR"):  # the 2-D search fallback; the numerical fallback
         yield f"general_{kinds.lower()}", (lambda k=kinds: general_chain(k)), "pose", (), True
+    for name in ("puma560", "ur5", "kr6_r700", "stanford"):  # calibrated: snapped plans (_PLAN_TWISTS)
+        yield f"{name}_perturbed", (lambda n=name: perturbed(load_robot(n), 1e-6)), "pose", (), True
+    if configurations:
+        for geometry in ("modular", "general"):
+            for kinds in joint_strings():
+                load = lambda k=kinds, g=geometry: modular_chain(k, seed=0, geometry=g)  # noqa: E731
+                yield f"config_{geometry}_{kinds}", load, "pose", (), True
 
 
 def main(argv=None) -> int:
@@ -69,9 +79,11 @@ def main(argv=None) -> int:
 
     print(f"ikcompiler from {Path(ikcompiler.__file__).parent}")
 
-    out = Path((argv or sys.argv[1:])[0])
+    args = list(sys.argv[1:] if argv is None else argv)
+    configurations = "--configurations" in args
+    out = Path([a for a in args if not a.startswith("--")][0])
     out.mkdir(parents=True, exist_ok=True)
-    for case, load, target, free, general6 in cases():
+    for case, load, target, free, general6 in cases(configurations):
         compiler.USE_GENERAL6 = general6
         try:
             chain = load()

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from ikcompiler.errors import PlanFormatError
 from ikcompiler.steps import Step, step_from_dict
+from ikcompiler.steps.base import fits_annotation
 
 PLAN_FORMAT = "ikcompiler-plan"
 PLAN_VERSION = 1
@@ -119,13 +120,21 @@ class Plan:
             if name not in data:
                 continue
             value = data[name]
+            kind = str(fields[name].type)
+            shaped = name in ("steps", "alternative", "cost") or fits_annotation(kind, value)
+            if not shaped:
+                raise PlanFormatError(f"plan field {name!r} must be {fields[name].type}, got {value!r}")
             if name in ("steps", "alternative"):
                 if not isinstance(value, list):
                     raise PlanFormatError(f"plan field {name!r} must be a list of steps")
                 value = tuple(step_from_dict(s) for s in value)
             elif name == "cost":
+                if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                    raise PlanFormatError(f"plan field 'cost' must be a number or null, got {value!r}")
                 value = math.inf if value is None else float(value)
             elif name == "plan_twists":
+                if not all(isinstance(row, list) and len(row) == 6 for row in value):
+                    raise PlanFormatError("plan field 'plan_twists' must hold 6-lists (v, w), one per joint")
                 value = tuple(tuple(float(x) for x in row) for row in value)
             elif isinstance(value, list):
                 value = tuple(value)

@@ -1,10 +1,10 @@
 """Typed plan steps (ikcompiler.steps) and the plan as JSON (docs/design.md section 12).
 
-On every zoo robot, the README's target variants and the three fallbacks (1-D search, 2-D search,
-numerical): the plan survives ``to_json`` / ``from_json`` unchanged and the module generated from the
-read-back plan is the same text; every step's dict view agrees with its ``to_dict()``; the steps are in
-an order where each one's run-time inputs are solved before it; and malformed plans raise typed errors
-naming the field.
+On every zoo robot, the README's target variants, the three fallbacks (1-D search, 2-D search,
+numerical) and a calibrated arm (a snapped plan): the plan survives ``to_json`` / ``from_json``
+unchanged and the module generated from the read-back plan is the same text; every step's dict view
+agrees with its ``to_dict()``; the steps are in an order where each one's run-time inputs are solved
+before it; and malformed plans raise typed errors naming the field.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import pytest
 from ikcompiler import compiler
 from ikcompiler.cli import main
 from ikcompiler.compiler import compile_plan, plan_source
+from ikcompiler.configs import perturbed
 from ikcompiler.errors import PlanFormatError
 from ikcompiler.inputs import load_robot
 from ikcompiler.inputs.zoo import zoo_names
@@ -51,7 +52,7 @@ def general_chain(kinds: str, seed: int = 11) -> Chain:
 
 
 CASES = [n for n in zoo_names() if n != "panda"] + [f"{n}:{t}" for n, (t, _) in VARIANTS.items()]
-CASES += ["jaco:search", "general:TRRRRR", "general:TTTTR"]
+CASES += ["jaco:search", "general:TRRRRR", "general:TTTTR", "puma560:perturbed"]
 
 
 @pytest.fixture(scope="module", params=CASES)
@@ -64,6 +65,8 @@ def compiled(request, monkeypatch_module):
         chain = load_robot(name)
         if variant == "search":
             monkeypatch_module.setattr(compiler, "USE_GENERAL6", False)
+        elif variant == "perturbed":  # a calibrated arm: a snapped plan carries the snapped twists
+            chain = perturbed(chain, 1e-6)
         elif variant:
             target, free = VARIANTS[name]
     plan = compile_plan(chain, target=target, free=free)
@@ -84,6 +87,7 @@ def test_the_cases_reach_every_method(compiled):
     expected = {"jaco": "general-6r", "jaco:search": "1d-search", "general:TRRRRR": "2d-search",
                 "general:TTTTR": "numerical"}.get(case, "closed-form")
     assert plan.method == expected, (case, plan.method)
+    assert bool(plan.plan_twists) == (case == "puma560:perturbed"), case
 
 
 def test_plan_json_round_trip(compiled):
@@ -181,9 +185,15 @@ def _rhino_dict() -> dict:
         (lambda d: d["steps"][0].update(kind="S9"), ["unknown step kind 'S9'"]),
         (lambda d: d["steps"][0].update(colour="red"), ["'O'", "colour"]),
         (lambda d: d["steps"][1].pop("p0"), ["'HT'", "missing", "p0"]),
+        (lambda d: d["steps"][1].update(solve="q1"), ["'HT'", "'solve'", "tuple"]),
+        (lambda d: d["steps"][1].update(inverted=0), ["'HT'", "'inverted'", "bool"]),
+        (lambda d: d["steps"][3].update(group=None), ["'SUM'", "'group'", "null"]),
         (lambda d: d.update(version=99), ["version 99"]),
         (lambda d: d.update(extra=1), ["plan", "extra"]),
         (lambda d: d.pop("robot"), ["missing", "robot"]),
+        (lambda d: d.update(robot=5), ["'robot'", "str"]),
+        (lambda d: d.update(cost="cheap"), ["'cost'", "number"]),
+        (lambda d: d.update(plan_twists=[[0.0] * 5]), ["'plan_twists'", "6-lists"]),
         (lambda d: d.update(steps={"kind": "O"}), ["'steps'", "list"]),
     ],
 )

@@ -13,6 +13,7 @@ old dicts (codegen, the reference runtime) keeps working while it moves to the a
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Iterator, Mapping
 from typing import Any, ClassVar
 
@@ -40,6 +41,20 @@ def thaw(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [thaw(v) for v in value]
     return value
+
+
+def fits_annotation(annotation: str, value: Any) -> bool:
+    """Whether a value read from JSON has the shape a field's annotation asks for (outer type only)."""
+    outer = annotation.split(" | ")[0]
+    if outer.startswith("tuple"):
+        return isinstance(value, (list, tuple))
+    if outer == "bool":
+        return isinstance(value, bool)
+    if outer == "int":
+        return isinstance(value, int) and not isinstance(value, bool)
+    if outer == "str":
+        return isinstance(value, str)
+    return True
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -116,16 +131,24 @@ class Step(Mapping):
         ]
         if missing:
             raise PlanFormatError(f"step {kind!r}: missing field(s) {', '.join(missing)}")
-        return target(**{k: v for k, v in data.items() if k != "kind"})
+        values = {k: v for k, v in data.items() if k != "kind"}
+        for name, value in values.items():
+            if value is None:  # the dict form leaves an unset field out; null is no value of any field
+                raise PlanFormatError(f"step {kind!r}: field {name!r} is null (an unset field is left out)")
+            if not fits_annotation(str(fields[name].type), value):
+                raise PlanFormatError(
+                    f"step {kind!r}: field {name!r} must be {fields[name].type}, got {value!r}"
+                )
+        return target(**values)
 
     # -- read-only Mapping view (transition; see the module docstring) ---------------------------------
     def _present(self) -> list[str]:
-        return ["kind"] + [f.name for f in dataclasses.fields(self) if getattr(self, f.name) is not None]
+        return ["kind"] + [n for n in _field_names(type(self)) if getattr(self, n) is not None]
 
     def __getitem__(self, key: str) -> Any:
         if key == "kind":
             return self.kind
-        if key in self._field_names() and getattr(self, key) is not None:
+        if key in _field_names(type(self)) and getattr(self, key) is not None:
             return thaw(getattr(self, key))
         raise KeyError(key)
 
@@ -135,6 +158,8 @@ class Step(Mapping):
     def __len__(self) -> int:
         return len(self._present())
 
-    @classmethod
-    def _field_names(cls) -> frozenset:
-        return frozenset(f.name for f in dataclasses.fields(cls))
+
+@functools.cache
+def _field_names(cls: type) -> tuple[str, ...]:
+    """The dataclass fields of a step class, in order (looked up on every dict-view access)."""
+    return tuple(f.name for f in dataclasses.fields(cls))
