@@ -19,6 +19,10 @@ PLAN_FORMAT = "ikcompiler-plan"
 PLAN_VERSION = 1
 
 
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
 @dataclass(frozen=True)
 class Plan:
     robot: str
@@ -120,8 +124,8 @@ class Plan:
             if name not in data:
                 continue
             value = data[name]
-            kind = str(fields[name].type)
-            shaped = name in ("steps", "alternative", "cost") or fits_annotation(kind, value)
+            annotation = str(fields[name].type)
+            shaped = name in ("steps", "alternative", "cost") or fits_annotation(annotation, value)
             if not shaped:
                 raise PlanFormatError(f"plan field {name!r} must be {fields[name].type}, got {value!r}")
             if name in ("steps", "alternative"):
@@ -129,11 +133,14 @@ class Plan:
                     raise PlanFormatError(f"plan field {name!r} must be a list of steps")
                 value = tuple(step_from_dict(s) for s in value)
             elif name == "cost":
-                if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                if value is not None and not _is_number(value):
                     raise PlanFormatError(f"plan field 'cost' must be a number or null, got {value!r}")
                 value = math.inf if value is None else float(value)
             elif name == "plan_twists":
-                if not all(isinstance(row, list) and len(row) == 6 for row in value):
+                if not all(
+                    isinstance(row, (list, tuple)) and len(row) == 6 and all(map(_is_number, row))
+                    for row in value
+                ):
                     raise PlanFormatError("plan field 'plan_twists' must hold 6-lists (v, w), one per joint")
                 value = tuple(tuple(float(x) for x in row) for row in value)
             elif isinstance(value, list):

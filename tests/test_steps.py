@@ -84,8 +84,12 @@ def test_the_cases_reach_every_method(compiled):
     """The cases above exercise the fallbacks they are named for (else the round trips below would not
     cover the NUM and search plans)."""
     case, _, plan = compiled
-    expected = {"jaco": "general-6r", "jaco:search": "1d-search", "general:TRRRRR": "2d-search",
-                "general:TTTTR": "numerical"}.get(case, "closed-form")
+    expected = {
+        "jaco": "general-6r",
+        "jaco:search": "1d-search",
+        "general:TRRRRR": "2d-search",
+        "general:TTTTR": "numerical",
+    }.get(case, "closed-form")
     assert plan.method == expected, (case, plan.method)
     assert bool(plan.plan_twists) == (case == "puma560:perturbed"), case
 
