@@ -11,6 +11,7 @@ generator reads instead of measuring them again.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -58,15 +59,12 @@ def step_axes(step, twists, kinds, scale: float, th) -> str | None:
     return "meet" if np.all((gap <= tol.EXACT * scale) & (nn > tol.RR_AXES_MEET_ANGLE)) else "skew"
 
 
-def record_step_facts(steps, twists, kinds, scale: float) -> list[dict]:
-    """The steps (copies) with the facts they rely on recorded: ``axes`` on each S2-RR step."""
+def record_step_facts(steps, twists, kinds, scale: float) -> list:
+    """The steps with the facts they rely on recorded: ``axes`` on each S2-RR step (a new step)."""
     th = configurations(kinds, scale)
     twists = np.asarray(twists, dtype=float)
     out = []
     for step in steps:
-        step = dict(step)
         axes = step_axes(step, twists, kinds, scale, th)
-        if axes is not None:
-            step["axes"] = axes
-        out.append(step)
+        out.append(step if axes is None else dataclasses.replace(step, axes=axes))
     return out
