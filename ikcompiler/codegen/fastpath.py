@@ -489,7 +489,8 @@ class ChainData:
 
     @classmethod
     def from_plan(cls, plan, chain, *, independent, free_joints, scale) -> ChainData:
-        couplings = tuple((chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings)
+        couplings = tuple((chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b)
+                          for cp in chain.couplings)
         return cls(
             method=plan.method, target="virtual" if plan.virtual else plan.target, steps=tuple(plan.steps),
             twists=np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float),

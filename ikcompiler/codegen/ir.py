@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Union
 
 BINARY = ("+", "-", "*", "/")
 FUNCTIONS = {"cos": 1, "sin": 1, "sqrt": 1, "atan2": 2, "max2": 2}  # name -> number of arguments
@@ -50,8 +49,18 @@ class Free:
     index: int
 
 
+class _Hashed:
+    """Compound nodes keep their hash: CSE hashes every subtree, and a tree's hash needs its children's."""
+
+    def __hash__(self):
+        return self._hash
+
+    def _keep_hash(self, *fields):
+        object.__setattr__(self, "_hash", hash((type(self).__name__,) + fields))
+
+
 @dataclass(frozen=True)
-class BinOp:
+class BinOp(_Hashed):
     op: str
     left: Expr
     right: Expr
@@ -59,25 +68,30 @@ class BinOp:
     def __post_init__(self):
         if self.op not in BINARY:
             raise ValueError(f"IR operator {self.op!r} is not one of {BINARY}")
+        self._keep_hash(self.op, self.left, self.right)
 
 
 @dataclass(frozen=True)
-class Neg:
+class Neg(_Hashed):
     operand: Expr
 
+    def __post_init__(self):
+        self._keep_hash(self.operand)
+
 
 @dataclass(frozen=True)
-class Call:
+class Call(_Hashed):
     fn: str
     args: tuple
 
     def __post_init__(self):
         if FUNCTIONS.get(self.fn) != len(self.args):
             raise ValueError(f"IR call {self.fn} with {len(self.args)} arguments")
+        self._keep_hash(self.fn, self.args)
 
 
-Expr = Union[Const, Name, Free, BinOp, Neg, Call]
-Arg = Union[Expr, tuple]  # a kernel argument: a scalar or a tuple of scalars (a vector, a matrix)
+Expr = Const | Name | Free | BinOp | Neg | Call
+Arg = Expr | tuple  # a kernel argument: a scalar or a tuple of scalars (a vector, a matrix)
 
 
 @dataclass
@@ -118,7 +132,7 @@ class Leaf:
     flags: tuple  # of str
 
 
-Stmt = Union[Assign, Loop, ReferenceLoop, Leaf]
+Stmt = Assign | Loop | ReferenceLoop | Leaf
 
 
 @dataclass
@@ -154,8 +168,8 @@ _APPLY = {"+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a 
 
 def fold(e: Expr) -> Expr:
     """One node folded: constant operands computed now (the same IEEE operation the chain would do:
-    + - * / and sqrt), and the identities that hold bit for bit (``x*1 = 1*x = x``, ``x/1 = x``, ``x - 0 = x``, ``--x = x``).
-    ``x + 0`` is not folded (-0 + 0 is +0), nor ``x*0`` (NaN and infinity)."""
+    + - * / and sqrt), and the identities that hold bit for bit (``x*1 = 1*x = x``, ``x/1 = x``,
+    ``x - 0 = x``, ``--x = x``).  ``x + 0`` is not folded (-0 + 0 is +0), nor ``x*0`` (NaN, infinity)."""
     if isinstance(e, BinOp):
         a, b = e.left, e.right
         if isinstance(a, Const) and isinstance(b, Const):
@@ -284,30 +298,30 @@ def without_dead_code(program: Program) -> Program:
     body = program.body
     while True:
         reads: dict = {}
-
-        def count(block):
-            for s in block:
-                for e in statement_exprs(s):
-                    names_read(e, reads)
-                if body_of(s) is not None:
-                    count(body_of(s))
-
-        count(body)
-
-        def prune(block):
-            kept = []
-            for s in block:
-                if isinstance(s, Assign) and s.name not in reads:
-                    continue
-                if body_of(s) is not None:
-                    s = _with_body(s, prune(body_of(s)))
-                kept.append(s)
-            return kept
-
-        new = prune(body)
+        _count_reads(body, reads)
+        new = _prune(body, reads)
         if _size(new) == _size(body):
             return Program(program.goal, new)
         body = new
+
+
+def _count_reads(block, reads: dict) -> None:
+    for s in block:
+        for e in statement_exprs(s):
+            names_read(e, reads)
+        if body_of(s) is not None:
+            _count_reads(body_of(s), reads)
+
+
+def _prune(block, reads: dict) -> list:
+    kept = []
+    for s in block:
+        if isinstance(s, Assign) and s.name not in reads:
+            continue
+        if body_of(s) is not None:
+            s = _with_body(s, _prune(body_of(s), reads))
+        kept.append(s)
+    return kept
 
 
 def _size(block) -> int:
@@ -335,15 +349,20 @@ def eliminate_common(program: Program, prefix: str = "x") -> Program:
     return Program(program.goal, _number_values(body, {}, {}))
 
 
-def _number_values(block, available: dict, alias: dict) -> list:
-    """Pass 1 of :func:`eliminate_common` on ``block``; ``available`` maps trees to names in scope."""
+def _number_values(block, available: dict, alias: dict, negated: dict | None = None) -> list:
+    """Pass 1 of :func:`eliminate_common` on ``block``; ``available`` maps trees to names in scope,
+    ``alias`` names to the value they copy, ``negated`` names ``n = -y`` to ``y``."""
+    negated = {} if negated is None else negated
     available, out = dict(available), []
 
     def rename(name: Name) -> Expr:
         return alias.get(name.id, name)
 
     def rewrite(e: Expr) -> Expr:
-        return _replace_known(_rebuild(e, rename), available)
+        e = _rebuild(e, rename)
+        if isinstance(e, Neg) and isinstance(e.operand, Name) and e.operand.id in negated:
+            return negated[e.operand.id]  # -(n) where n = -y: y itself, bit for bit
+        return _replace_known(e, available)
 
     for s in block:
         s = map_statement(s, rewrite)
@@ -352,8 +371,10 @@ def _number_values(block, available: dict, alias: dict) -> list:
                 alias[s.name] = s.value  # a copy or a constant: propagate it
                 continue
             available[s.value] = Name(s.name)
+            if isinstance(s.value, Neg):
+                negated[s.name] = s.value.operand
         if body_of(s) is not None:
-            s = _with_body(s, _number_values(body_of(s), available, alias))
+            s = _with_body(s, _number_values(body_of(s), available, alias, negated))
         out.append(s)
     return out
 

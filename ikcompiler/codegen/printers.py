@@ -108,7 +108,8 @@ def python_source(program: ir.Program, name: str = "_fast_chain") -> str:
     """The program as ``def NAME(m, goal, free=(), rep=0.0)`` returning its list of leaves."""
     lines = [f"    {', '.join(program.goal)} = goal", "    out = []"]
     _py_block(program.body, 1, lines)
-    return f"\n\ndef {name}(m, goal, free=(), rep=0.0):\n" + PYTHON_DOC + "\n".join(lines) + "\n    return out\n"
+    head = f"\n\ndef {name}(m, goal, free=(), rep=0.0):\n" + PYTHON_DOC
+    return head + "\n".join(lines) + "\n    return out\n"
 
 
 # -- C --------------------------------------------------------------------------------------------------
