@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from ikcompiler import compile_robot, load_robot
+from ikcompiler.codegen import csource
 from ikcompiler.inputs.zoo import zoo_names
 from ikcompiler.verify import _same, sample_configurations
-from ikcompiler.codegen import csource
 from subproblems import fast, native
 from tests.test_fastpath import FREE, _set_distance
 
