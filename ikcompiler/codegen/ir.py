@@ -198,11 +198,6 @@ def fold(e: Expr) -> Expr:
     return e
 
 
-def fold_all(e: Expr) -> Expr:
-    """``e`` folded bottom-up (a tree built without the helpers above)."""
-    return _rebuild(e, lambda x: x)
-
-
 def _rebuild(e: Expr, leaf) -> Expr:
     """``e`` with ``leaf`` applied to every Name and each node refolded."""
     if isinstance(e, Name):
