@@ -177,7 +177,7 @@ IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
 
 
 class _Emitter:
-    """Walks the plan, emitting the loop nest."""
+    """Walks the plan, building the loop nest as IR."""
 
     def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans):
         self.c = _Code()
@@ -189,9 +189,8 @@ class _Emitter:
         self.couplings = couplings
         self.scale = scale
         self.target = target
-        self.q: dict[int, str] = {}  # joint -> variable holding its value
-        self.sig: dict[int, str] = {}
-        self.cs: dict[int, tuple[str, str]] = {}
+        self.q: dict = {}  # joint -> its value: a float or an IR expression (a name, a free value)
+        self.sig: dict = {}  # parallel group -> the name holding the sum of its angles
         self.exps: dict[int, list] = {}
         self.products: dict[tuple, list] = {(): IDENTITY}
         self.flags: list[str] = []
