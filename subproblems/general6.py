@@ -145,6 +145,32 @@ def _exp(w, r, th):
     return g
 
 
+def _hats(w, r):
+    """The 4 x 4 twist matrices H1 = [[w^], -w x r], [0]] and H2 = H1 @ H1 of unit axes (..., 3): a
+    revolute twist of pitch 0 has H1^3 = -H1, so exp(H1 th) = I + sin(th) H1 + (1 - cos(th)) H2."""
+    w, r = np.broadcast_arrays(np.asarray(w, dtype=float), np.asarray(r, dtype=float))
+    H1 = np.zeros(w.shape[:-1] + (4, 4))
+    H1[..., 0, 1], H1[..., 0, 2], H1[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
+    H1[..., 1, 0], H1[..., 2, 0], H1[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
+    H1[..., :3, 3] = -_cross(w, r)
+    return H1, H1 @ H1
+
+
+def _hat_list(w, r):
+    """[(H1, H2)] of each of the axes (6, 3)."""
+    H1, H2 = _hats(w, r)
+    return [(H1[i], H2[i]) for i in range(len(H1))]
+
+
+_EYE4 = np.eye(4)
+
+
+def _exp_h(H, th):
+    """exp(H1 th) for the twist matrices H = (H1, H2) of :func:`_hats` and angles th (...)."""
+    th = np.asarray(th, dtype=float)[..., None, None]
+    return _EYE4 + np.sin(th) * H[0] + (1 - np.cos(th)) * H[1]
+
+
 def _inv(g):
     h = np.zeros_like(g)
     Rt = np.swapaxes(g[..., :3, :3], -1, -2)
@@ -175,6 +201,7 @@ class _Arrangement:
     A: np.ndarray  # (14, 3, 9) left side: quantity, (1, c_c, s_c), (1,c_d,s_d) x (1,c_e,s_e)
     E: np.ndarray  # (9, 4, 4) X_b^-1 X_a^-1 on the (a, b) grid
     u: np.ndarray  # unit vector normal to w_f (reads th_f)
+    H: tuple  # per axis in arrangement order, its twist matrices (H1, H2) (4, 4) (see _hats)
 
 
 def _arrangement(w, r, sign, conj) -> _Arrangement:
@@ -191,7 +218,7 @@ def _arrangement(w, r, sign, conj) -> _Arrangement:
     ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
     E = _inv(_exp(w[1], r[1], ab[:, 1])) @ _inv(_exp(w[0], r[0], ab[:, 0]))
     u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
-    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u))
+    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u), _hat_list(w, r))
 
 
 def _axes(arr: _Arrangement, H):
@@ -244,6 +271,7 @@ class General6:
         self.w, self.r = w, (r - self.center) / self._s
         self.twists = np.concatenate([-np.cross(w, r), w], axis=1)
         self.Mn = self._norm(self.home[None])[0]
+        self._H = _hat_list(self.w, self.r)
         self._arr = [_arrangement(self.w, self.r, sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
         if arrangement is None:
             self.usable = [0]
@@ -264,7 +292,7 @@ class General6:
     def _fk_norm(self, Q):
         g = np.broadcast_to(np.eye(4), (len(Q), 4, 4))
         for i in range(6):
-            g = g @ _exp(self.w[i], self.r[i], Q[:, i])
+            g = g @ _exp_h(self._H[i], Q[:, i])
         return g @ self.Mn
 
     def _norm(self, T):
@@ -370,7 +398,8 @@ class General6:
         W, R = _axes(arr, Gk) if arr.conj else (arr.w[None], arr.r[None])
         X = np.broadcast_to(np.eye(4), (len(th), 4, 4))
         for k in range(5):
-            X = X @ _exp(W[:, k], R[:, k], th[:, k])
+            moved = k < arr.conj  # an axis mapped by the target: per-target twist
+            X = X @ (_exp(W[:, k], R[:, k], th[:, k]) if moved else _exp_h(arr.H[k], th[:, k]))
         Rf = np.swapaxes(X[:, :3, :3], 1, 2) @ Gk[:, :3, :3]
         Ru = Rf @ arr.u
         th_f = np.arctan2(_cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
@@ -429,7 +458,7 @@ class General6:
             W[:, i] = g[:, :3, :3] @ self.w[i]
             r = np.einsum("nij,j->ni", g[:, :3, :3], self.r[i]) + g[:, :3, 3]
             V[:, i] = _cross(r, W[:, i])  # v = -w x r of the moved axis
-            g = g @ _exp(self.w[i], self.r[i], Q[:, i])
+            g = g @ _exp_h(self._H[i], Q[:, i])
         g = g @ self.Mn
         V += _cross(W, g[:, None, :3, 3])  # velocity of the tool origin: v + w x p
         return g, np.concatenate([V, W], axis=2).transpose(0, 2, 1)
