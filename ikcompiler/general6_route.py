@@ -5,7 +5,7 @@ search (one joint gridded, a closed-form chain for the other five, in C where th
 builds) is complete only on some arms but, where it is, it can be several times faster (rtb-data's
 abb_irb140: 0.44 ms against 44 ms a pose before the doubtful-pose fix).  Issue 10 item 1: "the 1-D
 search stays only where it is measured faster and complete".  So it is measured, at compile time, on
-a fixed sample of poses (docs/design.md, section "General 6R"; docs/general6.md, "When it is used"):
+a fixed sample of poses (docs/design.md section 5, "General 6R"; docs/general6.md, "When it is used"):
 
 * complete: every sampled joint vector is among the 1-D search's exact rows (1e-6 rad, the
   verification's tolerance) and so is every row the elimination returns for the same poses;
