@@ -200,15 +200,16 @@ def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Pla
 
 
 def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol) -> Plan | None:
-    """The general 6R elimination (subproblems.general6) for a 6-revolute pose target without a
-    closed form, or None (other chains; or a geometry where it degenerates: the note says why).
+    """The general 6R elimination (subproblems.general6) for a 6-joint pose target without a closed
+    form (prismatic joints where an arrangement puts them on its right side), or None (other chains;
+    or a geometry where it degenerates or a prismatic joint sits in the middle: the note says why).
 
     Where a 1-D search exists (``search_1d()``), both are measured on sample poses and the 1-D search
     plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
     from ikcompiler import general6_route
     from subproblems import general6
 
-    if not USE_GENERAL6 or target != "pose" or free or chain.joint_types != "RRRRRR" or chain.couplings:
+    if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
         return None
     try:
         solver = general6.General6(chain.twists, chain.home, chain.scale)

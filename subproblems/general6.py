@@ -69,6 +69,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -92,6 +93,11 @@ _PHI = np.stack([np.ones(3), np.cos(_GRID), np.sin(_GRID)], axis=1)  # PHI[p, t]
 _INV3 = np.linalg.inv(_PHI)
 _INV9 = np.linalg.inv(np.kron(_PHI, _PHI))
 _INV27 = np.linalg.inv(np.kron(np.kron(_PHI, _PHI), _PHI))
+# A prismatic joint on the right side (position a or b): its displacement d (normalised) enters the 14
+# quantities as a polynomial of degree <= 2 (p linear, p.p and (p.p) l - 2 (p.l) p quadratic), so the
+# basis (1, cos, sin) becomes (1, d, d^2), interpolated on d in {-1, 0, 1}: the same 3 coefficients.
+_GRID_T = np.array([-1.0, 0.0, 1.0])
+_PHI_T = np.stack([np.ones(3), _GRID_T, _GRID_T**2], axis=1)
 # (1, cos, sin) times (1 + x^2) in powers of x = tan(th / 2): rows t, columns power
 _HALF = np.array([[1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [0.0, 2.0, 0.0]])
 _HALF9 = np.kron(_HALF, _HALF)  # trig product (t*3+u) -> monomial x_d^i x_e^j (i*3+j)
@@ -135,6 +141,19 @@ def _rodrigues(w, th):
     return R.reshape(R.shape[:-1] + (3, 3))
 
 
+def _joint_exp(w, r, th, prism: bool):
+    """Joint transforms (..., 4, 4): a rotation by th about the line (r, w), or for a prismatic joint
+    a translation by th along w."""
+    if not prism:
+        return _exp(w, r, th)
+    th = np.asarray(th, dtype=float)
+    w = np.asarray(w, dtype=float)
+    g = np.zeros(np.broadcast_shapes(w.shape[:-1], th.shape) + (4, 4))
+    g[..., 0, 0] = g[..., 1, 1] = g[..., 2, 2] = g[..., 3, 3] = 1.0
+    g[..., :3, 3] = w * th[..., None]
+    return g
+
+
 def _exp(w, r, th):
     """Transforms (..., 4, 4) of rotations by th about the lines (point r, direction w)."""
     R = _rodrigues(w, th)
@@ -156,18 +175,28 @@ def _hats(w, r):
     return H1, H1 @ H1
 
 
-def _hat_list(w, r):
-    """[(H1, H2)] of each of the axes (6, 3)."""
+def _hat_list(w, r, prism):
+    """[(H1, H2, prismatic)] of each of the axes (6, 3); a prismatic joint's H1 = [[0, w], [0]]."""
     H1, H2 = _hats(w, r)
-    return [(H1[i], H2[i]) for i in range(len(H1))]
+    out = []
+    for i in range(len(H1)):
+        if prism[i]:
+            h = np.zeros((4, 4))
+            h[:3, 3] = w[i]
+            out.append((h, np.zeros((4, 4)), True))
+        else:
+            out.append((H1[i], H2[i], False))
+    return out
 
 
 _EYE4 = np.eye(4)
 
 
 def _exp_h(H, th):
-    """exp(H1 th) for the twist matrices H = (H1, H2) of :func:`_hats` and angles th (...)."""
+    """exp(H1 th) for the twist matrices H = (H1, H2, prismatic) of :func:`_hat_list`, values th (...)."""
     th = np.asarray(th, dtype=float)[..., None, None]
+    if H[2]:
+        return _EYE4 + th * H[0]
     return _EYE4 + np.sin(th) * H[0] + (1 - np.cos(th)) * H[1]
 
 
@@ -201,24 +230,38 @@ class _Arrangement:
     A: np.ndarray  # (14, 3, 9) left side: quantity, (1, c_c, s_c), (1,c_d,s_d) x (1,c_e,s_e)
     E: np.ndarray  # (9, 4, 4) X_b^-1 X_a^-1 on the (a, b) grid
     u: np.ndarray  # unit vector normal to w_f (reads th_f)
-    H: tuple  # per axis in arrangement order, its twist matrices (H1, H2) (4, 4) (see _hats)
+    H: tuple  # per axis in arrangement order, its twist matrices (H1, H2, prismatic) (see _hat_list)
+    prism: tuple  # (6,) bool in arrangement order; only positions a, b may be prismatic
+    inv9: np.ndarray  # (9, 9) interpolation of the right side on the (a, b) grid
+    grid_ab: np.ndarray  # (9, 2) the (a, b) grid values
+    cols: tuple = tuple(range(8))  # columns of B' (non-constant (a, b) monomials) present in the equations
 
 
-def _arrangement(w, r, sign, conj) -> _Arrangement:
-    """Joint order: the chain (sign +1) or its inverse (-1), its last ``conj`` joints moved ahead."""
+def _arrangement_order(sign, conj) -> list[int]:
     base = list(range(6)) if sign > 0 else list(range(5, -1, -1))
-    order = base[6 - conj:] + base[:6 - conj]
+    return base[6 - conj:] + base[:6 - conj]
+
+
+def _arrangement(w, r, sign, conj, prism) -> _Arrangement:
+    """Joint order: the chain (sign +1) or its inverse (-1), its last ``conj`` joints moved ahead.
+    Prismatic joints must land on the right side (positions a, b)."""
+    order = _arrangement_order(sign, conj)
     w = sign * w[list(order)]
     r = r[list(order)]
+    prism = tuple(bool(prism[i]) for i in order)
+    assert not any(prism[2:]), "prismatic joints only at positions a, b"
     th = np.stack(np.meshgrid(_GRID, _GRID, _GRID, indexing="ij"), axis=-1).reshape(27, 3)
     X = _exp(w[2], r[2], th[:, 0]) @ _exp(w[3], r[3], th[:, 1]) @ _exp(w[4], r[4], th[:, 2])
     p = np.einsum("kij,j->ki", X[:, :3, :3], r[5]) + X[:, :3, 3]
     lv = X[:, :3, :3] @ w[5]
     A = (_INV27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
-    ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
-    E = _inv(_exp(w[1], r[1], ab[:, 1])) @ _inv(_exp(w[0], r[0], ab[:, 0]))
+    ga, gb = (_GRID_T if prism[0] else _GRID), (_GRID_T if prism[1] else _GRID)
+    ab = np.stack(np.meshgrid(ga, gb, indexing="ij"), axis=-1).reshape(9, 2)
+    inv9 = np.linalg.inv(np.kron(_PHI_T if prism[0] else _PHI, _PHI_T if prism[1] else _PHI))
+    E = _inv(_joint_exp(w[1], r[1], ab[:, 1], prism[1])) @ _inv(_joint_exp(w[0], r[0], ab[:, 0], prism[0]))
     u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
-    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u), _hat_list(w, r))
+    return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u), _hat_list(w, r, prism),
+                        prism, inv9, ab)
 
 
 def _axes(arr: _Arrangement, H):
@@ -233,11 +276,11 @@ def _axes(arr: _Arrangement, H):
     return W, R
 
 
-def _grid_ab(W, R):
+def _grid_ab(arr: _Arrangement, W, R):
     """X_b^-1 X_a^-1 (N, 9, 4, 4) on the (a, b) interpolation grid for per-target axes."""
-    ab = np.stack(np.meshgrid(_GRID, _GRID, indexing="ij"), axis=-1).reshape(9, 2)
-    Xb = _exp(W[:, None, 1], R[:, None, 1], ab[None, :, 1])
-    Xa = _exp(W[:, None, 0], R[:, None, 0], ab[None, :, 0])
+    ab = arr.grid_ab
+    Xb = _joint_exp(W[:, None, 1], R[:, None, 1], ab[None, :, 1], arr.prism[1])
+    Xa = _joint_exp(W[:, None, 0], R[:, None, 0], ab[None, :, 0], arr.prism[0])
     return _inv(Xb) @ _inv(Xa)
 
 
@@ -253,26 +296,38 @@ class General6:
         tw = np.asarray(twists, dtype=float)
         if tw.shape != (6, 6) or not np.all(np.isfinite(tw)):
             raise SubproblemInputError(f"general6 needs 6 finite twists (6, 6); got shape {tw.shape}")
-        w = tw[:, 3:]
-        nw = np.linalg.norm(w, axis=1)
-        if np.any(nw < 1e-9):
-            k = int(np.argmin(nw))
-            raise General6Error(
-                f"general6 solves 6R chains; joint {k + 1} is prismatic (w = 0): use the compiler's "
-                "search fallback or name it a free joint"
-            )
-        w = w / nw[:, None]
-        r = np.cross(w, tw[:, :3])  # the foot of each axis nearest the origin
+        nw = np.linalg.norm(tw[:, 3:], axis=1)
+        self.prism = nw < 1e-9  # w = 0: a prismatic joint, its direction in v
+        if np.any(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < 1e-9)):
+            k = int(np.argmax(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < 1e-9)))
+            raise SubproblemInputError(f"general6: joint {k + 1} has a zero twist")
+        w = np.where(self.prism[:, None], tw[:, :3], tw[:, 3:])  # rotation axis, or translation direction
+        w = w / np.linalg.norm(w, axis=1, keepdims=True)
+        r = np.where(self.prism[:, None], 0.0, np.cross(w, tw[:, :3]))  # the foot of each axis nearest 0
         self.home = np.asarray(home, dtype=float)
-        self.center = r.mean(axis=0)
-        size = float(np.max(np.linalg.norm(np.vstack([r, self.home[:3, 3]]) - self.center, axis=1)))
+        rev = ~self.prism
+        self.center = r[rev].mean(axis=0) if rev.any() else np.zeros(3)
+        size = float(np.max(np.linalg.norm(np.vstack([r[rev], self.home[:3, 3]]) - self.center, axis=1)))
         self.scale = float(scale) if scale else max(size, 1e-9)
-        self._s = max(size, 1e-9)  # internal normalisation length
-        self.w, self.r = w, (r - self.center) / self._s
-        self.twists = np.concatenate([-np.cross(w, r), w], axis=1)
+        self._s = max(size, 1e-9)  # internal normalisation length (prismatic values are divided by it)
+        self.w = w
+        self.r = np.where(self.prism[:, None], 0.0, (r - self.center) / self._s)
         self.Mn = self._norm(self.home[None])[0]
-        self._H = _hat_list(self.w, self.r)
-        self._arr = [_arrangement(self.w, self.r, sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
+        self._H = _hat_list(self.w, self.r, self.prism)
+        # arrangements whose left side (c, d, e, f) is revolute: a prismatic joint only at a or b
+        layouts = [(sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
+        self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
+                     if not self.prism[_arrangement_order(sign, conj)[2:]].any() else None
+                     for sign, conj in layouts]
+        if self.prism.any():
+            self._arr = [self._present_columns(a) if a is not None else None for a in self._arr]
+        if all(a is None for a in self._arr):
+            k = int(np.nonzero(self.prism)[0][0])
+            raise General6Error(
+                f"general6: joint {k + 1} is prismatic and no joint order puts every prismatic joint among "
+                "the first two of the chain or of a rotated or inverted copy (joints 1, 2, 5, 6): use the "
+                "compiler's search fallback"
+            )
         if arrangement is None:
             self.usable = [0]
             self.usable = self._choose()
@@ -280,11 +335,31 @@ class General6:
             self.usable = [int(k) for k in np.atleast_1d(arrangement)]
         self.arrangement = self.usable[0]
 
+    def _present_columns(self, arr: _Arrangement, count: int = 8, seed: int = 21):
+        """The arrangement with B's structurally zero columns dropped (measured on random targets), or
+        None when an entry the back-substitution reads (a alone, b alone) is among them."""
+        rng = np.random.default_rng(seed)
+        Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
+        Q[:, self.prism] /= math.pi
+        Gn = self._fk_norm(Q) @ _inv(self.Mn)
+        Gn = Gn if arr.sign > 0 else _inv(Gn)
+        y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
+        m = Gn[:, :3, :3] @ arr.w[5]
+        E = _grid_ab(arr, *_axes(arr, Gn)) if arr.conj else np.broadcast_to(arr.E, (count, 9, 4, 4))
+        p = np.einsum("nkij,nj->nki", E[..., :3, :3], y) + E[..., :3, 3]
+        lv = np.einsum("nkij,nj->nki", E[..., :3, :3], m)
+        B = np.einsum("kq,nqj->nkj", arr.inv9, _fourteen(p, lv))  # (N, 9 monomials, 14)
+        size = np.linalg.norm(B, axis=2).max(axis=0)  # per monomial (a_t b_u at t * 3 + u)
+        present = size[1:] > 1e-10 * size.max()
+        if not all(present[k - 1] for k in (1, 2, 3, 6)):  # a_0 b_1, a_0 b_2, a_1 b_0, a_2 b_0
+            return None
+        return dataclasses.replace(arr, cols=tuple(int(k) for k in np.nonzero(present)[0]))
+
     # --------------------------------------------------------------------------------- kinematics
     def fk(self, q) -> np.ndarray:
         """Tool pose(s) of joint values q (6,) or (M, 6)."""
         q = np.asarray(q, dtype=float)
-        g = self._fk_norm(q.reshape(-1, 6))
+        g = self._fk_norm(q.reshape(-1, 6) / np.where(self.prism, self._s, 1.0))
         out = g.copy()
         out[:, :3, 3] = g[:, :3, 3] * self._s + self.center
         return out.reshape(q.shape[:-1] + (4, 4))
@@ -314,21 +389,23 @@ class General6:
         y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
         m = Gn[:, :3, :3] @ arr.w[5]
         if arr.conj:
-            E = _grid_ab(*_axes(arr, Gn))
+            E = _grid_ab(arr, *_axes(arr, Gn))
             p = np.einsum("nkij,nj->nki", E[..., :3, :3], y) + E[..., :3, 3]
             lv = np.einsum("nkij,nj->nki", E[..., :3, :3], m)
         else:
             p = np.einsum("kij,nj->nki", arr.E[:, :3, :3], y) + arr.E[None, :, :3, 3]
             lv = np.einsum("kij,nj->nki", arr.E[:, :3, :3], m)
-        B = np.einsum("kq,nqj->nkj", _INV9, _fourteen(p, lv))  # (N, 9 coeffs, 14)
+        B = np.einsum("kq,nqj->nkj", arr.inv9, _fourteen(p, lv))  # (N, 9 coeffs, 14)
         B = np.swapaxes(B, 1, 2)  # (N, 14, 9)
-        U, s, Vh = np.linalg.svd(B[:, :, 1:], full_matrices=True)
-        Nl = U[:, :, 8:]  # (N, 14, 6)
+        cols = list(arr.cols)  # a prismatic joint leaves some monomials out: their columns are dropped
+        U, s, Vh = np.linalg.svd(B[:, :, 1:][:, :, cols], full_matrices=True)
+        Nl = U[:, :, 8:]  # (N, 14, 6): left null vectors (B' has rank <= 8)
         C = np.einsum("nqe,qtj->netj", Nl, arr.A)
         C[:, :, 0, 0] -= np.einsum("nqe,nq->ne", Nl, B[:, :, 0])  # the right side's constant column
         with np.errstate(divide="ignore", invalid="ignore"):
             sinv = np.where(s > 1e-13 * s[:, :1], 1.0 / s, 0.0)
-        pinv = np.einsum("nji,nj,nkj->nik", Vh, sinv, U[:, :, :8])
+        pinv = np.zeros((len(B), 8, 14))
+        pinv[:, cols] = np.einsum("nji,nj,nkj->nik", Vh, sinv, U[:, :, :len(cols)])
         return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
 
     @staticmethod
@@ -389,17 +466,26 @@ class General6:
         rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
         mab = np.einsum("niq,nq->ni", pinv[own], rhs)
         Kab = np.concatenate([np.ones((len(mab), 1)), mab], axis=1).reshape(-1, 3, 3)
-        th_a = np.arctan2(np.einsum("ni,ni->n", Kab[:, 2], Kab[:, 0]),
-                          np.einsum("ni,ni->n", Kab[:, 1], Kab[:, 0]))
-        th_b = np.arctan2(np.einsum("ni,ni->n", Kab[:, :, 2], Kab[:, :, 0]),
-                          np.einsum("ni,ni->n", Kab[:, :, 1], Kab[:, :, 0]))
+        # rank one: Kab = a b^T, a = (1, c_a, s_a) or (1, d_a, d_a^2) up to scale, likewise b
+        a0, a1, a2 = (np.einsum("ni,ni->n", Kab[:, t], Kab[:, 0]) for t in range(3))
+        b0, b1, b2 = (np.einsum("ni,ni->n", Kab[:, :, t], Kab[:, :, 0]) for t in range(3))
+        if arr.prism[0] or arr.prism[1]:
+            # some products are absent from the equations (their entries of Kab are not solved for):
+            # each joint from the entries of it alone, column 0 for a, row 0 for b (present by
+            # construction: the arrangement is refused otherwise)
+            a1, a2, b1, b2 = Kab[:, 1, 0], Kab[:, 2, 0], Kab[:, 0, 1], Kab[:, 0, 2]
+            a0 = b0 = 1.0
+        with np.errstate(all="ignore"):
+            th_a = a1 / a0 if arr.prism[0] else np.arctan2(a2, a1)
+            th_b = b1 / b0 if arr.prism[1] else np.arctan2(b2, b1)
         th = np.stack([th_a, th_b, th_c, th_d, th_e], axis=1)
         Gk = Gn[own] if arr.sign > 0 else _inv(Gn[own])
         W, R = _axes(arr, Gk) if arr.conj else (arr.w[None], arr.r[None])
         X = np.broadcast_to(np.eye(4), (len(th), 4, 4))
         for k in range(5):
             moved = k < arr.conj  # an axis mapped by the target: per-target twist
-            X = X @ (_exp(W[:, k], R[:, k], th[:, k]) if moved else _exp_h(arr.H[k], th[:, k]))
+            X = X @ (_joint_exp(W[:, k], R[:, k], th[:, k], arr.prism[k]) if moved
+                     else _exp_h(arr.H[k], th[:, k]))
         Rf = np.swapaxes(X[:, :3, :3], 1, 2) @ Gk[:, :3, :3]
         Ru = Rf @ arr.u
         th_f = np.arctan2(_cross(arr.u, Ru) @ arr.w[5], Ru @ arr.u)
@@ -455,6 +541,10 @@ class General6:
         g = np.broadcast_to(np.eye(4), (len(Q), 4, 4))
         W, V = np.zeros((len(Q), 6, 3)), np.zeros((len(Q), 6, 3))
         for i in range(6):
+            if self.prism[i]:  # a translation along the moved direction: (v, w) = (R w_i, 0)
+                V[:, i] = g[:, :3, :3] @ self.w[i]
+                g = g @ _exp_h(self._H[i], Q[:, i])
+                continue
             W[:, i] = g[:, :3, :3] @ self.w[i]
             r = np.einsum("nij,j->ni", g[:, :3, :3], self.r[i]) + g[:, :3, 3]
             V[:, i] = _cross(r, W[:, i])  # v = -w x r of the moved axis
@@ -505,15 +595,18 @@ class General6:
                     Qs.append(Qk), owns.append(todo[ok_]), errs.append(ek)
             Qc, own, err = np.concatenate(Qs), np.concatenate(owns), np.concatenate(errs)
         ok = err <= EXACT
-        Qc, own, err = _wrap(Qc[ok]), own[ok], err[ok]
-        return _pack(Qc, own, err, N)
+        Qc, own, err = _wrap(Qc[ok], self.prism), own[ok], err[ok]
+        return _pack(Qc, own, err, N, self.prism)
 
     def solve_batch(self, Ts) -> Batch:
         """Every solution of N targets (N, 4, 4): a :class:`Batch` of up to 16 rows each."""
         Ts = np.asarray(Ts, dtype=float).reshape(-1, 4, 4)
         if not np.all(np.isfinite(Ts)):
             raise SubproblemInputError("general6: target contains NaN or infinity")
-        return self._solve_norm(self._norm(Ts))
+        b = self._solve_norm(self._norm(Ts))
+        if self.prism.any():  # normalised displacements back to lengths
+            b.Q[..., self.prism] *= self._s
+        return b
 
     def describe(self, k: int, names=None) -> str:
         """One line on arrangement ``k``: its joint order and elimination variable."""
@@ -548,10 +641,13 @@ class General6:
         special = rng.random((count, 6)) < 1 / 3
         values = rng.choice([0.0, 0.5 * math.pi, -0.5 * math.pi, math.pi], size=int(special.sum()))
         Q[count:][special] = values
+        Q[:, self.prism] /= math.pi  # prismatic: normalised displacements in [-1, 1] (0 and +-1/2 special)
         Tn = self._fk_norm(Q)
         Gn = Tn @ _inv(self.Mn)
         why, found = [], []
         for k, arr in enumerate(self._arr):
+            if arr is None:  # a prismatic joint would sit on the left side
+                continue
             _, _, C, _ = self._pencil(arr, Gn[:count])
             M = self._matrices(C, np.full(count, SHIFTS[0]))
             x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
@@ -563,21 +659,25 @@ class General6:
             Qc, err = self._newton(Qc, Tn[own])
             doubt[own[(err > EXACT) & (err < 1e-3)]] = True
             ok = err <= EXACT
-            b = _pack(_wrap(Qc[ok]), own[ok], err[ok], 2 * count)
+            b = _pack(_wrap(Qc[ok], self.prism), own[ok], err[ok], 2 * count, self.prism)
             d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
             hit = np.where(b.valid, d, np.inf).min(axis=1) < 1e-6
             generic, special_hits = int(hit[:count].sum()), int(hit[count:].sum())
-            # doubtful samples go down the costly re-solve path: fewer first among equal recovery
-            found.append((-(generic + special_hits), int(doubt.sum()), k, generic))
+            rows = int(b.valid[:count].sum())  # generic samples: special ones may hold double roots
+            # more exact rows: fewer missed solutions (an order can recover the sampled vector and miss
+            # others: on a RRRRTT arm the inverse order returned 6 of 10); then fewer doubtful samples,
+            # which go down the costly re-solve path
+            found.append((-(generic + special_hits), -rows, int(doubt.sum()), k, generic))
             why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {generic} of {count} generic "
-                       f"and {special_hits} of {count} special-angle samples, {int(doubt.sum())} doubtful")
-        if not found or max(f[3] for f in found) < count // 2:
+                       f"and {special_hits} of {count} special-angle samples, {rows} generic rows, "
+                       f"{int(doubt.sum())} doubtful")
+        if not found or max(f[4] for f in found) < count // 2:
             raise General6Error(
                 "general6: the elimination degenerates on this geometry (" + "; ".join(why) + "); "
                 "the compiler falls back to its search"
             )
         self.why = tuple(why)
-        return [f[2] for f in sorted(found)]
+        return [f[3] for f in sorted(found)]
 
 
 def _leading_ok(L):
@@ -622,18 +722,20 @@ def _read_ratio(den, num):
     return 2 * np.arctan2(num[i, k], den[i, k])
 
 
-def _wrap(Q):
-    """Revolute values in (-pi, pi]."""
-    Q = np.mod(Q + math.pi, 2 * math.pi) - math.pi
-    return np.where(Q <= -math.pi, Q + 2 * math.pi, Q)
+def _wrap(Q, prism=None):
+    """Revolute values in (-pi, pi]; prismatic columns (``prism`` True) unchanged."""
+    W = np.mod(Q + math.pi, 2 * math.pi) - math.pi
+    W = np.where(W <= -math.pi, W + 2 * math.pi, W)
+    return W if prism is None else np.where(prism, Q, W)
 
 
-def _angle_gap(a, b):
-    """|a - b| modulo 2 pi, in [0, pi]."""
-    return np.abs(np.mod(a - b + math.pi, 2 * math.pi) - math.pi)
+def _angle_gap(a, b, prism=None):
+    """|a - b| modulo 2 pi, in [0, pi]; plain |a - b| in prismatic columns (normalised lengths)."""
+    gap = np.abs(np.mod(a - b + math.pi, 2 * math.pi) - math.pi)
+    return gap if prism is None else np.where(prism, np.abs(a - b), gap)
 
 
-def _pack(Q, own, err, N) -> Batch:
+def _pack(Q, own, err, N, prism=None) -> Batch:
     """Distinct rows per target into (N, 16) slots, best residual first among duplicates.
 
     Vectorised over targets in chunks (the pairwise distances are chunk x K x K x 6 floats, K the most
@@ -665,7 +767,7 @@ def _pack(Q, own, err, N) -> Batch:
             v = np.zeros((len(tg), K), dtype=bool)
             e = np.full((len(tg), K), np.inf)
             q[o, sl], v[o, sl], e[o, sl] = Q[sel], True, err[sel]
-            d = _angle_gap(q[:, :, None, :], q[:, None, :, :]).max(axis=3)
+            d = _angle_gap(q[:, :, None, :], q[:, None, :, :], prism).max(axis=3)
             v &= ~(earlier & (d <= SAME) & v[:, None, :]).any(axis=2)
             rank = np.cumsum(v, axis=1) - 1
             n, k = np.nonzero(v & (rank < MAX_SOLUTIONS))
