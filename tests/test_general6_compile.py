@@ -179,3 +179,27 @@ def test_route_refuses_an_incomplete_or_slower_search():
     slow = compare(chain, _Dropping(solver, drop=0, work=3), solver, "1d-search")
     assert not slow.keep_search and "slower" in slow.note, slow.note
     assert "recovered 64/64 sampled joint vectors" in slow.note, slow.note
+
+
+def test_general_trrrrr_chain_compiles_to_general_6r_and_verifies():
+    """Issue 10 item 1: 6-joint chains with prismatic joints by the same elimination (TRRRRR-type
+    general geometry from the configuration zoo; before, the 1-D / 2-D search)."""
+    from ikcompiler.configs import modular_chain
+
+    for kinds in ("TRRRRR", "RRRRRT"):
+        chain = modular_chain(kinds, 0, "general")
+        module = compile_robot(chain)
+        assert module.METHOD == "general-6r", kinds
+        report = verify(chain, module, samples=80, seed=2, scalar_checks=5, special=0.25)
+        assert report.wrong == 0 and report.missed == 0 and report.recovered == report.poses, report.text()
+        assert report.max_error <= 1e-12, report.text()
+
+
+def test_prismatic_joint_in_the_middle_keeps_the_search_with_a_note():
+    from ikcompiler.compiler import compile_plan
+    from ikcompiler.configs import modular_chain
+
+    plan = compile_plan(modular_chain("RRTRRR", 0, "general"))
+    assert plan.method != "general-6r"
+    refused = [n for n in plan.notes if "general 6R elimination not used" in n]
+    assert refused and "joint 3 is prismatic" in refused[0], plan.notes
