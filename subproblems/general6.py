@@ -49,6 +49,13 @@ error is at most ``1e-12`` of the robot size (position) and ``1e-12`` (rotation,
 that do not get there (near-real complex roots) are dropped, duplicates (double roots, a root found
 twice) merged.  Unreachable poses give no rows and ``reachable`` False.
 
+**Prismatic joints.**  A prismatic joint at position a or b enters the right side polynomially: its
+displacement d (over the robot size) in ``p`` linearly and in ``p.p``, ``(p.p) l - 2 (p.l) p``
+quadratically, so its basis (1, cos, sin) becomes (1, d, d^2), interpolated on d in {-1, 0, 1}, and
+steps 3-6 stand.  Products of the (a, b) basis that never occur are structurally zero columns of B';
+they are dropped (found once per arrangement), and a, b are read from the products of each alone
+(``d = a_1 / a_0``).  A prismatic joint 3 or 4 cannot be put at a or b: refused (docs/general6.md).
+
 **Special geometry.**  Parallel or intersecting axes can make B lose rank or the pencil M singular
 (``det M(x) == 0`` for every x).  :func:`prepare` tries the arrangements (the joint order forward, and
 reversed, i.e. the inverse chain ``X_6^-1 ... X_1^-1 = G^-1``) on sample poses and keeps the first whose
