@@ -24,8 +24,7 @@ from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
-from subproblems import max_solutions
-from subproblems.plan_runtime import COUPLED_ROOT_SLOTS
+from ikcompiler.steps import General6Step, NumericalStep
 
 TARGETS = ("pose", "position", "orientation", "position+direction")
 VIRTUAL_ROLL = "_tool_roll"
@@ -138,14 +137,13 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
         if found is not None:
             return _search_plan(chain, target, free, geometry, notes, found)
-        step = {
-            "kind": "NUM",
-            "code": "NUM",
-            "starts": NUMERICAL_STARTS,
-            "iters": NUMERICAL_ITERS,
-            "rule": f"numerical multi-start Gauss-Newton from {NUMERICAL_STARTS} fixed starts; "
+        step = NumericalStep(
+            code="NUM",
+            starts=NUMERICAL_STARTS,
+            iters=NUMERICAL_ITERS,
+            rule=f"numerical multi-start Gauss-Newton from {NUMERICAL_STARTS} fixed starts; "
             "returns every distinct solution it converges to",
-        }
+        )
         return Plan(
             chain.name,
             tuple(chain.independent_names),
@@ -173,7 +171,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         "closed-form",
         tuple(steps),
         free,
-        bool(snap_notes) or any(s.get("snapped", False) for s in steps),
+        bool(snap_notes) or any(getattr(s, "snapped", False) for s in steps),
         max(n_groups, alt_groups),
         geometry,
         tuple(notes),
@@ -219,20 +217,19 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     found = search_1d()
     if found is not None:
         searched = _search_plan(chain, target, free, geometry, notes, found)
-        module = load_module(source_of_plan(searched, chain, tol), _module_name(chain.name))
+        module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
         verdict = general6_route.compare(chain, module, solver, searched.method)
         notes.append(verdict.note)
         if verdict.keep_search:
             return dataclasses.replace(searched, notes=tuple(notes))
-    step = {
-        "kind": "G6R",
-        "code": "G6R",
-        "solve": list(range(6)),
-        "arrangements": list(solver.usable),
-        "rule": "Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
+    step = General6Step(
+        code="G6R",
+        solve=list(range(6)),
+        arrangements=list(solver.usable),
+        rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
-    }
+    )
     names = [j.name for j in chain.joints]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
     notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
@@ -260,23 +257,21 @@ def solution_slots(plan: Plan) -> int:
         return 16
     k = 1
     for s in plan.steps:
-        if s["kind"] == "S3C":
-            k *= COUPLED_ROOT_SLOTS
-        elif s["kind"] != "SUM":
-            k *= max_solutions(s["code"])
+        k *= s.slots
     return max(1, min(k, 64))
 
 
 def compile_source(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> str:
     """The generated module's source text."""
     tol = tol or Tolerance()
-    return source_of_plan(compile_plan(chain, target=target, free=free, tol=tol), chain, tol)
+    return plan_source(compile_plan(chain, target=target, free=free, tol=tol), chain, tol=tol)
 
 
-def source_of_plan(plan: Plan, chain: Chain, tol: Tolerance) -> str:
-    """The module source of a plan of ``chain`` (the chain the plan was compiled for)."""
+def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> str:
+    """The module source of a plan already made for ``chain`` (e.g. read back with ``Plan.from_json``)."""
     from ikcompiler import __version__
 
+    tol = tol or Tolerance()
     solved = with_tool_roll(chain) if plan.virtual else chain
     return generate(
         plan,
