@@ -659,7 +659,8 @@ class General6:
             M = self._matrices(C, np.full(count, SHIFTS[0]))
             x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
             sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
-            if np.median(sv[:, -1] / sv[:, 0]) < 1e-10:
+            ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(count), where=sv[:, 0] > 0)  # 0 / 0: singular
+            if np.median(ratio) < 1e-10:
                 why.append(f"order {arr.order} ({arr.conj} moved ahead): the 12 x 12 pencil is singular")
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
