@@ -599,7 +599,7 @@ def render(rows, meta, opts) -> str:
             "into cosine and sine by `sincos` are the lead for the C chain (issue 11 item 6).  The kinova "
             "arm is the exception: its chain takes 3.8 us a pose but the whole call 27 us, 85% of it "
             "Newton polishing in the finish (`ikc_fk_jacobian`, `ikc_newton_steps`, `ikc_solve_linear`): "
-            "its leaves miss the 1e-12 bar, so every candidate gets Newton steps.",
+            "its candidates get Newton steps (not yet traced further).",
             ""]
     return "\n".join(out)
 
