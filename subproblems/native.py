@@ -12,6 +12,8 @@ arithmetic, the same answers, slower.
 The code shared by every generated chain lives beside this file: ``fast_kernels.h``, a C port of the
 kernels of :mod:`subproblems.fast` that keeps their operation order (so the two backends agree to
 rounding), and ``fast_finish.h``, the port of its ``finish_one`` and a threaded driver over N poses.
+The finish is compiled once per machine into its own cached shared library and each chain alone
+against it (:func:`build`; docs/design.md, section 14): a new robot costs only its chain's build.
 
 Settings (environment): ``IKC_NATIVE=0`` disables the native backend; ``IKC_CACHE`` names the cache
 directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); ``CC`` the compiler.
