@@ -74,8 +74,10 @@ STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lea
 STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters", "solve_pair", "var", "coupling")
 
 
-def _step_source(step: dict, line: str) -> str:
-    body = ", ".join(f"{f!r}: {_literal(step[f])}" for f in STEP_FIELDS if f in step)
+def _step_source(step, line: str) -> str:
+    """One ``_STEPS`` entry: the step's plain dict (``Step.to_dict()``), the fields the runtime reads."""
+    data = step.to_dict()
+    body = ", ".join(f"{f!r}: {_literal(data[f])}" for f in STEP_FIELDS if f in data)
     return f"    # {line}\n    {{{body}}},\n"
 
 
