@@ -574,6 +574,7 @@ def render(rows, meta, opts) -> str:
                        f"{r_single} | {_f(batch, ',.0f')} | {r_batch} | {found} | {rec} | "
                        f"{acc.get('wrong', '-')} | {_f(acc.get('max_error'), '.1e')} | "
                        f"{_f(acc.get('solutions_median'), '.0f')} | {'; '.join(notes)} |")
+    out += ["", "## Short table (the README's)", ""] + render_short(rows)
     out += ["", "## Robots", ""]
     for row in rows:
         out.append(f"- {row['label']}: {row['joints']}, size {row['scale']:.3g} m, from {row['source']}")
@@ -602,6 +603,29 @@ def render(rows, meta, opts) -> str:
             "its candidates get Newton steps (not yet traced further).",
             ""]
     return "\n".join(out)
+
+
+def render_short(rows) -> list[str]:
+    """Time per pose of each tool and the batch ratio to EAIK, one line per robot (README, "Speed")."""
+    def us(t):
+        ok = t.get("single_us") and t.get("frame_ok", True)
+        return _f(t["single_us"], ",.3g" if t["single_us"] < 1000 else ",.0f") if ok else (
+            "refuses" if "decomposition" in str(t.get("error", "")) else "-")
+
+    def pps(t):
+        return _f(t.get("batch_pps"), ",.0f") if t.get("batch_pps") else (
+            "refuses" if "decomposition" in str(t.get("error", "")) else "-")
+
+    lines = ["| robot | ikcompiler `solve` us | EAIK us | RTB `ik_LM` us | ikpy us "
+             "| ikcompiler batch poses/s | EAIK `IK_batched` | batch ratio |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for row in rows:
+        t = row["tools"]
+        ours, eaik = t.get("ikcompiler", {}), t.get("eaik", {})
+        ratio = _ratio(ours.get("batch_pps"), eaik.get("batch_pps")) if eaik.get("batch_pps") else "-"
+        lines.append(f"| {row['label']} | {us(ours)} | {us(eaik)} | {us(t.get('rtb_ik_LM', {}))} | "
+                     f"{us(t.get('ikpy', {}))} | {pps(ours)} | {pps(eaik)} | {ratio} |")
+    return lines
 
 
 def plot(rows, path: Path) -> None:
