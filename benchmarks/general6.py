@@ -9,7 +9,13 @@
 * the same arms compiled with the general solver switched off (``compiler.USE_GENERAL6 = False``: the
   1-D or 2-D search), on the first SEARCH_POSES poses of the first SEARCH_ARMS arms (it is slow), in
   chunks of 4 poses to bound its memory;
-* the zoo's Jaco (no closed form): general-6r vs the 1-D search on the same generic poses.
+* the zoo's Jaco (no closed form): general-6r vs the 1-D search on the same generic poses;
+* 6-joint chains with prismatic joints (the random arms with joints made prismatic along their drawn
+  directions, for each joint string the elimination accepts): recovery, real solutions, residual, CPU;
+* the compile-time choice between the 1-D search and general-6r (``ikcompiler.general6_route``) on
+  rtb-data's abb_irb140 (where the 1-D search is complete) and the Jaco (where it is not): the plan's
+  verdict, both solvers' times on 200 poses inside the limits, and general-6r's doubtful poses (the
+  costly re-solve path) with its chosen order and with the plain joint order.
 
 The machine is shared (2 cores, several engineers): the load average is written with the results and
 times are inflated by it; the CPU-time column is less affected.  Results: ``benchmarks/results/general6.md``.
@@ -120,6 +126,108 @@ def bench_search(chain, Q, log):
     return module.METHOD, _recovery(S, V, Q), spent / len(Q), S, V
 
 
+def _cpu_per_pose(solver, T, single=60, **kw):
+    """Process CPU per pose of one solve_batch over T and of solve on each of the first ``single``."""
+    c = time.process_time()
+    solver.solve_batch(T, **kw)
+    batch = (time.process_time() - c) / len(T)
+    c = time.process_time()
+    for t in T[:single]:
+        solver.solve(t)
+    return batch, (time.process_time() - c) / min(single, len(T))
+
+
+def prismatic_section(log, poses, arms=3):
+    """Prismatic joints at positions the elimination accepts (docs/general6.md, "Prismatic joints")."""
+    from ikcompiler.configs import random_6r_geometry
+
+    lines = ["", "## 6-joint chains with prismatic joints", "",
+             f"Random arms (seeds 0..{arms - 1}) with the joints marked T sliding along their drawn axis "
+             f"directions; {poses} poses each, prismatic values uniform in +-size. Recovered: revolute "
+             "values to 1e-6 rad, prismatic to 1e-6 of the size. CPU: one `solve_batch`, per pose.", "",
+             "| joints | recovered | real solutions 2/4/6/8/10/12/14/16 | odd counts | worst residual "
+             "| batch CPU us |",
+             "|---|---|---|---|---|---|"]
+    for kinds in ("TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT"):
+        prism = np.array([k == "T" for k in kinds])
+        hits = total = 0
+        counts = np.zeros(17, dtype=int)
+        worst, cpu = 0.0, []
+        for seed in range(arms):
+            tw, home = random_6r_geometry(seed)
+            tw[prism] = np.concatenate([tw[prism, 3:], np.zeros((int(prism.sum()), 3))], axis=1)
+            solver = g6.prepare(tw, home)
+            size = solver.scale
+            rng = np.random.default_rng(300 + seed)
+            Q = rng.uniform(-math.pi, math.pi, size=(poses, 6))
+            Q[:, prism] = rng.uniform(-size, size, size=(poses, int(prism.sum())))
+            T = fk_batch(tw, Q, home)
+            c = time.process_time()
+            b = solver.solve_batch(T)
+            cpu.append((time.process_time() - c) / poses)
+            for n in range(poses):
+                rows = b.Q[n][b.valid[n]]
+                counts[len(rows)] += 1
+                total += 1
+                if len(rows):
+                    turn = np.abs(np.angle(np.exp(1j * (rows - Q[n]))))
+                    gap = np.where(prism, np.abs(rows - Q[n]) / size, turn)
+                    hits += gap.max(axis=1).min() < 1e-6
+                    worst = max(worst, _residual(tw, home, size, rows, T[n]))
+        log(f"prismatic {kinds}: {hits}/{total}")
+        dist = "/".join(str(int(counts[k])) for k in range(2, 17, 2))
+        odd = int(counts[1::2].sum())
+        us = np.median(cpu) * 1e6
+        lines.append(f"| {kinds} | {hits}/{total} | {dist} | {odd} | {worst:.1e} | {us:.0f} |")
+    return lines
+
+
+def route_section(log, poses=200):
+    """The sampled 1-D search / general-6r decision and the doubtful-pose path (issue 10 item 1)."""
+    from ikcompiler import robotdb
+    from ikcompiler.compiler import compile_plan
+
+    robots = [load_robot("jaco")]
+    if robotdb.installed("rtb-data"):
+        entry = next(e for e in robotdb.discover(["rtb-data"]).chains if e.urdf.name == "irb140.urdf")
+        robots.insert(0, entry.load())
+    lines = ["", "## The 1-D search or general-6r: the compile-time decision", "",
+             f"Times: process CPU per pose on {poses} poses inside the limits (seed 9), warm; batch = one "
+             "`solve_batch`, single = `solve` per pose. Doubtful: poses sent down general-6r's re-solve path "
+             "by its first order (chosen order / the plain joint order).", "",
+             "| robot | plan method | verdict (plan note) | 1-D search batch us | 1-D search single us "
+             "| general-6r batch us | general-6r single us | general-6r plain order batch / single us "
+             "| doubtful chosen / plain |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for chain in robots:
+        log(f"route: {chain.name}")
+        plan = compile_plan(chain)
+        verdict = next((n for n in plan.notes if "1d-search kept" in n or "chosen over" in n), "-")
+        lo, hi = np.maximum(chain.lower, -math.pi), np.minimum(chain.upper, math.pi)
+        Q = np.random.default_rng(9).uniform(lo, hi, size=(poses, 6))
+        T = chain.fk_batch(Q)
+        _compiler.USE_GENERAL6 = False
+        try:
+            search = compile_robot(chain)
+        finally:
+            _compiler.USE_GENERAL6 = True
+        search.solve_batch(T[:1], limits=False)
+        s_batch, s_single = _cpu_per_pose(search, T, limits=False)
+        out = []
+        for arrangement in (None, list(range(6))):
+            solver = g6.General6(chain.twists, chain.home, chain.scale, arrangement=arrangement)
+            solver.solve_batch(T[:1])
+            batch, single = _cpu_per_pose(solver, T)
+            Gn = solver._norm(T) @ g6._inv(solver.Mn)
+            _, _, doubt = solver._candidates(solver._arr[solver.usable[0]], Gn)
+            out.append((batch, single, int(doubt.sum())))
+        (gb, gs, gd), (pb, ps, pd) = out
+        us = [f"{x * 1e6:.0f}" for x in (s_batch, s_single, gb, gs)]
+        lines.append(f"| {chain.name} | {plan.method} | {verdict} | " + " | ".join(us)
+                     + f" | {pb * 1e6:.0f} / {ps * 1e6:.0f} | {gd} / {pd} of {poses} |")
+    return lines
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arms", type=int, default=10)
@@ -202,6 +310,8 @@ def main(argv=None) -> int:
         lines.append(f"| {chain.name} | {method} | {s_hits}/{len(Q)} | {s_time * 1e3:.1f} | {int(Vs.sum())} "
                      f"| {_recovery(S, V, Q)}/{len(Q)} | {g_time * 1e6:.0f} | {int(V.sum())} | {only_s} "
                      f"| {only_g} | {dup} |")
+    lines += prismatic_section(log, args.poses)
+    lines += route_section(log)
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text("\n".join(lines) + "\n")
     log(f"wrote {OUT}")

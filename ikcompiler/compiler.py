@@ -8,6 +8,7 @@ says why and falls back to a numerical multi-start solver (always available, fla
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 import types
@@ -120,32 +121,14 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             "no closed-form chain: the rules found no subproblem sequence; tried (first moves):\n"
             + "\n".join("    " + s for s in report.summary(12).splitlines())
         )
-        general = _general6_plan(chain, target, free, geometry, notes)
+        search_1d = functools.partial(_search_fallback, chain, ctx, couplings, full_lower, full_upper, start,
+                                      sizes=(1,))
+        general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol)
         if general is not None:
             return general
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
         if found is not None:
-            sub_steps, joints, cost = found
-            sub_steps, n_groups = finalize_steps(sub_steps)
-            sub_steps = record_step_facts(sub_steps, ctx.twists, ctx.kinds, chain.scale)
-            method = f"{len(joints)}d-search"
-            return Plan(
-                chain.name,
-                tuple(chain.independent_names),
-                chain.joint_types,
-                target,
-                method,
-                tuple(sub_steps),
-                free,
-                True,
-                n_groups,
-                geometry,
-                tuple(notes),
-                cost,
-                tuple(joints),
-                SEARCH_GRID[len(joints)],
-                all_names,
-            )
+            return _search_plan(chain, target, free, geometry, notes, found)
         step = NumericalStep(
             code="NUM",
             starts=NUMERICAL_STARTS,
@@ -198,18 +181,43 @@ GENERAL6 = "general-6r"
 USE_GENERAL6 = True  # False: 6R chains without a closed form take the search fallback as before (tests)
 
 
-def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | None:
-    """The general 6R elimination (subproblems.general6) for a 6-revolute pose target without a
-    closed form, or None (other chains; or a geometry where it degenerates: the note says why)."""
+def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Plan:
+    """The plan of the 1-D / 2-D search fallback from ``_search_fallback``'s (steps, joints, cost)."""
+    sub_steps, joints, cost = found
+    sub_steps, n_groups = finalize_steps(sub_steps)
+    # no plan_twists on a search plan: its steps run on the true robot's twists
+    sub_steps = record_step_facts(sub_steps, chain.twists, chain.joint_types, chain.scale)
+    method = f"{len(joints)}d-search"
+    return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, method,
+                tuple(sub_steps), free, True, n_groups, geometry, tuple(notes), cost, tuple(joints),
+                SEARCH_GRID[len(joints)], tuple(j.name for j in chain.joints))
+
+
+def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol) -> Plan | None:
+    """The general 6R elimination (subproblems.general6) for a 6-joint pose target without a closed
+    form (prismatic joints where an arrangement puts them on its right side), or None (other chains;
+    or a geometry where it degenerates or a prismatic joint sits in the middle: the note says why).
+
+    Where a 1-D search exists (``search_1d()``), both are measured on sample poses and the 1-D search
+    plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
+    from ikcompiler import general6_route
     from subproblems import general6
 
-    if not USE_GENERAL6 or target != "pose" or free or chain.joint_types != "RRRRRR" or chain.couplings:
+    if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
         return None
     try:
         solver = general6.General6(chain.twists, chain.home, chain.scale)
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
+    found = search_1d()
+    if found is not None:
+        searched = _search_plan(chain, target, free, geometry, notes, found)
+        module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
+        verdict = general6_route.compare(chain, module, solver, searched.method)
+        notes.append(verdict.note)
+        if verdict.keep_search:
+            return dataclasses.replace(searched, notes=tuple(notes))
     step = General6Step(
         code="G6R",
         solve=list(range(6)),
@@ -226,10 +234,10 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | N
                 tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
 
 
-def _search_fallback(chain, ctx, couplings, lower, upper, start):
+def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):
     """Cheapest closed-form chain once one joint (then two) is treated as known: (steps, joints, cost)."""
     candidates = [i for i in chain.independent if chain.joints[i].kind == "R" and i not in start]
-    for k in (1, 2):
+    for k in sizes:
         best = None
         for joints in itertools.combinations(candidates, k):
             steps, cost, _ = search(ctx, couplings, lower, upper, start | frozenset(joints), max_states=200)

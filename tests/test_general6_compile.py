@@ -100,3 +100,106 @@ def test_five_joint_arm_position_direction_target_through_the_virtual_roll():
     assert module.METHOD == "general-6r" and len(module.JOINT_NAMES) == 5
     report = verify(chain, module, samples=60, seed=1, scalar_checks=5, special=0.0)
     assert report.wrong == 0 and report.recovered == report.poses, report.text()
+
+
+# ------------------------------------------------------------------ the 1-D search where it is measured
+def _irb140():
+    from ikcompiler import robotdb
+
+    robotdb.require(["rtb-data"])
+    entry = next(e for e in robotdb.discover(["rtb-data"]).chains if e.urdf.name == "irb140.urdf")
+    return entry.load()
+
+
+def test_irb140_keeps_the_1d_search_measured_complete_and_faster():
+    """rtb-data's abb_irb140: the C 1-D search was complete there and 100x faster than general-6r's
+    doubtful-pose path (issue 10 item 1); the sampled decision keeps it and says so in the notes."""
+    from ikcompiler.compiler import compile_plan
+
+    chain = _irb140()
+    plan = compile_plan(chain)
+    assert plan.method == "1d-search", plan.notes
+    note = next(n for n in plan.notes if "1d-search kept" in n)
+    assert "recovered 64/64 sampled joint vectors" in note, note
+    module = compile_robot(chain)
+    report = verify(chain, module, samples=120, seed=4, scalar_checks=10, special=0.0)
+    assert report.wrong == 0 and report.missed == 0 and report.recovered == report.poses, report.text()
+
+
+def test_irb140_general6_prefers_an_order_with_few_doubtful_poses():
+    """The plain joint order leaves 46 of 64 irb140 poses doubtful (the costly re-solve path); the
+    arrangement chosen first must leave few (measured: 1 of 64)."""
+    from ikcompiler.general6_route import sample_joints
+    from subproblems import general6 as g6
+
+    chain = _irb140()
+    solver = g6.General6(chain.twists, chain.home, chain.scale)
+    Q = sample_joints(chain)
+    Tn = solver._norm(chain.fk_batch(Q))
+    _, _, doubt = solver._candidates(solver._arr[solver.usable[0]], Tn @ g6._inv(solver.Mn))
+    assert doubt.sum() <= 4, (solver.usable, solver.why)
+    b = solver.solve_batch(chain.fk_batch(Q))
+    for n in range(len(Q)):
+        rows = b.Q[n][b.valid[n]]
+        assert np.abs(np.angle(np.exp(1j * (rows - Q[n])))).max(axis=1).min() < 1e-6, n
+
+
+def test_jaco_notes_say_the_1d_search_was_measured_incomplete():
+    from ikcompiler.compiler import compile_plan
+
+    plan = compile_plan(load_robot("jaco"))
+    assert plan.method == "general-6r"
+    assert any("chosen over the 1d-search (incomplete on the sample)" in n for n in plan.notes), plan.notes
+
+
+class _Dropping:
+    """A stand-in 1-D search module: the general solver's rows with the last row of some poses dropped
+    (``drop``) and every call repeated ``work`` times (a slower solver)."""
+
+    def __init__(self, solver, drop, work=1):
+        self.solver, self.drop, self.work = solver, drop, work
+
+    def solve_batch(self, T, limits=True):
+        for _ in range(self.work):
+            b = self.solver.solve_batch(T)
+        V = b.valid.copy()
+        for n in range(0, len(T), self.drop) if self.drop else ():
+            V[n, np.nonzero(V[n])[0][-1:]] = False
+        return b.Q, V
+
+
+def test_route_refuses_an_incomplete_or_slower_search():
+    from ikcompiler.general6_route import compare
+    from subproblems import general6 as g6
+
+    chain = _random_chain(4)
+    solver = g6.General6(chain.twists, chain.home, chain.scale)
+    missing = compare(chain, _Dropping(solver, drop=7), solver, "1d-search")
+    assert not missing.keep_search and "incomplete" in missing.note, missing.note
+    slow = compare(chain, _Dropping(solver, drop=0, work=3), solver, "1d-search")
+    assert not slow.keep_search and "slower" in slow.note, slow.note
+    assert "on 8 sampled poses" in slow.note and "recovered 8/8 sampled joint vectors" in slow.note, slow.note
+
+
+def test_general_trrrrr_chain_compiles_to_general_6r_and_verifies():
+    """Issue 10 item 1: 6-joint chains with prismatic joints by the same elimination (TRRRRR-type
+    general geometry from the configuration zoo; before, the 1-D / 2-D search)."""
+    from ikcompiler.configs import modular_chain
+
+    for kinds in ("TRRRRR", "RRRRRT"):
+        chain = modular_chain(kinds, 0, "general")
+        module = compile_robot(chain)
+        assert module.METHOD == "general-6r", kinds
+        report = verify(chain, module, samples=80, seed=2, scalar_checks=5, special=0.25)
+        assert report.wrong == 0 and report.missed == 0 and report.recovered == report.poses, report.text()
+        assert report.max_error <= 1e-12, report.text()
+
+
+def test_prismatic_joint_in_the_middle_keeps_the_search_with_a_note():
+    from ikcompiler.compiler import compile_plan
+    from ikcompiler.configs import modular_chain
+
+    plan = compile_plan(modular_chain("RRTRRR", 0, "general"))
+    assert plan.method != "general-6r"
+    refused = [n for n in plan.notes if "general 6R elimination not used" in n]
+    assert refused and "joint 3 is prismatic" in refused[0], plan.notes

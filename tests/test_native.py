@@ -408,6 +408,36 @@ def test_missing_or_failing_compiler_falls_back_to_python(cc, monkeypatch, tmp_p
     assert len(fresh.solve(Ts[0])) and fresh._native_chain() is None
 
 
+def test_chains_share_one_finish_library(monkeypatch, tmp_path):
+    """The split build (docs/design.md, section 14): the finish is built once into the cache, each
+    chain alone against it, and a chain library names that finish library as its dependency."""
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "_loaded", {})
+    built = [compile_robot(name) for name in ("ur5", "puma560")]
+    assert all(m._native_chain() is not None for m in built), native.last_error
+    finish = sorted(tmp_path.glob("ikc_finish_*.so"))
+    chains = sorted(p for p in tmp_path.glob("ikc_*.so") if p not in finish)
+    assert len(finish) == 1 and len(chains) == 2, sorted(p.name for p in tmp_path.iterdir())
+    for chain_lib in chains:
+        assert str(finish[0]).encode() in chain_lib.read_bytes()
+
+
+def test_one_piece_fallback_gives_the_split_builds_answers(monkeypatch, tmp_path):
+    """Where the split build fails, the kernels, finish and chain are compiled as one file: same answers."""
+    module, chain, split = _compiled("ur5")
+    assert split is not None
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "_finish_library", lambda *args, **kw: None)  # as if the split build failed
+    whole = compile_robot("ur5")
+    assert whole._native_chain() is not None, native.last_error
+    assert not list(tmp_path.glob("ikc_finish_*.so"))
+    _, Ts, _ = _poses(module, chain, 60, seed=19)
+    _same_results(module, whole, Ts)
+
+
 # --- 7. the generated C --------------------------------------------------------------------------------
 
 

@@ -148,6 +148,41 @@ def test_prismatic_joint_is_refused_with_a_reason():
         g6.prepare(twists, home)
 
 
+def _with_prismatic(seed, kinds):
+    """A general arm whose joints marked T in ``kinds`` slide along the drawn axis direction."""
+    twists, home = random_6r_geometry(seed)
+    for i, k in enumerate(kinds):
+        if k == "T":
+            twists[i] = np.concatenate([twists[i, 3:], np.zeros(3)])
+    return twists, home
+
+
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT"])
+def test_prismatic_joints_on_the_right_side_every_sampled_vector_recovered_and_exact(kinds):
+    """A prismatic joint where an arrangement puts it at position a or b (joints 1, 2, 5, 6): its
+    displacement enters the 14 quantities as (1, d, d^2) (docs/general6.md, "Prismatic joints")."""
+    prism = np.array([k == "T" for k in kinds])
+    for seed in (0, 1):
+        twists, home = _with_prismatic(seed, kinds)
+        solver = g6.prepare(twists, home)
+        size = _size(twists[~prism], home)
+        rng = np.random.default_rng(200 + seed)
+        Q = rng.uniform(-math.pi, math.pi, size=(60, 6))
+        Q[:, prism] = rng.uniform(-size, size, size=(60, int(prism.sum())))
+        T = _fk(twists, home, Q)
+        b = solver.solve_batch(T)
+        for n in range(len(Q)):
+            rows = b.Q[n][b.valid[n]]
+            assert len(rows) and len(rows) % 2 == 0, (kinds, seed, n, len(rows))
+            gap = np.where(prism, np.abs(rows - Q[n]) / size, np.abs(np.angle(np.exp(1j * (rows - Q[n])))))
+            assert gap.max(axis=1).min() < SAME, (kinds, seed, n, Q[n], rows)
+            G = _fk(twists, home, rows)
+            assert np.linalg.norm(G[:, :3, 3] - T[n, :3, 3], axis=1).max() <= EXACT * size
+            assert np.linalg.norm(G[:, :3, :3] - T[n, :3, :3], axis=(1, 2)).max() <= EXACT
+            assert np.all(rows[:, ~prism] > -math.pi) and np.all(rows[:, ~prism] <= math.pi)
+        assert np.allclose(solver.fk(Q[:3]), T[:3], atol=1e-12 * size)
+
+
 def test_bad_input_is_refused():
     twists, home = random_6r_geometry(0)
     with pytest.raises(SubproblemInputError, match="6 finite twists"):
