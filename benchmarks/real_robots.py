@@ -227,7 +227,9 @@ def _left_out_lines(args) -> list[str]:
         "<details><summary>the list</summary>",
         "",
     ]
-    out += [f"- {e.ident} ({e.kind}, {e.dof} joints){f' perturbed {eps:g}' if eps else ''}" for e, eps in left]
+    out += [
+        f"- {e.ident} ({e.kind}, {e.dof} joints){f' perturbed {eps:g}' if eps else ''}" for e, eps in left
+    ]
     return out + ["", "</details>", ""]
 
 
@@ -290,7 +292,9 @@ def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
 
 def _commit() -> str:
     try:
-        out = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+        out = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        )
         return out.stdout.strip() or "?"
     except OSError:
         return "?"
@@ -367,7 +371,9 @@ def main(argv=None) -> int:
     for n, (entry, eps) in enumerate(work, 1):
         if args.budget and time.time() - started > 60.0 * args.budget:
             args.left_out = work[n - 1 :] + args.left_out
-            print(f"budget of {args.budget:g} min reached: {len(work) - n + 1} items not run", file=sys.stderr)
+            print(
+                f"budget of {args.budget:g} min reached: {len(work) - n + 1} items not run", file=sys.stderr
+            )
             break
         t0 = time.perf_counter()
         row = run_one(entry, eps, args.timeout)
