@@ -43,17 +43,6 @@ def _alarm(signum, frame):
     raise Timeout()
 
 
-def generic_rank(chain, samples: int = 5, seed: int = 0) -> int:
-    """The largest rank of the (size-normalised) space Jacobian at random configurations."""
-    Q = verify_mod.sample_configurations(chain, samples, seed=seed, special=0.0)
-    best = 0
-    for q in Q:
-        J = chain.space_jacobian(q).copy()
-        J[:3] /= chain.scale
-        best = max(best, int(np.linalg.matrix_rank(J, tol=1e-8)))
-    return best
-
-
 @dataclass
 class Result:
     kinds: str
@@ -74,7 +63,7 @@ def run_one(kinds: str, geometry: str, seed: int, poses: int, timeout: float) ->
     signal.setitimer(signal.ITIMER_PROF, timeout)  # CPU seconds: fair on a loaded machine
     try:
         chain = configs.modular_chain(kinds, seed=seed, geometry=geometry)
-        res.redundant = generic_rank(chain) < chain.dof
+        res.redundant = configs.generic_rank(chain) < chain.dof
         compiled = configs.compile_chain(chain)
         res.method, res.compile_s = compiled.module.METHOD, compiled.seconds
         verify_mod.VERIFY_CHUNK = 500 if res.method == "closed-form" else 10

@@ -75,9 +75,13 @@ class Row:
     missed: int = 0
     wrong: int = 0
     mismatch: int = 0
+    imprecise: int = 0  # exact rows above the module's 1e-12 (not wrong)
+    outside: int = 0  # rows outside their limits as returned, or not in (-pi, pi] where they could be
+    duplicates: int = 0  # pairs of rows of one pose closer than the recovery tolerance
     max_error: float = 0.0
     solve_ms: float = math.nan
     status: str = "ok"
+    redundant: bool = False  # generic Jacobian rank below the joints solved for: a continuum everywhere
     notes: list[str] = field(default_factory=list)
 
 
@@ -89,6 +93,9 @@ def _stage(chain, module, row: Row, count: int, seed: int, special: float) -> No
     row.missed += rep.missed
     row.wrong += rep.wrong
     row.mismatch += rep.batch_mismatch
+    row.imprecise += rep.imprecise
+    row.outside += rep.outside_limits + rep.non_canonical
+    row.duplicates += rep.duplicates
     if rep.solutions:
         row.max_error = max(row.max_error, rep.max_error)
 
@@ -131,6 +138,10 @@ def run_one(entry, eps: float, timeout: float) -> Row:
         row.compile_s = time.perf_counter() - t0
         module = compiled.module
         row.method, row.free = module.METHOD, " ".join(compiled.free)
+        rank = configs.generic_rank(chain)
+        if rank < chain.dof - len(compiled.free):
+            row.redundant = True
+            row.notes.append(f"redundant: generic Jacobian rank {rank} < {chain.dof - len(compiled.free)}")
         # search methods hold ~100 MB a pose in solve_batch (issue 10): verify them in small chunks
         verify_mod.VERIFY_CHUNK = 500 if module.METHOD == "closed-form" else 10
         _stage(chain, module, row, 30, seed=1, special=1.0)
@@ -153,6 +164,8 @@ def run_one(entry, eps: float, timeout: float) -> Row:
 
 def _fmt_rate(row: Row) -> str:
     base = row.poses - row.self_motion
+    if row.redundant:
+        return f"redundant ({row.recovered}/{row.poses} not scored)"
     if row.poses == 0:
         return "-"
     return f"{row.recovered}/{base} ({100.0 * row.recovered / base:.2f}%)" if base else "0/0"
@@ -161,25 +174,28 @@ def _fmt_rate(row: Row) -> str:
 def _table(rows: list[Row]) -> list[str]:
     head = (
         "| robot | package | chain | kind | perturbed | joints | method | compile s | poses | recovered | "
-        "self-motion | missed | wrong | max error | median solve ms | status |"
+        "self-motion | missed | wrong | imprecise / outside limits / duplicate | max error | "
+        "median solve ms | status |"
     )
-    out = [head, "|" + "---|" * 16]
+    out = [head, "|" + "---|" * 17]
     for r in rows:
         eps = f"{r.perturb:g}" if r.perturb else "-"
         out.append(
             f"| {r.robot} | {r.package} | {r.chain} | {r.kind} | {eps} | {r.joints} ({r.dof} ind.) "
             f"{('free ' + r.free) if r.free else ''} | {r.method or '-'} | {r.compile_s:.2f} | {r.poses} | "
-            f"{_fmt_rate(r)} | {r.self_motion} | {r.missed} | {r.wrong} | {r.max_error:.1e} | "
-            f"{r.solve_ms:.3g} | {r.status} |"
+            f"{_fmt_rate(r)} | {r.self_motion} | {r.missed} | {r.wrong} | "
+            f"{r.imprecise} / {r.outside} / {r.duplicates} | {r.max_error:.1e} | "
+            f"{r.solve_ms:.3g} | {r.status}{'; ' + '; '.join(r.notes) if r.notes else ''} |"
         )
     return out
 
 
 def _summary(rows: list[Row]) -> list[str]:
     out = [
-        "| pass | chains | compiled | closed form | 1-D search | general | failed/timeout | "
-        "0 wrong | every pose recovered | poses | recovered (self-motions excluded) | wrong rows |",
-        "|" + "---|" * 12,
+        "| pass | chains | compiled | closed form | 1-D search | general | failed/timeout | redundant | "
+        "0 wrong | every pose recovered | poses | recovered (self-motions, redundant chains excluded) | "
+        "wrong rows | imprecise / outside limits / duplicate rows |",
+        "|" + "---|" * 14,
     ]
     by = collections.defaultdict(list)
     for r in rows:
@@ -187,15 +203,19 @@ def _summary(rows: list[Row]) -> list[str]:
     for eps, rs in sorted(by.items()):
         ok = [r for r in rs if r.method]
         cls = collections.Counter(configs.method_class(r.method) for r in ok)
+        scored = [r for r in rs if not r.redundant]
         poses = sum(r.poses for r in rs)
-        base = sum(r.poses - r.self_motion for r in rs)
-        rec = sum(r.recovered for r in rs)
-        full = sum(1 for r in rs if r.status == "ok" and r.recovered == r.poses - r.self_motion)
+        base = sum(r.poses - r.self_motion for r in scored)
+        rec = sum(r.recovered for r in scored)
+        full = sum(1 for r in scored if r.status == "ok" and r.recovered == r.poses - r.self_motion)
         out.append(
             f"| {'exact file' if not eps else f'perturbed {eps:g}'} | {len(rs)} | {len(ok)} | "
             f"{cls['closed form']} | {cls['1-D search']} | {cls['general solver']} | "
-            f"{sum(1 for r in rs if r.status != 'ok')} | {sum(1 for r in rs if r.wrong == 0)} | {full} | "
-            f"{poses} | {rec}/{base} ({100.0 * rec / max(base, 1):.3f}%) | {sum(r.wrong for r in rs)} |"
+            f"{sum(1 for r in rs if r.status != 'ok')} | {len(rs) - len(scored)} | "
+            f"{sum(1 for r in rs if r.wrong == 0)} | {full} | "
+            f"{poses} | {rec}/{base} ({100.0 * rec / max(base, 1):.3f}%) | {sum(r.wrong for r in rs)} | "
+            f"{sum(r.imprecise for r in rs)} / {sum(r.outside for r in rs)} / "
+            f"{sum(r.duplicates for r in rs)} |"
         )
     return out
 
@@ -256,7 +276,9 @@ def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
         "`configs.free_candidates`), 30 poses at special angles then 200 random poses (`verify`, FK "
         "residuals recomputed on the true robot).  *recovered*: the sampled joint vector is among the "
         "solutions (to 1e-6), over the poses not flagged as a self-motion; *wrong*: returned rows whose FK "
-        "misses the target by more than the module's tolerance (1e-9 of the size).",
+        "misses the target by more than 1e-9 of the size (`verify.WRONG`); *redundant*: the generic rank "
+        "of the Jacobian (`configs.generic_rank`) is below the joints solved for, so every pose is a "
+        "self-motion: its rows are checked, its recovery is not scored.",
         "",
         "## Summary",
         "",
