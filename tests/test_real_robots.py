@@ -79,3 +79,48 @@ def test_external_mimic_chains_have_the_master_as_their_joint(catalogue):
         assert chain.dof == 1 and chain.n >= 2, (name, chain.describe())
         (master,) = chain.independent_names
         assert any(f"{master!r} is the chain's independent joint" in n for n in chain.notes), chain.notes
+
+
+def test_rescue_rows_on_a_numerical_self_motion_are_not_returned(catalogue):
+    """ur5_gripper.urdf (example-robot-data) writes pi/2 as 1.570796327: wrist_2 misses parallel to the
+    shoulder by 3.6e-9 rad, the plan is snapped, and at q5 = 0 the true arm's Jacobian is singular to
+    1e-17.  Rescue seeds along that near-self-motion all reproduce the target, at arbitrary points of it
+    (measured before the fix: 8 extra rows at sigma 4e-19..1e-17, a few 1e-7 apart, returned as distinct
+    solutions).  Only rows resolved at the contract's precision (sigma >= continuation.RESOLVED) may be
+    added (docs/calibrated.md)."""
+    import numpy as np
+
+    from subproblems import continuation as ct
+
+    chain = _entry(catalogue, "example-robot-data", "ur5_gripper.urdf", "wrist_3_link").load()
+    m = configs.compile_chain(chain).module
+    assert m._POLISH, "the file's rounded pi/2 no longer gives a snapped plan: pick another chain"
+    q = np.array([np.pi / 2, 0.0, np.pi / 2, np.pi / 2, 0.0, np.pi / 2])
+    rows, _ = ct.correct(
+        q[None],
+        chain.fk_batch(q[None]),
+        [0],
+        twists0=m._PLAN_TWISTS,
+        twists1=m._TWISTS,
+        home=m._HOME,
+        A=m._A,
+        b=m._B,
+        independent=m._VARY,
+        kinds=m._VARY_KINDS,
+        target=m._SOLVE_TARGET,
+        hold=m._FREE,
+        scale=m.SCALE,
+        tol=m.TOLERANCE,
+        plain=m._POLISH,
+    )
+    robot = (
+        np.asarray(m._A, float),
+        np.asarray(m._B, float),
+        np.asarray(m._HOME, float),
+        m._SOLVE_TARGET,
+        list(m._FREE),
+        m.SCALE,
+        np.ones(6),
+    )
+    sv, _ = ct._weakest(rows[1:, list(m._VARY)], np.asarray(m._TWISTS, float), robot)
+    assert np.all(sv >= ct.RESOLVED), f"unresolved rescue rows at sigma {sv}"
