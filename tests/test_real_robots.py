@@ -130,7 +130,7 @@ def test_snapping_repeats_until_the_snapped_robot_has_the_relations_the_plan_use
     """kuka_kr16_2 (rtb-data) perturbed by 1e-3 (seed 7): the wrist axes miss one point by 1.4e-3 (not
     snapped as a run), the pairs 4-5 and 5-6 are snapped, and then the three miss one point by 8.2e-4,
     which the planner reads as a spherical wrist.  One round of snapping left the snapped robot without
-    it: every leaf inexact, plain Newton, 117 of 230 poses recovered (benchmarks/real_robots.py).  The
+    it: every leaf inexact, plain Newton, 118 of 230 poses recovered (benchmarks/real_robots.py).  The
     snap repeats until nothing moves (ikcompiler/geometry/snap.py)."""
     from ikcompiler.geometry.relations import lines_meet
     from ikcompiler.geometry.snap import snap_chain

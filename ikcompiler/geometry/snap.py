@@ -35,7 +35,7 @@ def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[
     wrist axes 4, 5, 6 miss a common point by 1.4e-3 (no run), the pairs 4-5 and 5-6 by 8.7e-4 and
     4e-5 (snapped); after that the three miss one point by 8.2e-4, within the snap tolerance, so the
     planner took them for a spherical wrist that the snapped robot did not have: its closed form was
-    inexact and half of the solutions were lost (117 of 230 poses recovered).
+    inexact and half of the solutions were lost (118 of 230 poses recovered).
     """
     tol = tol or Tolerance()
     notes: list[str] = []
