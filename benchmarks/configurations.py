@@ -19,6 +19,7 @@ import math
 import platform
 import signal
 import statistics
+import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -43,17 +44,6 @@ def _alarm(signum, frame):
     raise Timeout()
 
 
-def generic_rank(chain, samples: int = 5, seed: int = 0) -> int:
-    """The largest rank of the (size-normalised) space Jacobian at random configurations."""
-    Q = verify_mod.sample_configurations(chain, samples, seed=seed, special=0.0)
-    best = 0
-    for q in Q:
-        J = chain.space_jacobian(q).copy()
-        J[:3] /= chain.scale
-        best = max(best, int(np.linalg.matrix_rank(J, tol=1e-8)))
-    return best
-
-
 @dataclass
 class Result:
     kinds: str
@@ -66,6 +56,7 @@ class Result:
     recovered: int = 0
     self_motion: int = 0
     wrong: int = 0
+    contract: int = 0  # imprecise, outside-limit, non-canonical and duplicate rows (verify's counts)
     status: str = "ok"
 
 
@@ -74,7 +65,7 @@ def run_one(kinds: str, geometry: str, seed: int, poses: int, timeout: float) ->
     signal.setitimer(signal.ITIMER_PROF, timeout)  # CPU seconds: fair on a loaded machine
     try:
         chain = configs.modular_chain(kinds, seed=seed, geometry=geometry)
-        res.redundant = generic_rank(chain) < chain.dof
+        res.redundant = configs.generic_rank(chain) < chain.dof
         compiled = configs.compile_chain(chain)
         res.method, res.compile_s = compiled.module.METHOD, compiled.seconds
         verify_mod.VERIFY_CHUNK = 500 if res.method == "closed-form" else 10
@@ -87,6 +78,7 @@ def run_one(kinds: str, geometry: str, seed: int, poses: int, timeout: float) ->
             res.recovered += rep.recovered
             res.self_motion += rep.self_motion
             res.wrong += rep.wrong + rep.batch_mismatch
+            res.contract += rep.imprecise + rep.outside_limits + rep.non_canonical + rep.duplicates
     except Timeout:
         res.status = f"timeout after {res.poses} poses"
     except Exception as exc:  # a refusal or crash is a result
@@ -95,6 +87,11 @@ def run_one(kinds: str, geometry: str, seed: int, poses: int, timeout: float) ->
         signal.setitimer(signal.ITIMER_PROF, 0)
         verify_mod.VERIFY_CHUNK = 500
     return res
+
+
+def _commit() -> str:
+    cmd = ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]
+    return subprocess.run(cmd, capture_output=True, text=True).stdout.strip() or "?"
 
 
 def _cell(rs: list[Result]) -> dict:
@@ -139,8 +136,9 @@ def write(results: list[Result], args, started: float, done: bool) -> None:
         "",
         "Command: `nice python benchmarks/configurations.py "
         f"--instances {args.instances} --poses {args.poses} --timeout {args.timeout:g} "
-        f"--max-len {args.max_len}`; "
-        f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(started))}, Python {platform.python_version()}, "
+        f"--max-len {args.max_len}{f' --budget {args.budget:g}' if args.budget else ''}`; "
+        f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(started))}, commit {_commit()}, "
+        f"Python {platform.python_version()}, "
         "on a 2-core machine shared with other jobs (times are loaded-machine times).",
         ""
         if done
@@ -170,13 +168,16 @@ def write(results: list[Result], args, started: float, done: bool) -> None:
         by[(len(r.kinds), r.kinds, r.geometry)].append(r)
     for key in sorted(by):
         lines.append(_row(f"{key[1]} / {key[2]}", _cell(by[key])))
-    bad = [r for r in results if r.wrong or r.status != "ok"]
-    lines += ["", "## Chains with wrong rows or a failure", ""]
+    bad = [r for r in results if r.wrong or r.contract or r.status != "ok"]
+    lines += ["", "## Chains with wrong rows, contract violations or a failure", ""]
     lines += [
         f"- `modular_chain({r.kinds!r}, seed={r.seed}, geometry={r.geometry!r})`: {r.method or '-'}, "
-        f"wrong {r.wrong}, {r.status}"
+        f"wrong {r.wrong}, imprecise/outside limits/non-canonical/duplicate rows {r.contract}, {r.status}"
         for r in bad
     ] or ["- none"]
+    left = getattr(args, "left_out", [])
+    if left:
+        lines += ["", f"## Not run: cut by `--budget` ({len(left)} joint strings)", "", ", ".join(left)]
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text("\n".join(lines) + "\n")
 
@@ -188,12 +189,18 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=20.0, help="CPU seconds per chain")
     ap.add_argument("--max-len", type=int, default=6)
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--budget", type=float, default=0.0, help="wall minutes for the run (0: none)")
     args = ap.parse_args(argv)
+    args.left_out = []
     signal.signal(signal.SIGPROF, _alarm)
     started = time.time()
     strings = configs.joint_strings(args.max_len)
     results: list[Result] = []
     for n, kinds in enumerate(strings, 1):
+        if args.budget and time.time() - started > 60.0 * args.budget:
+            args.left_out = strings[n - 1 :]
+            print(f"budget of {args.budget:g} min: {len(args.left_out)} strings not run", file=sys.stderr)
+            break
         for geometry in ("modular", "general"):
             for seed in range(args.instances):
                 t0 = time.perf_counter()

@@ -145,6 +145,25 @@ def compile_chain(chain: Chain, **options) -> Compiled:
     return Compiled(module, "pose", free, time.perf_counter() - t0)
 
 
+def generic_rank(chain: Chain, samples: int = 5, seed: int = 0) -> int:
+    """The largest rank of the size-free space Jacobian at random configurations inside the limits.
+
+    Below the number of independent joints (four parallel revolute axes, four or more prismatic
+    joints, two coincident axes) the chain has a continuum of solutions at every pose: *redundant*.
+
+    >>> generic_rank(modular_chain("RRR", seed=2))
+    3
+    """
+    from ikcompiler.verify import sample_configurations  # verify imports nothing of this module
+
+    best = 0
+    for q in sample_configurations(chain, samples, seed=seed, special=0.0):
+        J = chain.space_jacobian(q).copy()
+        J[:3] /= chain.scale
+        best = max(best, int(np.linalg.matrix_rank(J, tol=1e-8)))
+    return best
+
+
 def method_class(method: str) -> str:
     """The coverage column of a module's METHOD: closed form, 1-D search, or general solver."""
     if method == "closed-form":

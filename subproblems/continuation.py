@@ -41,7 +41,13 @@ RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
 NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
 SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
-NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS
+NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS  # rescue rows kept for the caller's check
+# A rescue row whose weakest singular value is below this is no isolated solution at the contract's
+# precision: a row exact to 1e-12 of the size is located only to 1e-12 / sigma, more than SEPARATE
+# (1e-6) here, so it is one arbitrary point of a numerical self-motion (measured: ur5_gripper.urdf of
+# example-robot-data, wrist_2 off parallel by 3.6e-9 rad: 7 of 30 special poses got 5-8 such rows at
+# sigma 1e-18..1e-17, 29 pairs closer than 1e-6; docs/calibrated.md).
+RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/design.md section 10)
 
 
 def _lines(twists):
@@ -268,7 +274,10 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
     tw = np.asarray(twists1, dtype=float)
     _, _, err = _newton_step(tw, X, goals, robot)
     keep = np.isfinite(err) & (err <= tol)
-    X, own = X[keep], own[keep]
+    if keep.any():
+        sv, _ = _weakest(X[keep], tw, robot)
+        keep[np.nonzero(keep)[0][~(sv >= RESOLVED)]] = False  # unresolved: see RESOLVED
+    X, own, err = X[keep], own[keep], err[keep]
     if not len(X):
         return X, own
 
@@ -285,7 +294,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
     # at most RESCUE_KEEP new rows a target, the best first (near a self-motion of the snapped robot
     # many points of the true robot's near-continuum reproduce the target; the finish's cost grows
     # with the square of a target's candidates)
-    pick = pick[np.lexsort((err[keep][pick], own[pick]))]
+    pick = pick[np.lexsort((err[pick], own[pick]))]
     rank = np.arange(len(pick)) - np.searchsorted(own[pick], own[pick], side="left")
     pick = pick[rank < RESCUE_KEEP]
     return X[pick], own[pick]
@@ -379,4 +388,5 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     return Q @ A.T + b, own
 
 
-__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "SEPARATE"]
+__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
+           "SEPARATE"]

@@ -79,3 +79,76 @@ def test_external_mimic_chains_have_the_master_as_their_joint(catalogue):
         assert chain.dof == 1 and chain.n >= 2, (name, chain.describe())
         (master,) = chain.independent_names
         assert any(f"{master!r} is the chain's independent joint" in n for n in chain.notes), chain.notes
+
+
+def test_rescue_rows_on_a_numerical_self_motion_are_not_returned(catalogue):
+    """ur5_gripper.urdf (example-robot-data) writes pi/2 as 1.570796327: wrist_2 misses parallel to the
+    shoulder by 3.6e-9 rad, the plan is snapped, and at q5 = 0 the true arm's Jacobian is singular to
+    1e-17.  Rescue seeds along that near-self-motion all reproduce the target, at arbitrary points of it
+    (measured before the fix: 8 extra rows at sigma 4e-19..1e-17, a few 1e-7 apart, returned as distinct
+    solutions).  Only rows resolved at the contract's precision (sigma >= continuation.RESOLVED) may be
+    added (docs/calibrated.md)."""
+    import numpy as np
+
+    from subproblems import continuation as ct
+
+    chain = _entry(catalogue, "example-robot-data", "ur5_gripper.urdf", "wrist_3_link").load()
+    m = configs.compile_chain(chain).module
+    assert m._POLISH, "the file's rounded pi/2 no longer gives a snapped plan: pick another chain"
+    q = np.array([np.pi / 2, 0.0, np.pi / 2, np.pi / 2, 0.0, np.pi / 2])
+    rows, _ = ct.correct(
+        q[None],
+        chain.fk_batch(q[None]),
+        [0],
+        twists0=m._PLAN_TWISTS,
+        twists1=m._TWISTS,
+        home=m._HOME,
+        A=m._A,
+        b=m._B,
+        independent=m._VARY,
+        kinds=m._VARY_KINDS,
+        target=m._SOLVE_TARGET,
+        hold=m._FREE,
+        scale=m.SCALE,
+        tol=m.TOLERANCE,
+        plain=m._POLISH,
+    )
+    robot = (
+        np.asarray(m._A, float),
+        np.asarray(m._B, float),
+        np.asarray(m._HOME, float),
+        m._SOLVE_TARGET,
+        list(m._FREE),
+        m.SCALE,
+        np.ones(6),
+    )
+    sv, _ = ct._weakest(rows[1:, list(m._VARY)], np.asarray(m._TWISTS, float), robot)
+    assert np.all(sv >= ct.RESOLVED), f"unresolved rescue rows at sigma {sv}"
+
+
+def test_snapping_repeats_until_the_snapped_robot_has_the_relations_the_plan_uses(catalogue):
+    """kuka_kr16_2 (rtb-data) perturbed by 1e-3 (seed 7): the wrist axes miss one point by 1.4e-3 (not
+    snapped as a run), the pairs 4-5 and 5-6 are snapped, and then the three miss one point by 8.2e-4,
+    which the planner reads as a spherical wrist.  One round of snapping left the snapped robot without
+    it: every leaf inexact, plain Newton, 118 of 230 poses recovered (benchmarks/real_robots.py).  The
+    snap repeats until nothing moves (ikcompiler/geometry/snap.py)."""
+    from ikcompiler.geometry.relations import lines_meet
+    from ikcompiler.geometry.snap import snap_chain
+
+    chain = configs.perturbed(_entry(catalogue, "rtb-data", "kr16_2.urdf", "tool0").load(), 1e-3, seed=7)
+    snapped, notes = snap_chain(chain)
+    wrist = [(j.axis, j.point) for j in snapped.joints[3:6]]
+    assert lines_meet(wrist, snapped.scale)[1] < 1e-12, notes
+    module = configs.compile_chain(chain).module
+    for seed in (10, 11):
+        rep = verify(chain, module, samples=50, seed=seed, special=0.0, scalar_checks=3)
+        assert rep.wrong == 0 and rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
+def test_redundant_chains_are_told_apart(catalogue):
+    """pybullet's pendulum5 (five parallel axes) has generic rank 3 and a continuum at every pose: the
+    benchmark reports it as redundant instead of 222 missed poses of 230; a 6R industrial arm has rank 6."""
+    pendulum = _entry(catalogue, "pybullet", "pendulum5.urdf", "link4").load()
+    assert (pendulum.dof, configs.generic_rank(pendulum)) == (5, 3)
+    arm = _entry(catalogue, "rtb-data", "irb140.urdf", "tool0").load()
+    assert configs.generic_rank(arm) == 6

@@ -24,10 +24,33 @@ from ikcompiler.geometry.relations import Tolerance, lines_meet, parallel_miss, 
 from ikcompiler.model import Chain, Joint
 from subproblems.screw import prismatic_twist, revolute_twist
 
+ROUNDS = 4  # snapping rounds at most (each round only moves relations within the snap tolerance)
+
 
 def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[str]]:
-    """The snapped chain and one note per relation that was snapped (empty when nothing moved)."""
+    """The snapped chain and one note per relation that was snapped (empty when nothing moved).
+
+    Snapping is repeated on its own result until nothing moves: a snap can create a near-relation the
+    first round did not see.  Measured on kuka_kr16_2 (rtb-data) perturbed by 1e-3 (seed 7): its
+    wrist axes 4, 5, 6 miss a common point by 1.4e-3 (no run), the pairs 4-5 and 5-6 by 8.7e-4 and
+    4e-5 (snapped); after that the three miss one point by 8.2e-4, within the snap tolerance, so the
+    planner took them for a spherical wrist that the snapped robot did not have: its closed form was
+    inexact and half of the solutions were lost (118 of 230 poses recovered).
+    """
     tol = tol or Tolerance()
+    notes: list[str] = []
+    for _ in range(ROUNDS):
+        snapped, more = _snap_once(chain, tol)
+        if not more:
+            break
+        chain, notes = snapped, notes + more
+    if notes and not chain.name.endswith("(snapped)"):
+        chain = dataclasses.replace(chain, name=f"{chain.name} (snapped)")
+    return chain, notes
+
+
+def _snap_once(chain: Chain, tol: Tolerance) -> tuple[Chain, list[str]]:
+    """One round of the rules of the module docstring: (chain, notes), the chain unchanged without notes."""
     dirs = [j.axis.copy() for j in chain.joints]
     points = [j.point.copy() if j.kind == "R" else None for j in chain.joints]
     notes: list[str] = []
@@ -88,7 +111,7 @@ def snap_chain(chain: Chain, tol: Tolerance | None = None) -> tuple[Chain, list[
         Joint(j.name, j.kind, revolute_twist(d, p) if j.kind == "R" else prismatic_twist(d), j.lower, j.upper)
         for j, d, p in zip(chain.joints, dirs, points)
     )
-    return dataclasses.replace(chain, name=f"{chain.name} (snapped)", joints=joints), notes
+    return dataclasses.replace(chain, joints=joints), notes
 
 
-__all__ = ["snap_chain", "twist_line"]
+__all__ = ["ROUNDS", "snap_chain", "twist_line"]
