@@ -19,6 +19,7 @@ import numpy as np
 from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
+from ikcompiler.geometry.facts import configurations, record_step_facts
 from ikcompiler.geometry.snap import snap_chain
 from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
@@ -30,15 +31,6 @@ TARGETS = ("pose", "position", "orientation", "position+direction")
 VIRTUAL_ROLL = "_tool_roll"
 NUMERICAL_STARTS = 48
 NUMERICAL_ITERS = 30
-
-
-def _samples(chain: Chain, count: int = 4, seed: int = 3) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    th = rng.uniform(-math.pi, math.pi, size=(count, chain.n))
-    for i, j in enumerate(chain.joints):
-        if j.kind == "T":
-            th[:, i] = rng.uniform(-chain.scale, chain.scale, size=count)
-    return th
 
 
 def _coupling_tuples(chain: Chain):
@@ -112,7 +104,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         home=np.asarray(chain.home),
         target=target,
         tol=tol,
-        samples=_samples(chain),
+        samples=configurations(chain.joint_types, chain.scale),
         couplings=tuple(_coupling_tuples(chain)),
     )
     couplings = _coupling_tuples(chain)
@@ -163,6 +155,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     alt, _, _ = search(ctx, couplings, full_lower, full_upper, start, banned_first={move_key(steps[0])})
     steps, n_groups = finalize_steps(steps)
     alt_steps, alt_groups = finalize_steps(alt) if alt else ([], 0)
+    steps = record_step_facts(steps, ctx.twists, ctx.kinds, chain.scale)
+    alt_steps = record_step_facts(alt_steps, ctx.twists, ctx.kinds, chain.scale)
     return Plan(
         chain.name,
         tuple(chain.independent_names),
@@ -191,6 +185,8 @@ def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Pla
     """The plan of the 1-D / 2-D search fallback from ``_search_fallback``'s (steps, joints, cost)."""
     sub_steps, joints, cost = found
     sub_steps, n_groups = finalize_steps(sub_steps)
+    # no plan_twists on a search plan: its steps run on the true robot's twists
+    sub_steps = record_step_facts(sub_steps, chain.twists, chain.joint_types, chain.scale)
     method = f"{len(joints)}d-search"
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, method,
                 tuple(sub_steps), free, True, n_groups, geometry, tuple(notes), cost, tuple(joints),

@@ -33,14 +33,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from subproblems import tolerances as tol
+from subproblems.angles import wrap_array
 from subproblems.fast import PI_SNAP
 
 SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
-SAME_ANGLE = 1e-6  # rad: a revolute value of a recovered sample (absolute)
-SAME_LENGTH = 1e-6  # of the robot's size: a prismatic value of a recovered sample
+SAME_ANGLE = tol.VERIFY_SAME_ANGLE  # rad: a revolute value of a recovered sample (subproblems/tolerances.py)
+SAME_LENGTH = tol.VERIFY_SAME_LENGTH  # of the robot's size: a prismatic value of a recovered sample
 SINGULAR_FACTOR = 100.0  # tolerance factor at a singular sampled vector (a double root)
-SINGULAR = 1e-7  # smallest singular value of the normalised Jacobian below which a vector is singular
-WRONG = 1e-9  # relative error of an exact row above which it is wrong
+SINGULAR = tol.VERIFY_SINGULAR  # the normalised Jacobian's smallest singular value below which: singular
+WRONG = tol.VERIFY_WRONG  # relative error of an exact row above which it is wrong
 
 
 @dataclass
@@ -183,7 +185,7 @@ def _limit_checks(rows, kinds, lower, upper):
         if k != "R":
             continue
         v = rows[:, c]
-        w = np.remainder(v + math.pi, 2 * math.pi) - math.pi
+        w = wrap_array(v)
         w = np.where(w <= -math.pi + PI_SNAP, math.pi, w)  # (-pi, pi]; a value at -pi is pi
         moved = (v <= -math.pi + PI_SNAP) | (v > math.pi)  # not in (-pi, pi] as returned
         non_canonical |= moved & (w >= lower[c]) & (w <= upper[c])

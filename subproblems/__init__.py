@@ -49,7 +49,7 @@ __all__ = [
 ]
 
 # Every public module other than the infrastructure holds solvers that register themselves on import.
-_INFRASTRUCTURE = {"core", "screw"}
+_INFRASTRUCTURE = {"angles", "core", "screw", "tolerances"}
 for _mod in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
     if not _mod.name.startswith("_") and _mod.name not in _INFRASTRUCTURE:
         importlib.import_module(f"{__name__}.{_mod.name}")

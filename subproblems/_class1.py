@@ -34,6 +34,8 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances
+from subproblems.angles import wrap_array, wrap_joints
 from subproblems.core import BatchResult, Solution
 from subproblems.rotation import (
     GIMBAL_TOL,
@@ -43,28 +45,18 @@ from subproblems.rotation import (
     rotation_families,
     rotation_families_batch,
 )
-from subproblems.screw import adjoint, inverse_transform, twist_exp, twist_exp_batch
+from subproblems.screw import adjoint, fk, fk_batch, inverse_transform, twist_exp, twist_exp_batch
 
-#: A solution is exact when its residual is at most this times the problem scale.
-EXACT_TOL = 1e-9
-#: Candidates with a residual below this (relative) are polished before the exactness check.
-POLISH_TOL = 1e-6
-#: Two exact solutions closer than this (angles modulo 2 pi; prismatic values relative) are one.
-DEDUP_TOL = 1e-6
-#: Relative singular value under which prismatic directions count as dependent.
-RANK_TOL = 1e-9
-#: Lengths under this (relative) count as zero (a point on an axis, coincident axes).
-FREE_TOL = 1e-10
-#: Revolute axes parallel within this (``|w_i x w_j|``) also get candidates from the parallel geometry;
-#: the batch path leaves them, and prismatic directions this close to dependent, to the scalar one.
-NEAR_TOL = 1e-6
-#: Those candidates are polished when their residual is below this (relative).
-NEAR_POLISH_TOL = 1e-3
-
-#: Roots of a family's trigonometric polynomial at most this far apart (radians) may be one double root,
-MERGE_SPAN = 1e-5
-#: merged when the polynomial at their midpoint is within this many ulps of its coefficients' size.
-DOUBLE_ROOT_ULPS = 64.0
+# Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
+EXACT_TOL = tolerances.EXACT
+POLISH_TOL = tolerances.S1_POLISH
+DEDUP_TOL = tolerances.S1_SAME_SOLUTION
+RANK_TOL = tolerances.S1_DEPENDENT_SLIDES
+FREE_TOL = tolerances.S1_ZERO_LENGTH
+NEAR_TOL = tolerances.S1_NEAR_PARALLEL
+NEAR_POLISH_TOL = tolerances.S1_NEAR_POLISH
+MERGE_SPAN = tolerances.S1_DOUBLE_ROOT_SPAN
+DOUBLE_ROOT_ULPS = tolerances.S1_DOUBLE_ROOT_ULPS
 
 TWO_PI = 2.0 * math.pi
 _TAU5 = TWO_PI * np.arange(5) / 5.0
@@ -72,18 +64,6 @@ _TAU5 = TWO_PI * np.arange(5) / 5.0
 
 def kinds_of(code: str) -> str:
     return code.split("-", 1)[1]
-
-
-def wrap(a: float) -> float:
-    a = math.remainder(float(a), TWO_PI)
-    return math.pi if a <= -math.pi else a
-
-
-def fk(twists, q) -> np.ndarray:
-    g = np.eye(4)
-    for xi, t in zip(twists, q):
-        g = g @ twist_exp(xi, t)
-    return g
 
 
 def problem_scale(twists, T) -> float:
@@ -436,7 +416,7 @@ def finalize(kinds: str, twists, T, cands, scale, max_count: int = 0) -> list[So
         err = residual(twists, q, T)
         if err <= POLISH_TOL * scale:
             q = polish(twists, q, T, scale, fixed)
-        q = np.array([wrap(a) if k == "R" else float(a) for k, a in zip(kinds, q)])
+        q = wrap_joints(q, kinds)
         scored.append((residual(twists, q, T), q, bool(cont)))
     if not scored:
         return [Solution(tuple(0.0 for _ in kinds), ls=True)]
@@ -481,11 +461,7 @@ def solve_class1(code: str, twists, T) -> list[Solution]:
 
 def _fk_batch(tw, Q) -> np.ndarray:
     """``prod exp(xi_i q_i)`` for twists (N, m, 6) and joint values (N, K, m): (N, K, 4, 4)."""
-    N, K, m = Q.shape
-    g = np.broadcast_to(np.eye(4), (N, K, 4, 4)).copy()
-    for i in range(m):
-        g = g @ twist_exp_batch(np.repeat(tw[:, None, i], K, 1), Q[..., i])
-    return g
+    return fk_batch(tw[:, None], Q)
 
 
 def _residual_batch(tw, Q, T) -> np.ndarray:
@@ -599,8 +575,7 @@ def batch_class1(code: str, twists, T) -> BatchResult:
     near = (err <= POLISH_TOL * scale[:, None]) & cvalid
     Q = np.where(near[..., None], _polish_batch(tw, Q, T, scale), Q)
     rev = np.array([k == "R" for k in kinds])
-    Q = np.where(rev, np.remainder(Q + math.pi, TWO_PI) - math.pi, Q)
-    Q = np.where(rev & (Q <= -math.pi), math.pi, Q)
+    Q = np.where(rev, wrap_array(Q), Q)
     err = np.where(cvalid, _residual_batch(tw, Q, T), np.inf)
     exact = err <= EXACT_TOL * scale[:, None]
     valid = exact.copy()

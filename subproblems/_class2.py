@@ -27,51 +27,32 @@ from __future__ import annotations
 
 import math
 from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 
+from subproblems import tolerances as tol
+from subproblems.angles import wrap, wrap_array, wrap_joints
 from subproblems.core import BatchResult, Solution
 from subproblems.screw import twist_exp
 
-#: A solution is exact when its residual is at most this times the problem scale.
-EXACT_TOL = 1e-9
-#: Two exact solutions closer than this (angles modulo 2 pi; prismatic values relative) are one.
-DEDUP_TOL = 1e-6
-#: A point closer than this (relative) to a revolute axis does not determine the joint angle.
-FREE_TOL = 1e-10
-#: After polishing, a solution whose point on a revolute joint is this close (relative) to the joint's
-#: axis leaves that angle undetermined at the EXACT_TOL level (near a double root the polished point
-#: may stay ~sqrt(eps) off the axis): the instance is flagged continuum.
-FREE_POINT_TOL = 10 * EXACT_TOL
-#: Two exact rows closer than this are the same root found twice (not averaged into a cluster).
-SAME_TOL = 1e-12
-#: Relative size under which an eliminant coefficient counts as zero.
-COEF_TOL = 1e-12
+# Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
+EXACT_TOL = tol.EXACT
+DEDUP_TOL = tol.S2_SAME_SOLUTION
+FREE_TOL = tol.S2_POINT_ON_AXIS
+FREE_POINT_TOL = tol.S2_POLISHED_POINT_ON_AXIS
+SAME_TOL = tol.S2_SAME_ROOT
+COEF_TOL = tol.S2_ZERO_COEFFICIENT
 #: Floating-point error of evaluating a chain, per unit of translation (one eps): added to a row's
 #: residual before the exactness check, so a row whose joint values are too large to verify (~5e6
 #: times the problem's size) is never flagged exact.
 ROUNDOFF = float(np.finfo(float).eps)
-#: Candidates whose residual is at most this times the problem scale are not polished: the closed
-#: forms and eigenvalue roots normally land there, and Gauss-Newton would not change them.
-POLISH_TOL = 1e-14
-#: Two exact rows closer than TANGENT_TOL are one (multiple) root when their polished midpoint
-#: satisfies the equation to this times the problem scale: see :func:`merge_tangent`.
-MERGE_TOL = 1e-12
-#: Candidates whose residual exceeds this times the problem scale are polished only when no candidate
-#: of the instance is exact (to find the best least-squares answer): from that far, a few
-#: Gauss-Newton steps do not reach a solution the construction missed.
-FAR_TOL = 1e-2
-#: Two exact rows closer than this (joint distance) whose midpoint is exact to MERGE_TOL are one
-#: (tangent) solution: see :func:`merge_tangent`.
-TANGENT_TOL = 1e-3
-#: An exact row whose point on a revolute joint is this close (relative) to the joint's axis, but not
-#: within FREE_POINT_TOL, is tested for a nearby exact row with the point on the axis: at a singular
-#: configuration the roots are located only to ~sqrt(eps), and a free joint can hide behind that.
-NEAR_FREE_TOL = 1e-4
-
-#: An exact row whose Jacobian, columns scaled to unit length, has a singular value below this is
-#: probed for a curve of solutions through it: see :func:`on_continuum_rows`.
-SINGULAR_TOL = 1e-8
+POLISH_TOL = tol.S2_NO_POLISH
+MERGE_TOL = tol.S2_TANGENT_MERGE
+FAR_TOL = tol.S2_FAR
+TANGENT_TOL = tol.S2_TANGENT
+NEAR_FREE_TOL = tol.S2_NEAR_POINT_ON_AXIS
+SINGULAR_TOL = tol.S2_SINGULAR
 #: The probe's steps along the curve (radians; prismatic values relative to the scale) and their number.
 PROBE_STEP = 0.5
 PROBE_STEPS = 2
@@ -140,14 +121,8 @@ def normalized_batch(tw, p, q):
     return tw, p / L[:, None], q / L[:, None], L
 
 
-def wrap(a: float) -> float:
-    """Angle wrapped to (-pi, pi]."""
-    a = math.remainder(float(a), TWO_PI)
-    return math.pi if a <= -math.pi else a
-
-
 def wrap_row(kinds: str, th) -> np.ndarray:
-    return np.array([wrap(a) if k == "R" else float(a) for k, a in zip(kinds, th)])
+    return wrap_joints(np.asarray(th, dtype=float).reshape(len(kinds)), kinds)
 
 
 def joint_distance(kinds: str, a, b) -> float:
@@ -556,7 +531,7 @@ def lin_trig_roots_batch(f0, c1, s1, at0=None):
     th = np.where(flip[..., None], th_w, th_u)
     th = np.where(lsq[..., None], th_ls[..., None], th)
     th = np.where(((c1 == 0.0) & (s1 == 0.0))[..., None], 0.0, th)
-    return np.where(th > math.pi, th - TWO_PI, th)  # exact for small angles, unlike wrap_batch
+    return wrap_array(th)  # th in (-pi, 2 pi): the one wrap, exact
 
 
 def quadratic_form_to_fourier(A, B, C, D, E, F):
@@ -600,11 +575,6 @@ def _mv(R, v):
 
 def problem_scale_batch(tw, p, q) -> np.ndarray:
     return np.maximum(1.0, _largest_length_batch(tw, p, q))
-
-
-def wrap_batch(a):
-    a = np.remainder(a + math.pi, TWO_PI) - math.pi
-    return np.where(a <= -math.pi, math.pi, a)
 
 
 def _cross(a, b):
@@ -939,7 +909,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     ok = np.all(np.isfinite(cand), axis=-1)
     ni, ci = np.nonzero(ok)
     TW, P, Qr, S = tw[ni], p[ni], q[ni], scale[ni]
-    th = np.where(rev, wrap_batch(cand[ni, ci]), cand[ni, ci])
+    th = np.where(rev, wrap_array(cand[ni, ci]), cand[ni, ci])
     x, _, dist = point_chain_rows(kinds, TW, th, P, jac=False)
     r = np.linalg.norm(x - Qr, axis=-1)
 
@@ -947,7 +917,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
         if sel.size == 0:
             return
         t2, _ = polish_rows(kinds, TW[sel], P[sel], Qr[sel], th[sel], r[sel], S[sel])
-        t2 = np.where(rev, wrap_batch(t2), t2)
+        t2 = np.where(rev, wrap_array(t2), t2)
         x2, _, d2 = point_chain_rows(kinds, TW[sel], t2, P[sel], jac=False)
         th[sel], dist[sel] = t2, d2
         r[sel] = np.linalg.norm(x2 - Qr[sel], axis=-1)
@@ -961,7 +931,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     sel = np.flatnonzero((r <= EXACT_TOL * S) & (dmin > FREE_POINT_TOL * S) & (dmin <= NEAR_FREE_TOL * S))
     if sel.size:
         t2, good = snap_free_rows(kinds, TW[sel], P[sel], Qr[sel], th[sel], dist[sel], S[sel])
-        sel, t2 = sel[good], np.where(rev, wrap_batch(t2[good]), t2[good])
+        sel, t2 = sel[good], np.where(rev, wrap_array(t2[good]), t2[good])
     if sel.size:
         x2, _, d2 = point_chain_rows(kinds, TW[sel], t2, P[sel], jac=False)
         ni, ci = np.concatenate([ni, ni[sel]]), np.concatenate([ci, ci[sel] + C])
@@ -1009,10 +979,10 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
         return np.where(rev, np.remainder(b - a + math.pi, TWO_PI) - math.pi, b - a)
 
     def polished(n, th_):
-        th_ = np.where(rev, wrap_batch(th_), th_)
+        th_ = np.where(rev, wrap_array(th_), th_)
         xm, _, _ = point_chain_rows(kinds, tw[n], th_, p[n], jac=False)
         t2, r2 = polish_rows(kinds, tw[n], p[n], q[n], th_, np.linalg.norm(xm - q[n], axis=-1), scale[n])
-        return np.where(rev, wrap_batch(t2), t2), r2
+        return np.where(rev, wrap_array(t2), t2), r2
 
     # clusters of tangent rows (see the scalar path): anchor, sum of offsets, members
     anchor, dsum, cnt = Cand.copy(), np.zeros_like(Cand), np.ones((N, Ce))
@@ -1031,7 +1001,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
                 a, b = Cand[near, i], Cand[near, j]
                 mid = a + offset(a, b) / 2
                 pm, rm = polished(near, mid)
-                moved = jdist(pm, np.where(rev, wrap_batch(mid), mid))
+                moved = jdist(pm, np.where(rev, wrap_array(mid), mid))
                 hit = np.concatenate(
                     [split, near[(rm <= MERGE_TOL * scale[near]) & (moved <= 0.05 * d[near])]]
                 )
@@ -1079,12 +1049,9 @@ def revert_batch(r: BatchResult, code: str) -> BatchResult:
 # ----------------------------------------------------------------------------------------------------
 
 #: Least-squares refinement: Newton steps on the squared residual (gradient ``J^T f``, Hessian by central
-#: differences of the gradient) until a step is below this (radians; prismatic values relative).
-LS_STEP_TOL = 1e-13
-#: Two least-squares rows whose residuals differ by at most this times the scale are equally good: the
-#: lexicographically smaller one is returned (symmetric minima), so the answer does not depend on
-#: which path found which minimiser first.
-LS_TIE_TOL = 1e-12
+#: differences of the gradient) until a step is below LS_STEP_TOL; ties within LS_TIE_TOL.
+LS_STEP_TOL = tol.S2_LS_STEP
+LS_TIE_TOL = tol.S2_LS_TIE
 
 
 def _ls_gradient(twists, p, q, th):
@@ -1141,7 +1108,15 @@ def _best_ls(kinds: str, twists, p, q, rows, scale: float):
     return refined[i], res[i]
 
 
-_IN_SCALAR = [False]  # the scalar path's own call of the batch solver must not defer back to it
+# Whether the class II solvers skip their agreement step in the current context (thread, task): a
+# context variable, not a module global, so one thread's reference runtime never switches off another
+# thread's agreement (docs/design.md section 10).
+_INDEPENDENT: ContextVar[bool] = ContextVar("subproblems_class2_independent_paths", default=False)
+
+
+def agreement_active() -> bool:
+    """True unless the caller is inside :func:`independent_paths` (in this thread or task)."""
+    return not _INDEPENDENT.get()
 
 
 @contextmanager
@@ -1150,22 +1125,20 @@ def independent_paths():
     :func:`defer_to_scalar`): each path returns its own rows.  For callers that want the exact rows and
     a least-squares point but not the same point from both paths, at a fraction of the cost: the
     compiler's reference runtime, whose search grids hand mostly unreachable instances to the batch
-    solver (measured: a 1-D search arm's verify 20 s with the agreement step, 0.7 s without)."""
-    before = _IN_SCALAR[0]
-    _IN_SCALAR[0] = True
+    solver (measured: a 1-D search arm's verify 20 s with the agreement step, 0.7 s without).  The
+    setting belongs to the current thread (or asyncio task) only; the scalar path's own call of the
+    batch solver uses it too, so that it does not defer back to itself."""
+    token = _INDEPENDENT.set(True)
     try:
         yield
     finally:
-        _IN_SCALAR[0] = before
+        _INDEPENDENT.reset(token)
 
 
-#: An exact row is uncertain when its residual exceeds this times the scale (well-posed roots polish
-#: to ~1e-15: a larger residual means a valley of near-solutions, nearly degenerate geometry) ...
-UNCERTAIN_RES_TOL = 1e-12
-#: ... or when its Jacobian, columns scaled to unit length, has a singular value below this (a
-#: multiple root or a continuum, located only to ~sqrt(eps)).  The two paths' constructions then
-#: return different rows (each within EXACT_TOL), so both paths answer with the union of both.
-UNCERTAIN_SING_TOL = 1e-6
+#: An exact row is uncertain (its residual, or its scaled Jacobian's smallest singular value: the two
+#: paths' constructions then return different rows, so both paths answer with the union of both).
+UNCERTAIN_RES_TOL = tol.S2_UNCERTAIN_RESIDUAL
+UNCERTAIN_SING_TOL = tol.S2_UNCERTAIN_SINGULAR
 
 
 def uncertain_rows(kinds: str, tw, p, q, th, scale) -> np.ndarray:
@@ -1208,7 +1181,7 @@ def agreeing(code: str, batch_raw):
     def deco(scalar):
         def solve_one(twists, p, q):
             sols = scalar(twists, p, q)
-            if _IN_SCALAR[0] or any(s.continuum and not s.ls for s in sols):
+            if not agreement_active() or any(s.continuum and not s.ls for s in sols):
                 return sols  # a continuum's representatives: the batch path defers it here
             kinds = kinds_of(code)
             exact = [s.q for s in sols if not s.ls]
@@ -1247,7 +1220,7 @@ def defer_to_scalar(code: str, r: BatchResult, tw, p, q) -> BatchResult:
     continuum, uncertain rows: see :func:`agreeing`) solved by it (a loop over those only)."""
     from subproblems.core import solve
 
-    if _IN_SCALAR[0]:
+    if not agreement_active():
         return r
     idx = np.flatnonzero(_to_defer(kinds_of(code), r, tw, p, q))
     if idx.size == 0:

@@ -25,16 +25,15 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances as tol
+from subproblems.angles import wrap, wrap_array
 from subproblems.core import SubproblemInputError
 
-#: Residual (relative to the problem scale) under which a solution is exact.
-EXACT_TOL = 1e-9
-#: Relative size of ``r - |C|`` under which the two roots of ``A cos + B sin = C`` are one.
-TANGENT_TOL = 1e-13
-#: Relative size of ``r = hypot(A, B)`` under which the angle does not matter (continuum).
-FREE_TOL = 1e-12
-#: Smallest scale (avoids zero tolerances on an all-zero instance).
-TINY = 1e-300
+# Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
+EXACT_TOL = tol.EXACT
+TANGENT_TOL = tol.S3_TANGENT
+FREE_TOL = tol.S3_FREE_ANGLE
+TINY = tol.TINY
 
 
 # ------------------------------------------------------------------------------------ small vectors
@@ -62,17 +61,6 @@ def scale_vec(s: float, a) -> tuple[float, float, float]:
 
 def norm(a) -> float:
     return math.sqrt(dot(a, a))
-
-
-def wrap(th: float) -> float:
-    """Angle in (-pi, pi]."""
-    w = math.remainder(th, 2.0 * math.pi)
-    return math.pi if w == -math.pi else w
-
-
-def wrap_batch(th):
-    w = np.remainder(th + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(w == -np.pi, np.pi, w)
 
 
 # ------------------------------------------------------------------------------------------ inputs
@@ -158,7 +146,7 @@ def trig_linear_batch(A, B, C, mag, free_mag=None):
     th1 = np.where(single, t0, phi - delta)
     th2 = phi + delta
     th1 = np.where(free, 0.0, th1)
-    th = wrap_batch(np.stack([th1, th2], axis=1))
+    th = wrap_array(np.stack([th1, th2], axis=1))
     th = np.sort(np.where(single[:, None] & (np.arange(2) == 1), np.inf, th), axis=1)
     valid = np.stack([np.ones_like(single), ~single], axis=1)
     th = np.where(valid, th, 0.0)

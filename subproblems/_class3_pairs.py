@@ -87,29 +87,32 @@ from __future__ import annotations
 
 import numpy as np
 
-from subproblems._class3 import EXACT_TOL, TINY, wrap_batch
+from subproblems import tolerances
+from subproblems._class3 import EXACT_TOL, TINY
+from subproblems.angles import wrap_array
 from subproblems.core import BatchResult, Solution, solve_batch
 
-DEDUP_TOL = 1e-7
-ZERO_TOL = 1e-10  # |F| / reference below which the eliminant is identically zero
-M_FLOOR = 1e-13  # tensor entries below this times the problem's size are roundoff
-FREE_REL = 1e-10  # coefficient size (relative) under which a value is unconstrained
+# Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
+DEDUP_TOL = tolerances.S3P_SAME_SOLUTION
+ZERO_TOL = tolerances.S3P_ZERO_ELIMINANT
+M_FLOOR = tolerances.S3P_TENSOR_FLOOR
+FREE_REL = tolerances.S3P_FREE_VALUE
 LM_ITERS = 40
-ZERO_DIST = 1e-12  # S3: a distance below this times the scale is a point coincidence (class II)
-APEX_TOL = 1e-6  # engine rows this close to a point-coincidence (d = 0) solution are that solution
-RESEED_TOL = 1e-4  # stalled candidates missing by less than this, a value acting less (relative): _reseed
+ZERO_DIST = tolerances.S3P_ZERO_DISTANCE
+APEX_TOL = tolerances.S3P_APEX
+RESEED_TOL = tolerances.S3P_RESEED
 LS_POLISH_ITERS = 200  # further LM iterations of a least-squares answer, at most (_polish_lsq)
 NEWTON_ITERS = 24
-MERGE_TOL = 1e-3  # rows of one multiple root: at most this far apart (angles, relative prismatic values)
+MERGE_TOL = tolerances.S3P_MULTIPLE_ROOT
 MERGE_SPREAD = 100.0  # ... and the equations hold between them to this many times their residual
-ROUNDOFF = 1e-16  # the equations' evaluation roundoff, relative to the problem scale (~eps / 2)
-FOLD_SV = 1e-6  # |det J| / |J|^2 under which an exact row may be a tangency split by roundoff
-FOLD_FLAT = 1e-5  # |J| / scale under which the Jacobian vanishes at a tangency (both equations stationary)
+ROUNDOFF = tolerances.S3P_ROUNDOFF
+FOLD_SV = tolerances.S3P_FOLD_SINGULAR
+FOLD_FLAT = tolerances.S3P_FOLD_FLAT
 FOLD_STEP = 1e-7  # finite-difference step of the tangency refinement (units of the normalised problem)
 FOLD_ITERS = 8
 MIN_UNIT = 2.0**-500  # smallest unit of length an instance is solved in (Pair.normalised)
-CLUSTER_TOL = 1e-2  # roots of the eliminant closer than this are a cluster: its centre is a root too
-RANK_TOL = 1e-12  # H-TT: singular values below this times the largest are roundoff (a singular system)
+CLUSTER_TOL = tolerances.S3P_CLUSTER
+RANK_TOL = tolerances.S3P_RANK
 
 
 # --------------------------------------------------------------------------------- parametrisation
@@ -368,14 +371,14 @@ def _with_cluster_centres(ku, u, ok):
     """
     d = u[:, :, None] - u[:, None, :]
     if ku == "R":
-        d = wrap_batch(d)
+        d = wrap_array(d)
     else:
         d = d / np.maximum(1.0, np.abs(u))[:, :, None]
     member = ok[:, :, None] & ok[:, None, :] & (np.abs(d) <= CLUSTER_TOL)
     count = member.sum(axis=2)
     centre = u - np.sum(np.where(member, d, 0.0), axis=2) / np.maximum(count, 1)
     if ku == "R":
-        centre = wrap_batch(centre)
+        centre = wrap_array(centre)
     first = np.argmax(member, axis=2) == np.arange(u.shape[1])[None]
     # (a cluster has distinct members: roots z and 1 / conj(z), or a complex pair of a prismatic value,
     # give the same value twice, and their candidates are already there)
@@ -488,7 +491,7 @@ def _snap_free(M, kx, ky, X, Y, scale, iters: int = 12):
         c = contract(_basis_values(kind, u))
         moved = u - u0
         if kind == "R":
-            moved = wrap_batch(moved)
+            moved = wrap_array(moved)
         near = np.abs(moved) <= 1e-3 * (1.0 if kind == "R" else np.maximum(1.0, np.abs(u0)))
         return u, near & (np.abs(c).max(axis=-1) <= FREE_REL * ref)
 
@@ -578,8 +581,8 @@ def _newton(pb: Pair, x, y, iters: int):
 def _distance(kx, ky, X1, Y1, X2, Y2):
     """Joint-value distance (angles modulo 2 pi, prismatic values relative to max(1, |value|))."""
     dx, dy = X1 - X2, Y1 - Y2
-    dx = wrap_batch(dx) if kx == "R" else dx / np.maximum(1.0, np.abs(X2))
-    dy = wrap_batch(dy) if ky == "R" else dy / np.maximum(1.0, np.abs(Y2))
+    dx = wrap_array(dx) if kx == "R" else dx / np.maximum(1.0, np.abs(X2))
+    dy = wrap_array(dy) if ky == "R" else dy / np.maximum(1.0, np.abs(Y2))
     return np.maximum(np.abs(dx), np.abs(dy))
 
 
@@ -614,9 +617,9 @@ def _merge_clusters(pb: Pair, X, Y, exact, res, tangent=None):
     ox = Xs[:, None, :] - Xs[:, :, None]
     oy = Ys[:, None, :] - Ys[:, :, None]
     if kx == "R":
-        ox = wrap_batch(ox)
+        ox = wrap_array(ox)
     if ky == "R":
-        oy = wrap_batch(oy)
+        oy = wrap_array(oy)
     mx = (Xs[:, :, None] + 0.5 * ox).reshape(len(idx), -1)
     my = (Ys[:, :, None] + 0.5 * oy).reshape(len(idx), -1)
     mr, _ = sub.residual(mx, my)
@@ -638,9 +641,9 @@ def _merge_clusters(pb: Pair, X, Y, exact, res, tangent=None):
     LY = np.take_along_axis(Y, leader, axis=1)
     ox, oy = X - LX, Y - LY
     if kx == "R":
-        ox = wrap_batch(ox)
+        ox = wrap_array(ox)
     if ky == "R":
-        oy = wrap_batch(oy)
+        oy = wrap_array(oy)
     w = link.astype(float)
     MX = LX + np.einsum("nij,nj->ni", w, ox) / members
     MY = LY + np.einsum("nij,nj->ni", w, oy) / members
@@ -730,7 +733,7 @@ def _refine_folds(pb: Pair, X, Y, exact, res, J):
 
 
 def _wrap(kind, v):
-    return wrap_batch(v) if kind == "R" else v
+    return wrap_array(v) if kind == "R" else v
 
 
 def _starts(kind, scale):
@@ -1011,11 +1014,11 @@ def _solve_normalised(code: str, pb: Pair, K: int) -> BatchResult:
     dx = X[:, :, None] - X[:, None, :]
     dy = Y[:, :, None] - Y[:, None, :]
     if kx == "R":
-        dx = wrap_batch(dx)
+        dx = wrap_array(dx)
     else:
         dx = dx / np.maximum(1.0, np.abs(X))[:, None, :]
     if ky == "R":
-        dy = wrap_batch(dy)
+        dy = wrap_array(dy)
     else:
         dy = dy / np.maximum(1.0, np.abs(Y))[:, None, :]
     close = np.maximum(np.abs(dx), np.abs(dy)) <= DEDUP_TOL

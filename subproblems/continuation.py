@@ -26,26 +26,28 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems import tolerances
+from subproblems.angles import wrap_array
 from subproblems.plan_runtime import _cross
 from subproblems.screw import twist_exp_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
 MAX_ROUNDS = 32  # predictor-corrector rounds at most (a row creeping toward a turning point stops)
-SEPARATE = 1e-6  # joint distance (rad / relative length) below which two rows are the same solution
+SEPARATE = tolerances.CONTINUATION_SAME_SOLUTION  # subproblems/tolerances.py
 # Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
 # solutions anywhere on the circle.
 RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
 NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
 SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
-NEAR_MISS_NEWTON = 1e-4  # rescue rows kept for the caller's check (it polishes near misses further)
+NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS  # rescue rows kept for the caller's check
 # A rescue row whose weakest singular value is below this is no isolated solution at the contract's
 # precision: a row exact to 1e-12 of the size is located only to 1e-12 / sigma, more than SEPARATE
 # (1e-6) here, so it is one arbitrary point of a numerical self-motion (measured: ur5_gripper.urdf of
 # example-robot-data, wrist_2 off parallel by 3.6e-9 rad: 7 of 30 special poses got 5-8 such rows at
 # sigma 1e-18..1e-17, 29 pairs closer than 1e-6; docs/calibrated.md).
-RESOLVED = 1e-12 / SEPARATE  # 1e-12: the precision contract (TOLERANCE, docs/design.md section 10)
+RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/design.md section 10)
 
 
 def _lines(twists):
@@ -280,7 +282,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
         return X, own
 
     def keys(Z, o):
-        Z = np.where(revolute, np.remainder(Z + np.pi, 2 * np.pi) - np.pi, Z / robot[5])
+        Z = np.where(revolute, wrap_array(Z), Z / robot[5])
         return np.concatenate([o[:, None].astype(float), np.round(Z / 1e-7)], axis=1)
 
     finite = np.all(np.isfinite(Q), axis=1)

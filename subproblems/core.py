@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from subproblems.tolerances import TWIST_UNIT, ZERO_AXIS
+
 __all__ = [
     "Solution",
     "Result",
@@ -147,11 +149,11 @@ def check_twists(code: str, kinds: str, twists) -> np.ndarray:
         raise SubproblemInputError(f"{code}: twists contain NaN or infinity")
     for i, (kind, xi) in enumerate(zip(kinds, tw)):
         wn, vn = np.linalg.norm(xi[3:]), np.linalg.norm(xi[:3])
-        if kind == "R" and abs(wn - 1.0) > 1e-9:
+        if kind == "R" and abs(wn - 1.0) > TWIST_UNIT:
             raise SubproblemInputError(f"{code}: twist {i + 1} must be revolute with unit w, |w|={wn:g}")
-        if kind == "R" and abs(float(xi[:3] @ xi[3:])) > 1e-9 * max(1.0, vn):
+        if kind == "R" and abs(float(xi[:3] @ xi[3:])) > TWIST_UNIT * max(1.0, vn):
             raise SubproblemInputError(f"{code}: twist {i + 1} has pitch (v.w != 0); joints have none")
-        if kind == "T" and (wn > 1e-12 or abs(vn - 1.0) > 1e-9):
+        if kind == "T" and (wn > ZERO_AXIS or abs(vn - 1.0) > TWIST_UNIT):
             raise SubproblemInputError(
                 f"{code}: twist {i + 1} must be prismatic (w = 0, unit v), |w|={wn:g}, |v|={vn:g}"
             )

@@ -45,14 +45,17 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from subproblems import tolerances
+from subproblems.angles import wrap, wrap_array
+
 TANGENT_ROOT, FAMILY, DEFER, EMPTY = 1, 2, 4, 8
-NEAR = 1e-7  # relative size below which an instance is treated as degenerate and deferred
+NEAR = tolerances.FAST_DEGENERATE  # tolerances in subproblems/tolerances.py (docs/design.md section 10)
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
-TANGENT = 1e-10
+TANGENT = tolerances.FAST_TANGENT
 NEAR2 = NEAR * NEAR
-SPLIT_ROOT = 1e-6  # joint distance within which two copies of a tangent root are one solution
-TINY = 1e-300
+SPLIT_ROOT = tolerances.FAST_SPLIT_ROOT
+TINY = tolerances.TINY
 
 SCALAR = SimpleNamespace(
     sin=math.sin,
@@ -454,7 +457,7 @@ def reference(m, code, twists, inputs):
 # ---------------------------------------------------------------------------------------------------
 # the end of a generated fast path: measure, wrap, limit, deduplicate, pack
 
-NEAR_MISS = 1e-4  # candidates missing by less than this (relative) need Newton steps: reference path
+NEAR_MISS = tolerances.NEAR_MISS  # candidates missing by less need Newton steps
 
 
 def goal_entries(T, target: str):
@@ -507,8 +510,8 @@ def goal_entries(T, target: str):
 # inside them; a value within LIMIT_EPS outside a limit (a double root at a limit is only located to
 # about sqrt(eps)) is clamped onto the limit, and one within PI_SNAP above -pi (roundoff of a root at pi)
 # becomes pi; both change the row, so its error is measured again before it counts as exact.
-LIMIT_EPS = 1e-7
-PI_SNAP = 1e-13
+LIMIT_EPS = tolerances.LIMIT_SLACK
+PI_SNAP = tolerances.PI_SNAP
 INSIDE, ADJUSTED, OUTSIDE = 0, 1, 2
 
 
@@ -518,8 +521,8 @@ def wrap_pi(x: float) -> float:
     >>> wrap_pi(-math.pi), wrap_pi(3 * math.pi / 2) == -math.pi / 2, wrap_pi(-math.pi + 1e-15)
     (3.141592653589793, True, 3.141592653589793)
     """
-    if not -math.pi < x <= math.pi:
-        x = (x + math.pi) % (2 * math.pi) - math.pi
+    if not -math.pi < x <= math.pi:  # in range: wrap(x) is x (skipped for speed)
+        x = wrap(x)
     return math.pi if x <= -math.pi + PI_SNAP else x
 
 
@@ -535,7 +538,7 @@ def represent_one(q, revolute, bounds, limits: bool):
     for x, rev, (lo, hi) in zip(q, revolute, bounds):
         if rev:
             if not -math.pi < x <= math.pi:
-                x = (x + math.pi) % two_pi - math.pi
+                x = wrap(x)
             if x <= -math.pi + PI_SNAP:
                 if x != -math.pi:  # pi itself is an alias; a value beside it is moved
                     status = ADJUSTED
@@ -573,7 +576,7 @@ def represent(Q, kinds, lower, upper, limits: bool, clamps: bool = False):
     for j, k in enumerate(kinds):
         x = Q[..., j]
         if k == "R":
-            x = np.where((x > -math.pi) & (x <= math.pi), x, np.remainder(x + math.pi, two_pi) - math.pi)
+            x = wrap_array(x)
             snap = x <= -math.pi + PI_SNAP
             adjusted |= snap & (x != -math.pi)
             x = np.where(snap, math.pi, x)

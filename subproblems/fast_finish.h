@@ -253,17 +253,14 @@ static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int it
     return ikc_newton_steps(rb, g, q, iters, 1);
 }
 
-/* Python's ((x + pi) % 2pi) - pi, with -pi mapped to pi: the wrap of finish_one, bit for bit. */
+/* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
+ * subtraction is exact by Sterbenz's lemma). */
 static double ikc_wrap(double x) {
     if (-IKC_PI_F < x && x <= IKC_PI_F) return x;
-    double a = x + IKC_PI_F, mod = fmod(a, IKC_TWO_PI);
-    if (mod != 0.0) {
-        if (mod < 0.0) mod += IKC_TWO_PI;
-    } else {
-        mod = 0.0;
-    }
-    double w = mod - IKC_PI_F;
-    return w == -IKC_PI_F ? IKC_PI_F : w;
+    double r = fmod(x, IKC_TWO_PI);
+    if (r > IKC_PI_F) r -= IKC_TWO_PI;
+    else if (r <= -IKC_PI_F) r += IKC_TWO_PI;
+    return r;
 }
 
 #define IKC_LIMIT_EPS 1e-7  /* fast.LIMIT_EPS: a value this close outside a limit is clamped onto it */

@@ -39,11 +39,13 @@ import math
 import numpy as np
 
 from subproblems._class2 import independent_paths
+from subproblems.angles import wrap_joints
 from subproblems.core import solve_batch
 from subproblems.fast import angle_distance, represent
-from subproblems.screw import inverse_transform, twist_exp_batch
+from subproblems.screw import fk_batch, inverse_transform, twist_exp_batch
+from subproblems.tolerances import DUPLICATE_ROWS, NEWTON_DAMPING, TINY
 
-__all__ = ["run_plan", "finish", "fk_batch", "wrap_angles", "InvalidTargetError", "InvalidFreeValueError"]
+__all__ = ["run_plan", "finish", "fk_batch", "InvalidTargetError", "InvalidFreeValueError"]
 
 
 class InvalidTargetError(ValueError):
@@ -213,16 +215,6 @@ def _apply_couplings(TH, couplings) -> None:
         TH[back, master] = (TH[back, dep] - b) / a
 
 
-def wrap_angles(Q, kinds) -> np.ndarray:
-    """Revolute values wrapped to (-pi, pi]; prismatic ones unchanged."""
-    Q = np.array(Q, dtype=float)
-    for i, k in enumerate(kinds):
-        if k == "R":
-            w = np.remainder(Q[..., i] + math.pi, 2 * math.pi) - math.pi
-            Q[..., i] = np.where(w == -math.pi, math.pi, w)
-    return Q
-
-
 def run_plan(steps, twists, kinds, Td, couplings=(), n_groups=0, init=None):
     """Run every step over N targets ``Td`` (N, 4, 4) (already right-multiplied by ``g_st(0)^-1``).
 
@@ -324,15 +316,6 @@ def run_search(step, twists, kinds, Td, couplings=(), n_groups=0, init=None):
     return TH[picked], owner[picked]
 
 
-def fk_batch(twists, TH, home) -> np.ndarray:
-    """Forward kinematics of all joints' values TH (M, n): (M, 4, 4)."""
-    M = TH.shape[0]
-    g = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-    for i in range(TH.shape[1]):
-        g = g @ twist_exp_batch(twists[i], TH[:, i])
-    return g @ np.asarray(home, dtype=float)
-
-
 def pose_error(G, T, scale: float) -> np.ndarray:
     """Per-row pose error: max of the position error and ``scale`` times the rotation error (Frobenius
     norm), so that ``error <= tol * scale`` holds a row to ``tol`` of the robot's size in position and
@@ -400,7 +383,7 @@ def finish(
     TH, owner, ls, cont, Qi = TH[~outside], owner[~outside], ls[~outside], cont[~outside], Qi[~outside]
     if TH.shape[0] == 0:
         return Q, valid, LS, RES, CONT
-    TH = wrap_angles(TH, kinds)
+    TH = wrap_joints(TH, kinds)
     TH[:, list(independent)] = Qi
     if A is not None:
         TH = TH[:, list(vary)] @ np.asarray(A).T + np.asarray(b)
@@ -425,7 +408,7 @@ def finish(
     diff = cand[:, :, None, :] - cand[:, None, :, :]
     for c, k in enumerate(ind_kinds):
         diff[..., c] = angle_distance(diff[..., c], k == "R")
-    same = np.abs(diff).max(axis=3) <= (1e-9 * max(1.0, scale) if dedupe is None else dedupe)
+    same = np.abs(diff).max(axis=3) <= (DUPLICATE_ROWS * max(1.0, scale) if dedupe is None else dedupe)
     earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
     dup = np.any(same & earlier & cval[:, None, :], axis=2)
     keep = cval & ~dup
@@ -484,9 +467,9 @@ def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters
                 e = np.concatenate([e_pos, e_rot], axis=1)
         # Columns scaled to unit norm (lengths and angles mix), then a whisper of damping so that a
         # singular direction neither blows the step up nor stalls the others.
-        col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
+        col = np.maximum(np.linalg.norm(J, axis=1), TINY)
         Js = J / col[:, None, :]
-        JtJ = np.einsum("mki,mkj->mij", Js, Js) + 1e-12 * np.eye(Js.shape[2])
+        JtJ = np.einsum("mki,mkj->mij", Js, Js) + NEWTON_DAMPING * np.eye(Js.shape[2])
         dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
         Q = Q + dq
     return Q @ A.T + b

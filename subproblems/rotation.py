@@ -65,6 +65,8 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances as tol
+from subproblems.angles import wrap, wrap_array
 from subproblems.core import BatchResult, Solution, SubproblemInputError, register
 from subproblems.screw import rotation_exp
 
@@ -81,33 +83,20 @@ __all__ = [
     "rotation_families",
 ]
 
-#: An orientation solution is exact when its residual angle is at most this (radians).
-EXACT_TOL = 1e-9
-#: Two axes are parallel when ``|w1 x w2|`` is at most this.
-PAR_TOL = 1e-9
-#: Below this ``|w1 x w2|`` the general formulas cannot be evaluated: the parallel branch is forced.
-_DEGEN = 1e-15
-#: Gimbal lock is tried when ``|w1 x R w3|`` is at most this; it is declared when its representative
-#: (``t1 = 0``) is exact.  Closer to gimbal lock than this the isolated solutions are not resolvable.
-GIMBAL_TOL = 1e-6
-#: A vector closer than this (relative) to an axis does not determine the angle about it.
-FREE_TOL = 1e-10
-#: Exact solutions closer than this (radians, modulo 2 pi) are one.
-DEDUP_TOL = 1e-6
-#: Candidates with a residual below this are polished before the exactness check.
-POLISH_TOL = 1e-5
+# Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
+EXACT_TOL = tol.EXACT  # radians here
+PAR_TOL = tol.O_PARALLEL
+_DEGEN = tol.O_DEGENERATE
+GIMBAL_TOL = tol.O_GIMBAL
+FREE_TOL = tol.O_VECTOR_ON_AXIS
+DEDUP_TOL = tol.O_SAME_SOLUTION
+POLISH_TOL = tol.O_POLISH
 #: Gauss-Newton steps on the general ``O-RRR`` candidates (linear convergence near a singularity).
 GN_ITERS = 12
-#: Below this ``|w1 x w2|`` or ``|w2 x w3|`` the general ``O-RRR`` candidates get Gauss-Newton restarts.
-NEAR_PAR = 1e-6
-#: ``O-RRR``: two exact, distinct first candidates with a Jacobian determinant at least this are final.
-WELL_COND = 1e-3
-
-#: ``rho cos(t - psi) = rhs`` with ``|rhs| / rho`` this many ulps from 1 is a double root (a tangency).
-TANGENT_ULPS = 8.0
-
-#: Residual (radians) under which a tangent point is preferred to other candidates (roundoff floor).
-TANGENT_FLOOR = 1e-14
+NEAR_PAR = tol.O_NEAR_PARALLEL
+WELL_COND = tol.O_WELL_CONDITIONED
+TANGENT_ULPS = tol.O_TANGENT_ULPS
+TANGENT_FLOOR = tol.O_TANGENT_FLOOR
 
 _TWO_PI = 2.0 * math.pi
 _SQRT8 = math.sqrt(8.0)
@@ -116,11 +105,6 @@ _SQRT8 = math.sqrt(8.0)
 # ----------------------------------------------------------------------------------------------------
 # small scalar helpers
 # ----------------------------------------------------------------------------------------------------
-
-
-def _wrap(a: float) -> float:
-    a = math.remainder(float(a), _TWO_PI)
-    return math.pi if a <= -math.pi else a
 
 
 def _unit(w) -> np.ndarray:
@@ -212,7 +196,7 @@ def _finish(ws, R, cands, allow_continuum=True) -> list[Solution]:
         if err <= POLISH_TOL:
             th = _polish(ws, R, th, fixed)
             err = rotation_error(_product(ws, th), R)
-        scored.append((err, tuple(_wrap(a) for a in th), bool(cont and allow_continuum)))
+        scored.append((err, tuple(wrap(a) for a in th), bool(cont and allow_continuum)))
     exact = sorted((s for s in scored if s[0] <= EXACT_TOL), key=lambda s: s[0])
     if not exact:
         err, th, cont = min(scored, key=lambda s: s[0])
@@ -334,7 +318,7 @@ def orientation_r(w, R) -> list[Solution]:
     w, R = _unit(w), _rot(R)
     t, free = _angle_r(w, R)
     err = rotation_error(rotation_exp(w, t), R)
-    return [Solution((_wrap(t),), ls=err > EXACT_TOL, continuum=free)]
+    return [Solution((wrap(t),), ls=err > EXACT_TOL, continuum=free)]
 
 
 def orientation_rr(w1, w2, R) -> list[Solution]:
@@ -366,7 +350,7 @@ def direction_r(w, u, v) -> list[Solution]:
     scale = max(1.0, float(np.linalg.norm(u)), float(np.linalg.norm(v)))
     t, free = _angle_about(w, u, v, scale)
     err = float(np.linalg.norm(rotation_exp(w, t) @ u - v))
-    return [Solution((_wrap(t),), ls=err > EXACT_TOL * scale, continuum=free)]
+    return [Solution((wrap(t),), ls=err > EXACT_TOL * scale, continuum=free)]
 
 
 def _polish_direction(w1, w2, u, v, t1, t2, scale, iters: int = 4) -> tuple[float, float]:
@@ -450,7 +434,7 @@ def direction_rr(w1, w2, u, v) -> list[Solution]:
     scored = []
     for t1, t2, cont in cands:
         err = float(np.linalg.norm(rotation_exp(w1, t1) @ rotation_exp(w2, t2) @ u - v))
-        scored.append((err, (_wrap(t1), _wrap(t2)), cont))
+        scored.append((err, (wrap(t1), wrap(t2)), cont))
     exact = [s for s in scored if s[0] <= EXACT_TOL * scale]
     if not exact:
         err, th, cont = min(scored, key=lambda s: s[0])
@@ -504,11 +488,6 @@ def rotation_error_batch(E, R) -> np.ndarray:
     """:func:`rotation_error` over stacked matrices."""
     d = np.linalg.norm(E - R, axis=(-2, -1))
     return 2.0 * np.arcsin(np.minimum(1.0, d / _SQRT8))
-
-
-def _wrap_b(a) -> np.ndarray:
-    a = np.remainder(a + math.pi, _TWO_PI) - math.pi
-    return np.where(a <= -math.pi, math.pi, a)
 
 
 def _angle_r_b(w, R):
@@ -620,7 +599,7 @@ def _general_rrr_b(W, R, Rw3) -> np.ndarray:
         W2, np.repeat(R[:, None], 2, 1), np.stack([t1, t2, t3], -1), np.zeros((N, 2, 3), bool), iters=GN_ITERS
     )
     err = rotation_error_batch(product_batch(W2, C), R[:, None])
-    settled = (err.max(1) <= EXACT_TOL) & (np.max(np.abs(_wrap_b(C[:, 0] - C[:, 1])), -1) > DEDUP_TOL)
+    settled = (err.max(1) <= EXACT_TOL) & (np.max(np.abs(wrap_array(C[:, 0] - C[:, 1])), -1) > DEDUP_TOL)
     settled &= _jac_det_b(W2, C).min(1) >= WELL_COND
     idx = np.nonzero(~settled)[0]
     if not len(idx):
@@ -674,7 +653,7 @@ def _general_rrr_b(W, R, Rw3) -> np.ndarray:
     at_tangent[:, :2] = tangent[idx, None] & (err[idx] <= TANGENT_FLOOR)
     i0 = np.argmin(np.where(at_tangent, 0.0, eall), axis=1)
     first = Call[ar, i0]
-    dist = np.max(np.abs(_wrap_b(Call - first[:, None])), axis=-1)
+    dist = np.max(np.abs(wrap_array(Call - first[:, None])), axis=-1)
     e2 = np.where(dist > DEDUP_TOL, eall, np.inf)
     i1 = np.where(np.isfinite(e2).any(1), np.argmin(e2, axis=1), i0)
     C = C.copy()
@@ -788,12 +767,12 @@ def _finish_b(code, W, R, TH, cvalid, n, dim) -> BatchResult:
     Rk = np.repeat(R[:, None], K, 1)
     err = rotation_error_batch(product_batch(Wk, TH), Rk)
     TH = np.where((err <= POLISH_TOL)[..., None], _polish_b(Wk, Rk, TH, fixed), TH)
-    TH = _wrap_b(TH)
+    TH = wrap_array(TH)
     err = np.where(cvalid, rotation_error_batch(product_batch(Wk, TH), Rk), np.inf)
     exact = err <= EXACT_TOL
     valid = exact.copy()
     if K == 2:
-        dist = np.max(np.abs(_wrap_b(TH[:, 0] - TH[:, 1])), axis=-1)
+        dist = np.max(np.abs(wrap_array(TH[:, 0] - TH[:, 1])), axis=-1)
         valid[:, 1] &= ~(valid[:, 0] & (dist <= DEDUP_TOL))
     none = ~exact.any(axis=1)
     best = np.argmin(err, axis=1)
@@ -815,7 +794,7 @@ def orientation_r_batch(w, R) -> BatchResult:
     """Vectorised :func:`orientation_r`: ``w`` (N, 3), ``R`` (N, 3, 3) or (N, 4, 4); ``q`` (N, 1, 1)."""
     W, R = _batch_inputs(np.asarray(w, dtype=float)[:, None], R)
     t, free = _angle_r_b(W[:, 0], R)
-    t = _wrap_b(t)
+    t = wrap_array(t)
     err = rotation_error_batch(rexp_batch(W[:, 0], t), R)
     N = len(t)
     return BatchResult("O-R", t.reshape(N, 1, 1), np.ones((N, 1), bool), (err > EXACT_TOL)[:, None], free)

@@ -45,6 +45,7 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances as tol
 from subproblems._class2 import (
     FREE_TOL,
     agreeing,
@@ -62,9 +63,8 @@ from subproblems._class2 import (
 )
 from subproblems.core import BatchResult, Solution, register
 
-PARALLEL_TOL = 1e-12
-#: Axes whose direction cross product is below this also get the parallel (planar) candidates.
-NEAR_PARALLEL_TOL = 1e-6
+PARALLEL_TOL = tol.S2_RR_PARALLEL  # subproblems/tolerances.py
+NEAR_PARALLEL_TOL = tol.S2_RR_NEAR_PARALLEL
 
 
 def _planar_points(w1, r1, r2, p, q) -> list[np.ndarray]:

@@ -68,6 +68,7 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances as tol
 from subproblems._class2 import (
     COEF_TOL,
     EXACT_TOL,
@@ -90,7 +91,7 @@ from subproblems._class2 import (
 )
 from subproblems.core import BatchResult, Solution, register
 
-RANK_TOL = 1e-9
+RANK_TOL = tol.S2_RRR_RANK  # subproblems/tolerances.py
 
 
 def _lin_roots(f0, c1, s1, ref):

@@ -55,6 +55,7 @@ import math
 
 import numpy as np
 
+from subproblems import tolerances as tol
 from subproblems._class2 import (
     COEF_TOL,
     FREE_TOL,
@@ -83,8 +84,7 @@ from subproblems._class2 import (
 from subproblems.core import BatchResult, Solution, register
 from subproblems.s2_rr import PARALLEL_TOL, rr_candidates, rr_theta1_candidates_batch
 
-#: Below this |w_2 . v| the roots of g (the axial condition) join the eliminant's roots as candidates.
-K1_TOL = 1e-8
+K1_TOL = tol.S2_RRT_AXIAL  # subproblems/tolerances.py
 
 
 def _eliminant(x1, x2, x3, p, q):

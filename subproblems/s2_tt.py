@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems import tolerances as tol
 from subproblems._class2 import EXACT_TOL, problem_scale, problem_scale_batch
 from subproblems.core import BatchResult, Solution, register
 
-RANK_TOL = 1e-10
+RANK_TOL = tol.S2_TT_RANK  # subproblems/tolerances.py
 
 
 @np.errstate(all="ignore")

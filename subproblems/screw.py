@@ -21,6 +21,8 @@ import math
 
 import numpy as np
 
+from subproblems.tolerances import ZERO_AXIS
+
 __all__ = [
     "hat",
     "revolute_twist",
@@ -29,6 +31,8 @@ __all__ = [
     "axis_point",
     "twist_exp",
     "twist_exp_batch",
+    "fk",
+    "fk_batch",
     "rotation_exp",
     "adjoint",
     "transform_twist",
@@ -69,7 +73,7 @@ def prismatic_twist(v) -> np.ndarray:
     return np.concatenate([v / np.linalg.norm(v), np.zeros(3)])
 
 
-def is_prismatic(xi, tol: float = 1e-12) -> bool:
+def is_prismatic(xi, tol: float = ZERO_AXIS) -> bool:
     """True when the twist has no rotational part.
 
     >>> is_prismatic(prismatic_twist([1, 0, 0])), is_prismatic(revolute_twist([1, 0, 0], [0, 0, 0]))
@@ -150,6 +154,38 @@ def twist_exp_batch(xi, theta) -> np.ndarray:
     g[..., :3, 3] = np.where(revolute[..., None], t_rev, t_pri)
     g[..., 3, 3] = 1.0
     return g
+
+
+def fk(twists, q, home=None) -> np.ndarray:
+    """Forward kinematics ``exp(xi_1 q_1) ... exp(xi_n q_n) [home]`` (4x4) of one joint vector.
+
+    The one product of exponentials of the package (docs/design.md section 10); :func:`fk_batch` is
+    its vectorised form and agrees with it to roundoff.
+
+    >>> fk([prismatic_twist([1, 0, 0]), revolute_twist([0, 0, 1], [0, 0, 0])], [2.0, 0.0])[:3, 3]
+    array([2., 0., 0.])
+    """
+    g = np.eye(4)
+    for xi, t in zip(twists, q):
+        g = g @ twist_exp(xi, t)
+    return g if home is None else g @ np.asarray(home, dtype=float)
+
+
+def fk_batch(twists, Q, home=None) -> np.ndarray:
+    """:func:`fk` over joint vectors ``Q`` (..., n): poses (..., 4, 4).
+
+    ``twists`` is one chain (n, 6) for every row, or one per row, broadcast against ``Q``'s leading
+    axes ((..., n, 6)); ``home`` (4x4) multiplies on the right when given.
+
+    >>> fk_batch([[0, 0, 0, 0, 0, 1]], np.zeros((5, 1)), np.eye(4)).shape
+    (5, 4, 4)
+    """
+    Q = np.asarray(Q, dtype=float)
+    tw = np.asarray(twists, dtype=float)
+    g = np.broadcast_to(np.eye(4), Q.shape[:-1] + (4, 4)).copy()
+    for i in range(Q.shape[-1]):
+        g = g @ twist_exp_batch(tw[..., i, :], Q[..., i])
+    return g if home is None else g @ np.asarray(home, dtype=float)
 
 
 def inverse_transform(g) -> np.ndarray:

@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from subproblems import conditioning
+from subproblems import tolerances as tol
 
 __all__ = ["SolveInfo", "Excluded", "aliases", "nearest_alias", "distance", "excluding_joints",
            "jacobian", "sigma_min"]
@@ -50,7 +51,7 @@ class SolveInfo(NamedTuple):
     continuum: np.ndarray  # (k,) one representative of a self-motion
     sigma_min: np.ndarray  # (k,) smallest singular value of the size-free Jacobian (0: singular)
     excluded: tuple  # Excluded solutions (limits=True only): which joints leave each one out
-LIMIT_EPS = 1e-7  # roundoff forgiven at a limit, as the finish does (a double root sits at a stop)
+LIMIT_EPS = tol.LIMIT_SLACK  # roundoff forgiven at a limit, as the finish does (subproblems/tolerances.py)
 
 
 def _candidates(v, lo, hi, eps=LIMIT_EPS):

@@ -3,7 +3,7 @@
 Tolerance policy (adjustable through :class:`Tolerance`):
 
 * ``exact``: a relation that holds to ``exact * scale`` (lengths) or ``exact`` (radians) is structural;
-  the default 1e-9 matches the quality bar of docs/design.md section 9.
+  the default 1e-9 (``subproblems.tolerances.EXACT``) matches the quality bar of docs/design.md section 9.
 * ``snap``: a relation that holds only to ``snap * scale`` / ``snap`` rad (default 1e-3; a calibrated URDF
   whose axes miss by 1e-4 of its size) is *snapped*: the plan is built as if it held, and every
   solution is then corrected by Newton steps on the true robot and checked there.  Solutions that do
@@ -16,11 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from subproblems import tolerances
+
 
 @dataclass(frozen=True)
 class Tolerance:
-    exact: float = 1e-9
-    snap: float = 1e-3
+    exact: float = tolerances.EXACT
+    snap: float = tolerances.SNAP
 
 
 def lines_meet(lines, scale: float) -> tuple[np.ndarray | None, float]:
@@ -34,7 +36,7 @@ def lines_meet(lines, scale: float) -> tuple[np.ndarray | None, float]:
         P = np.eye(3) - np.outer(w, w)
         A += P
         b += P @ r
-    if np.linalg.cond(A) > 1e8:
+    if np.linalg.cond(A) > tolerances.LINES_MEET_CONDITION:
         return None, np.inf
     x = np.linalg.solve(A, b)
     miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - r))) for w, r in lines)
@@ -82,22 +84,16 @@ def pair_relation(chain, i: int, j: int, tol: Tolerance = Tolerance()) -> PairRe
     return PairRelation(i, j, "skew", perp <= tol.snap, None, True)
 
 
-def persists(chain, i: int, j: int, rel: PairRelation, tol: Tolerance, samples: int = 3) -> bool:
-    """Does the home relation of axes i < j hold for every value of the joints between them?"""
-    from subproblems.screw import adjoint, twist_exp
+def persists(chain, i: int, j: int, rel: PairRelation, tol: Tolerance, samples: int = 4) -> bool:
+    """Does the home relation of axes i < j hold for every value of the joints between them?  Judged on
+    the compiler's sampled configurations (:func:`ikcompiler.geometry.facts.configurations`)."""
+    from ikcompiler.geometry.facts import configurations
+    from subproblems.screw import adjoint, fk
 
     if j == i + 1:
         return True
-    rng = np.random.default_rng(5)
-    for _ in range(samples):
-        G = np.eye(4)
-        for k in range(i + 1, j):
-            th = (
-                rng.uniform(-np.pi, np.pi)
-                if chain.joints[k].kind == "R"
-                else rng.uniform(-1, 1) * chain.scale
-            )
-            G = G @ twist_exp(chain.joints[k].twist, th)
+    for th in configurations(chain.joint_types, chain.scale, samples):
+        G = fk(chain.twists[i + 1 : j], th[i + 1 : j])
         moved = adjoint(G) @ chain.joints[j].twist
         (w1, r1), (w2, r2) = twist_line(chain.joints[i].twist), twist_line(moved)
         if rel.relation in ("parallel", "coincident"):

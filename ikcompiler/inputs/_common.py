@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ikcompiler.errors import RobotInputError
+from subproblems import tolerances as tol
 from subproblems.screw import rigid_residual
 
 ANGLE_UNITS = {"rad": 1.0, "deg": math.pi / 180.0}
@@ -104,7 +105,7 @@ def cos_sin(t: float) -> tuple[float, float]:
     ((0.0, 1.0), (-1.0, 0.0))
     """
     k = round(t / (math.pi / 2))
-    if abs(t - k * (math.pi / 2)) <= 1e-15 * max(1.0, abs(t)):
+    if abs(t - k * (math.pi / 2)) <= tol.INPUT_RIGHT_ANGLE * max(1.0, abs(t)):
         return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[k % 4]
     return math.cos(t), math.sin(t)
 
@@ -146,7 +147,7 @@ def frame(table, source: str, where: str, scale: float) -> np.ndarray:
             g = None
         if g is None or not np.all(np.isfinite(g)):
             raise RobotInputError("matrix must be 4 rows of 4 numbers", source=source, where=where)
-        if rigid_residual(g) > 1e-9:
+        if rigid_residual(g) > tol.INPUT_RIGID:
             raise RobotInputError(
                 "matrix is not a rigid transform (rotation part not orthonormal or last row not 0 0 0 1)",
                 source=source,
@@ -163,6 +164,6 @@ def unit_axis(v, source: str, where: str) -> np.ndarray:
     """Normalise a direction; a zero (or tiny) one is an error naming ``where``."""
     v = np.asarray(v, dtype=float)
     n = float(np.linalg.norm(v))
-    if not n > 1e-12:
+    if not n > tol.ZERO_AXIS:
         raise RobotInputError(f"axis {list(v)} has zero length", source=source, where=where)
     return v / n

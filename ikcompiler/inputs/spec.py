@@ -52,6 +52,7 @@ from ikcompiler.inputs._common import (
     vector,
 )
 from ikcompiler.model import Chain, Coupling, Joint
+from subproblems import tolerances as tol
 from subproblems.screw import axis_point, revolute_twist
 
 TOP_KEYS = {"name", "units", "angles", "joints", "base", "tip", "joint", "coupling", "home", "description"}
@@ -96,12 +97,12 @@ def _joint(tbl, kind: str, i: int, scale: float, source: str) -> Joint:
         v, w = tw[:3], tw[3:]
         if kind == "R":
             nw = float(np.linalg.norm(w))
-            if nw <= 1e-12:
+            if nw <= tol.ZERO_AXIS:
                 raise RobotInputError(
                     "revolute twist has w = 0 (that is a prismatic twist)", source=source, where=where
                 )
             v, w = v / nw, w / nw
-            if abs(float(v @ w)) > 1e-9 * max(1.0, float(np.linalg.norm(v))):
+            if abs(float(v @ w)) > tol.TWIST_UNIT * max(1.0, float(np.linalg.norm(v))):
                 raise RobotInputError(
                     "revolute twist has a non-zero pitch (v . w != 0): not a pure rotation",
                     source=source,
@@ -109,7 +110,7 @@ def _joint(tbl, kind: str, i: int, scale: float, source: str) -> Joint:
                 )
             twist = np.concatenate([v, w])
         else:
-            if np.linalg.norm(w) > 1e-12:
+            if np.linalg.norm(w) > tol.ZERO_AXIS:
                 raise RobotInputError("prismatic twist needs w = 0", source=source, where=where)
             twist = np.concatenate([unit_axis(v, source, where + ": twist"), np.zeros(3)])
     else:

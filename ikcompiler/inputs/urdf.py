@@ -30,6 +30,7 @@ import numpy as np
 
 from ikcompiler.errors import ChainSelectionError, RobotInputError, UnsupportedJointError
 from ikcompiler.model import Chain, Coupling, Joint
+from subproblems import tolerances as tol
 from subproblems.screw import transform_twist, twist_exp
 
 MOVING = {"revolute": "R", "continuous": "R", "prismatic": "T"}
@@ -219,9 +220,9 @@ def load_urdf(path: Path | str, *, base: str | None = None, tip: str | None = No
         kind = MOVING[j.type]
         axis = np.asarray(j.axis if j.axis is not None else (1.0, 0.0, 0.0), dtype=float)
         norm = float(np.linalg.norm(axis))
-        if not norm > 1e-12:
+        if not norm > tol.ZERO_AXIS:
             raise RobotInputError("<axis xyz> has zero length", source=src, where=where(j))
-        if abs(norm - 1.0) > 1e-12:
+        if abs(norm - 1.0) > tol.INPUT_UNIT_NOTE:
             notes.append(f"axis of joint {j.name!r} normalised (length {norm:g})")
         direction = g[:3, :3] @ (axis / norm)
         if kind == "R":
@@ -349,7 +350,7 @@ def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src)
     joints, home = list(joints), np.asarray(home, dtype=float)
     for master in dict.fromkeys(external):  # each external master once, in order of first use
         driven = [i for i, jt in enumerate(joints) if resolved.get(jt.name, ("",))[0] == master]
-        unit = [i for i in driven if abs(abs(resolved[joints[i].name][1]) - 1.0) <= 1e-12]
+        unit = [i for i in driven if abs(abs(resolved[joints[i].name][1]) - 1.0) <= tol.INPUT_MIMIC]
         if not unit:
             names = ", ".join(
                 f"{joints[i].name!r} (multiplier {resolved[joints[i].name][1]:g})" for i in driven
@@ -368,7 +369,7 @@ def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src)
                 resolved[name] = (master, a * a1, a * b1 + b)
         lower, upper = _limits(joint_by_name[master], j1.kind, notes)
         lo1, hi1 = sorted(((j1.lower - b1) / a1, (j1.upper - b1) / a1))
-        if lo1 > lower + 1e-12 or hi1 < upper - 1e-12:
+        if lo1 > lower + tol.INPUT_MIMIC or hi1 < upper - tol.INPUT_MIMIC:
             # as for every mimic joint, the follower's own limits are not imposed (files often give a
             # follower the master's range whatever the multiplier, PR2's gripper: [0, 0.548] at -1)
             notes.append(

@@ -18,6 +18,7 @@ import numpy as np
 
 from ikcompiler.errors import RobotInputError
 from subproblems.screw import axis_point, is_prismatic
+from subproblems.tolerances import TWIST_UNIT
 
 JOINT_KINDS = ("R", "T")
 
@@ -44,9 +45,9 @@ class Joint:
         tw = _frozen(self.twist, (6,))
         if not np.all(np.isfinite(tw)):
             raise RobotInputError("twist is not finite", where=f"joint {self.name!r}")
-        if self.kind == "R" and abs(np.linalg.norm(tw[3:]) - 1.0) > 1e-9:
+        if self.kind == "R" and abs(np.linalg.norm(tw[3:]) - 1.0) > TWIST_UNIT:
             raise RobotInputError("revolute twist needs a unit axis w", where=f"joint {self.name!r}")
-        if self.kind == "T" and not (is_prismatic(tw) and abs(np.linalg.norm(tw[:3]) - 1) < 1e-9):
+        if self.kind == "T" and not (is_prismatic(tw) and abs(np.linalg.norm(tw[:3]) - 1) < TWIST_UNIT):
             raise RobotInputError(
                 "prismatic twist needs w = 0 and a unit direction v", where=f"joint {self.name!r}"
             )

@@ -9,25 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from subproblems.screw import adjoint, inverse_transform, twist_exp, twist_exp_batch
+from subproblems.screw import adjoint, fk, fk_batch, inverse_transform
 
 
 def forward(chain, q) -> np.ndarray:
-    """``g_st(q) = exp(xi_1 th_1) ... exp(xi_n th_n) g_st(0)``."""
+    """``g_st(q) = exp(xi_1 th_1) ... exp(xi_n th_n) g_st(0)`` (:func:`subproblems.screw.fk`)."""
     th = chain.expand(np.asarray(q, dtype=float))
-    g = np.eye(4)
-    for joint, t in zip(chain.joints, th):
-        g = g @ twist_exp(joint.twist, t)
-    return g @ chain.home
+    return fk(chain.twists, th, chain.home)
 
 
 def forward_batch(chain, Q) -> np.ndarray:
     """Vectorised :func:`forward` over Q of shape (N, dof); returns (N, 4, 4)."""
     th = chain.expand(np.atleast_2d(np.asarray(Q, dtype=float)))
-    g = np.broadcast_to(np.eye(4), (th.shape[0], 4, 4)).copy()
-    for i, joint in enumerate(chain.joints):
-        g = g @ twist_exp_batch(joint.twist, th[:, i])
-    return g @ chain.home
+    return fk_batch(chain.twists, th, chain.home)
 
 
 def space_jacobian(chain, q) -> np.ndarray:

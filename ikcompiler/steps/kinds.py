@@ -88,6 +88,9 @@ class PointStep(Step):
     p0: tuple[float, float, float]
     snapped: bool
     solve: tuple[int, ...]
+    # S2-RR: the relation of the two unknown axes in every sampled configuration ("parallel", "meet",
+    # "skew"), recorded by the compiler (ikcompiler/geometry/facts.py, docs/design.md section 10)
+    axes: str | None = None
 
 
 @_frozen

@@ -159,3 +159,45 @@ def test_s2_rrr_exact_row_not_moved_by_a_looser_copy():
         assert min(np.abs(np.remainder(rows - th + np.pi, 2 * np.pi) - np.pi).max(axis=1)) <= 1e-8
         for row in rows:
             assert np.linalg.norm(fk_point(tw, row, p) - q) <= 1e-9 * 1e3 * 5
+
+
+def test_independent_paths_is_local_to_its_thread():
+    """The agreement switch belongs to the thread that sets it (it was a module-global flag): while one
+    thread is inside ``independent_paths``, another thread's ``solve`` still agrees with ``solve_batch``
+    on instances where the two paths differ without the agreement step."""
+    import threading
+
+    from subproblems._class2 import agreement_active, independent_paths
+
+    code = "S2-RR"
+    insts = _unreachable(np.random.default_rng(7), code, 20)
+
+    def answers():
+        return [solve(code, tw, p=p, q=q).q for tw, p, q in insts]
+
+    agreed = answers()
+    with independent_paths():
+        assert not agreement_active()
+        own = answers()
+    assert agreement_active()
+    # the switch matters on these instances: some scalar answers change without the agreement step
+    assert any(a.shape != b.shape or np.abs(a - b).max() > 1e-9 for a, b in zip(agreed, own))
+
+    inside, done = threading.Event(), threading.Event()
+
+    def hold():
+        with independent_paths():
+            inside.set()
+            done.wait(timeout=60)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    try:
+        assert inside.wait(timeout=60)
+        assert agreement_active()
+        got = answers()
+    finally:
+        done.set()
+        holder.join()
+    for a, b in zip(agreed, got):
+        np.testing.assert_array_equal(a, b)
