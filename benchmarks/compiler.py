@@ -437,9 +437,8 @@ def _native_deferred_batch(module, Ts, free_values) -> tuple[float, int]:
     """Fraction of the batch targets the native backend hands to the Python path (its per-target code
     from ``_native_chain().many`` below 0, as ``_native_batch`` reads it), and how many it calls
     invalid (code -2; the sampled poses are all valid)."""
-    from subproblems import native as _native
-
     from ikcompiler.runtime import targets
+    from subproblems import native as _native
 
     raw = np.asarray(Ts, dtype=float)
     robot = module._SOLVER.robot

@@ -65,7 +65,8 @@ class Solver:
 
     def reference_chunk(self, goals, Td, init, limits):
         """The reference runtime on targets (chunked so that a search stays within the budget)."""
-        step = max(1, self.memory_budget // (fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)))
+        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
+        step = max(1, self.memory_budget // width)
         if len(goals) <= step:
             return self._reference(goals, Td, init, limits)
         return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits)
@@ -158,7 +159,7 @@ class Solver:
     # -- many targets ----------------------------------------------------------------------------
 
     def solve_batch_info(self, Ts, *free, limits=True, chunk=CHUNK):
-        """Every solution of N targets: Q (N, K, n), valid (N, K), ls (N, K), residual (N, K), continuum (N, K).
+        """Every solution of N targets: Q (N, K, n), valid, ls, residual and continuum (N, K).
 
         Rows with ls True are least-squares answers (their residual says how far they miss); valid marks
         the filled slots; continuum marks solutions that are one representative of a self-motion (the
@@ -192,8 +193,8 @@ class Solver:
 
         parts = []
         for i in range(0, len(raw), NATIVE_CHUNK):
-            part, code = native.many(raw[i:i + NATIVE_CHUNK], targets.free_columns(self.robot, init[i:i + NATIVE_CHUNK]),
-                                     limits)
+            free_values = targets.free_columns(self.robot, init[i:i + NATIVE_CHUNK])
+            part, code = native.many(raw[i:i + NATIVE_CHUNK], free_values, limits)
             idx = np.nonzero(code == PYTHON)[0]  # invalid targets (code INVALID) keep their empty slots
             for j in range(0, len(idx), CHUNK):
                 sub = idx[j:j + CHUNK]
