@@ -85,7 +85,7 @@ def candidates(robot, goals, Td, init, correct):
     if cont.any():
         # A self-motion: the representative a step chose may not complete the pose; Newton steps
         # on every joint pull it onto a nearby exact solution of the continuum.
-        TH[cont] = robot.newton(TH[cont], goals[owner[cont]], CONTINUUM_NEWTON)
+        TH[cont] = robot.newton_until_exact(TH[cont], goals[owner[cont]], CONTINUUM_NEWTON)
     if robot.polish and len(TH):
         TH, owner = correct(TH, owner, goals)
         extra = np.zeros(len(TH) - len(ls), dtype=bool)
