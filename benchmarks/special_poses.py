@@ -146,7 +146,8 @@ def _table(rows, mem, batch) -> str:
         lines.append(
             f"| {r['robot']} | {r['method']} | {r['path']} | {r['random_median_us']:.1f} | "
             f"{r['random_p99_us']:.1f} | {r['special_median_us']:.1f} | {r['special_p99_us']:.1f} | "
-            f"{r['special_median_ratio']:.2f} | {r['special_p99_ratio']:.1f} | {r['special_over_1ms']} | {mb} |")
+            f"{r['special_median_ratio']:.2f} | {r['special_p99_ratio']:.1f} | {r['special_over_1ms']} | "
+            f"{mb} |")
     miss = [r["robot"] for r in rows if "error" not in r
             and (r["special_median_ratio"] > 3 or r["special_p99_ratio"] > 30)]
     over = [n for n, m in mem.items() if m.get("rss_peak_mb", 0) > MEMORY_GOAL_MB or "error" in m]
