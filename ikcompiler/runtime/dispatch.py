@@ -81,8 +81,6 @@ class Solver:
         reference runtime for targets near a degenerate geometry (fast.finish_many's routes)."""
         r = self.robot
         parts, route = _fk.finish_many(Q, err, flag, **r.finish_kwargs(limits))
-        if limits:
-            parts, route = self._without_unreachable_families(parts, route, Q, err, flag)
         newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
         if len(newton):
             rows, leaf = np.nonzero(_fk.usable(Q[newton], flag[newton]))
@@ -94,25 +92,6 @@ class Solver:
         if len(defer):
             _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits))
         return tuple(parts)
-
-    def _without_unreachable_families(self, parts, route, Q, err, flag):
-        """Targets sent to the reference runtime only for a self-motion that cannot reach the limits
-        (fastchain.families_outside_limits) finished here without those leaves."""
-        idx = np.nonzero(route == _fk.ROUTE_REFERENCE)[0]
-        if not len(idx):
-            return parts, route
-        drop = fastchain.families_outside_limits(self.robot, Q[idx], err[idx], flag[idx])
-        idx, drop = idx[drop.any(axis=1)], drop[drop.any(axis=1)]
-        if not len(idx):
-            return parts, route
-        again, route2 = _fk.finish_many(Q[idx], err[idx], np.where(drop, flag[idx] | _fk.EMPTY, flag[idx]),
-                                        **self.robot.finish_kwargs(True))
-        take = route2 != _fk.ROUTE_REFERENCE
-        parts = list(parts)
-        _scatter(parts, idx[take], [x[take] for x in again])
-        route = route.copy()
-        route[idx[take]] = route2[take]
-        return parts, route
 
     def python_chunk(self, goals, Td, init, limits):
         """Targets on the Python paths: the fast chain on arrays (its search, or its snapped plan's
@@ -141,7 +120,7 @@ class Solver:
         """Targets the C chain could not settle.  It ran the fast path already: what is left is the
         reference runtime, except for a search plan (its Python search is much cheaper than the
         reference runtime's) and a snapped plan (the continuation starts from the fast leaves)."""
-        if self.robot.search or self.robot.polish or (limits and self.fast_path()):
+        if self.robot.search or self.robot.polish:
             return self.python_chunk(goals, Td, init, limits)
         return self.reference_chunk(goals, Td, init, limits)
 
@@ -156,12 +135,11 @@ class Solver:
             found = native.exact(T, free, limits) if exact_only else native.one(T, free, limits)
             if found is not None:
                 return found
-            if not (limits and self.fast_path()) or r.search or r.polish:
-                goals, Td, init = self._one_target(T, free)
-                return _unpack(self.handed_back(goals, Td, init, limits), exact_only)
+            goals, Td, init = self._one_target(T, free)
+            return _unpack(self.handed_back(goals, Td, init, limits), exact_only)
         # the scalar fast chain once; its leaves, if its finish cannot settle them, routed once
         leaves = fastchain.scalar_leaves(r, T, free) if self.fast_path() else None
-        if leaves is not None and native is None:
+        if leaves is not None:
             found = _fk.finish_one(leaves, **r.finish_kwargs(limits))
             if found is not None:
                 q, res, ls, cont = fastchain.rows_of_one(found, len(r.joint_names))

@@ -85,34 +85,3 @@ def rows_of_one(found, dof: int) -> tuple:
     return (q, np.array([r[1] for r in found], dtype=float), np.array([r[0] for r in found], dtype=bool),
             np.array([r[3] for r in found], dtype=bool))
 
-
-NULL_SIGMA = 1e-9  # singular values below this (size-free Jacobian) span a self-motion's directions
-FIXED_JOINT = 1e-6  # a joint whose component in every such direction is below this does not move
-
-
-def families_outside_limits(robot, Q, err, flag) -> np.ndarray:
-    """(N, L) mask of the self-motion leaves that no representative of their family can bring inside
-    the limits: exact leaves outside the limits in a joint the self-motion does not move (its
-    component in the Jacobian's null space is zero, free joints held).  The fast finish sends a
-    target whose families have no exact in-limit leaf to the reference runtime; with these leaves
-    left out, such a target is settled by the fast finish (docs/design.md section 6)."""
-    from subproblems import select as _sel
-
-    family = ((flag & _fk.FAMILY) != 0) & ((flag & _fk.EMPTY) == 0) & (err <= robot.tol * robot.scale)
-    family &= ~np.isnan(Q).any(axis=-1)
-    out = np.zeros(flag.shape, dtype=bool)
-    if not family.any():
-        return out
-    rows = np.nonzero(family)
-    q = Q[rows]
-    outside = _sel.excluding_joints(q, robot.joint_types, robot.lower, robot.upper)
-    J = _sel.jacobian(q, twists=robot.twists, A=robot.A, b=robot.B, home=robot.home, scale=robot.scale,
-                      target=robot.target)
-    moving = [j for j in range(q.shape[1]) if j not in robot.free]
-    _, sigma, Vt = np.linalg.svd(J[:, :, moving])
-    sigma = np.concatenate([sigma, np.zeros((len(q), len(moving) - sigma.shape[1]))], axis=1)
-    null = sigma < NULL_SIGMA  # (k, n moving): rows of Vt spanning the self-motion
-    reach = np.zeros_like(outside)
-    reach[:, moving] = (np.abs(Vt) * null[:, :, None]).max(axis=1) > FIXED_JOINT
-    out[rows] = (outside & ~reach).any(axis=1) & null.any(axis=1)
-    return out
