@@ -11,9 +11,9 @@ import numpy as np
 
 from subproblems import fast as _fk
 
-# Bytes one search instance (a target at one grid value, through the fast chain) holds at its peak:
-# the chain's temporaries are a few hundred floats per instance (measured with
-# benchmarks/special_poses.py --memory, well under this bound on every zoo robot).
+# Bytes one search instance (a target at one grid value, through the fast chain) may hold at its peak:
+# an estimate with margin (its leaves are L x (n + 2) floats, the chain's temporaries a few hundred
+# floats), not a measurement: no zoo robot takes the search by default.
 BYTES_PER_INSTANCE = 16 * 1024
 SEED_ERROR = 1.0  # search seeds missing by more than this (relative to the robot size) are dropped
 
