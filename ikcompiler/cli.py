@@ -76,7 +76,8 @@ def _cmd_explain(args) -> int:
     from ikcompiler.compiler import compile_plan
 
     chain = load_robot(args.robot, base=args.base, tip=args.tip)
-    print(compile_plan(chain, target=args.target, free=args.free).explain())
+    plan = compile_plan(chain, target=args.target, free=args.free)
+    print(plan.to_json(indent=2) if args.json else plan.explain())
     return 0
 
 
@@ -129,6 +130,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_compile)
     p = sub.add_parser("explain", help="print the geometry found and the subproblem chain")
     _compile_args(p)
+    p.add_argument(
+        "--json", action="store_true", help="print the plan as JSON (Plan.to_json; docs/design.md section 12)"
+    )
     p.set_defaults(func=_cmd_explain)
     p = sub.add_parser("verify", help="compile, then check solutions on random poses")
     _compile_args(p)

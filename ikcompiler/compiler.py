@@ -23,8 +23,7 @@ from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
-from subproblems import max_solutions
-from subproblems.plan_runtime import COUPLED_ROOT_SLOTS
+from ikcompiler.steps import General6Step, NumericalStep
 
 TARGETS = ("pose", "position", "orientation", "position+direction")
 VIRTUAL_ROLL = "_tool_roll"
@@ -154,14 +153,13 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
                 SEARCH_GRID[len(joints)],
                 all_names,
             )
-        step = {
-            "kind": "NUM",
-            "code": "NUM",
-            "starts": NUMERICAL_STARTS,
-            "iters": NUMERICAL_ITERS,
-            "rule": f"numerical multi-start Gauss-Newton from {NUMERICAL_STARTS} fixed starts; "
+        step = NumericalStep(
+            code="NUM",
+            starts=NUMERICAL_STARTS,
+            iters=NUMERICAL_ITERS,
+            rule=f"numerical multi-start Gauss-Newton from {NUMERICAL_STARTS} fixed starts; "
             "returns every distinct solution it converges to",
-        }
+        )
         return Plan(
             chain.name,
             tuple(chain.independent_names),
@@ -189,7 +187,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         "closed-form",
         tuple(steps),
         free,
-        bool(snap_notes) or any(s.get("snapped", False) for s in steps),
+        bool(snap_notes) or any(getattr(s, "snapped", False) for s in steps),
         max(n_groups, alt_groups),
         geometry,
         tuple(notes),
@@ -217,15 +215,14 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes) -> Plan | N
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
-    step = {
-        "kind": "G6R",
-        "code": "G6R",
-        "solve": list(range(6)),
-        "arrangements": list(solver.usable),
-        "rule": "Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
+    step = General6Step(
+        code="G6R",
+        solve=list(range(6)),
+        arrangements=list(solver.usable),
+        rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
-    }
+    )
     names = [j.name for j in chain.joints]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
     notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
@@ -253,19 +250,21 @@ def solution_slots(plan: Plan) -> int:
         return 16
     k = 1
     for s in plan.steps:
-        if s["kind"] == "S3C":
-            k *= COUPLED_ROOT_SLOTS
-        elif s["kind"] != "SUM":
-            k *= max_solutions(s["code"])
+        k *= s.slots
     return max(1, min(k, 64))
 
 
 def compile_source(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> str:
     """The generated module's source text."""
+    tol = tol or Tolerance()
+    return plan_source(compile_plan(chain, target=target, free=free, tol=tol), chain, tol=tol)
+
+
+def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> str:
+    """The module source of a plan already made for ``chain`` (e.g. read back with ``Plan.from_json``)."""
     from ikcompiler import __version__
 
     tol = tol or Tolerance()
-    plan = compile_plan(chain, target=target, free=free, tol=tol)
     solved = with_tool_roll(chain) if plan.virtual else chain
     return generate(
         plan,

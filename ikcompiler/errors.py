@@ -45,6 +45,11 @@ class CompileError(IkcError):
     """No plan could be built; the message says what was tried and why it failed."""
 
 
+class PlanFormatError(IkcError, ValueError):
+    """A serialised plan or step (``Plan.from_json``, ``Step.from_dict``) that does not follow the schema
+    of docs/design.md section 12: the message names the step kind and the field."""
+
+
 class MotionError(IkcError, ValueError):
     """A path or trajectory request that cannot be met as asked (start not on the path, limits too
     tight for the duration, wrong number of joint values)."""

@@ -1,9 +1,10 @@
 """Turn a :class:`~ikcompiler.plan.Plan` and its chain into the source of a solver module
 (docs/design.md section 6).
 
-The module folds the robot's constants in, writes the derivation as comments beside each step, and
-imports only the standard library, numpy and ``subproblems``.  The same robot always gives the same
-text: numbers are printed with ``repr`` and nothing depends on time or environment.
+The module folds the robot's constants in, writes the derivation once (``PLAN``) and as comments beside
+each step, binds its API to ``ikcompiler.runtime`` and imports only the standard library, numpy,
+``subproblems`` and that runtime.  The same robot always gives the same text: numbers are printed with
+``repr`` and nothing depends on time or environment.
 """
 
 from __future__ import annotations
@@ -86,8 +87,10 @@ STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lea
 STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters", "solve_pair", "var", "coupling")
 
 
-def _step_source(step: dict, line: str) -> str:
-    body = ", ".join(f"{f!r}: {_literal(step[f])}" for f in STEP_FIELDS if f in step)
+def _step_source(step, line: str) -> str:
+    """One ``_STEPS`` entry: the step's plain dict (``Step.to_dict()``), the fields the runtime reads."""
+    data = step.to_dict()
+    body = ", ".join(f"{f!r}: {_literal(data[f])}" for f in STEP_FIELDS if f in data)
     return f"    # {line}\n    {{{body}}},\n"
 
 

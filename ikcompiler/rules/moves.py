@@ -7,8 +7,8 @@ must hold for every value of the solved joints; that is judged on random configu
 (``Context.samples``), not assumed.  The search (``ikcompiler.search``) then validates each proposed
 move numerically before it trusts it.
 
-Each move is a plain dict, the step format of :mod:`subproblems.plan_runtime`, plus ``"rule"`` (the
-derivation in words) and ``"gives"`` (joints and group sums it solves).
+Each move is a typed plan step (:mod:`ikcompiler.steps`, docs/design.md section 12) carrying its rule in
+words; the search reads what it solves (``solves``) and the group sums it gives (``gives_sums``).
 """
 
 from __future__ import annotations
@@ -18,6 +18,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ikcompiler.geometry.relations import Tolerance, lines_meet, parallel_miss, twist_line
+from ikcompiler.steps import (
+    CoupledDistanceStep,
+    DistanceStep,
+    LeadingAxialStep,
+    OrientationAxialStep,
+    OrientationStep,
+    PointStep,
+    S1Step,
+    Step,
+    SumStep,
+    TrailingAxialStep,
+)
 from subproblems.screw import adjoint, inverse_transform, twist_exp
 
 
@@ -117,13 +129,13 @@ def _code(prefix, ctx, joints) -> str:
     return prefix + "-" + "".join(ctx.kinds[j] for j in joints)
 
 
-def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[dict]:
+def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[Step]:
     """Every move the rules allow from the state (solved joints, known group sums)."""
     unknown = [i for i in range(ctx.n) if i not in solved]
     if not unknown:
         return []
     frames = ctx.frames(solved)
-    moves: list[dict] = []
+    moves: list[Step] = []
     known = sorted(solved)
 
     # SUM: a group sum known and one member left.
@@ -131,16 +143,14 @@ def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[dict]:
         left = [j for j, _ in group if j not in solved]
         if len(left) == 1:
             moves.append(
-                {
-                    "kind": "SUM",
-                    "code": "SUM",
-                    "known": known,
-                    "solve": left,
-                    "members": [list(m) for m in group],
-                    "group": group,
-                    "rule": f"{ctx.names[left[0]]} from the known sum of joints "
+                SumStep(
+                    code="SUM",
+                    known=known,
+                    solve=left,
+                    members=group,
+                    rule=f"{ctx.names[left[0]]} from the known sum of joints "
                     f"{_name_list(ctx, [j for j, _ in group])} (parallel axes add up, rule 2)",
-                }
+                )
             )
 
     if ctx.target == "pose":
@@ -150,14 +160,13 @@ def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[dict]:
             inv_txt = " on the inverted equation (rule 5)" if inverted else ""
             if len(seq) <= 3:
                 moves.append(
-                    {
-                        "kind": "S1",
-                        "code": _code("S1", ctx, seq),
-                        "known": known,
-                        "inverted": inverted,
-                        "solve": seq,
-                        "rule": f"rigid motion of the last unknowns{inv_txt} (rules 5, 7)",
-                    }
+                    S1Step(
+                        code=_code("S1", ctx, seq),
+                        known=known,
+                        inverted=inverted,
+                        solve=seq,
+                        rule=f"rigid motion of the last unknowns{inv_txt} (rules 5, 7)",
+                    )
                 )
             for j in (3, 2, 1):
                 trail = seq[-j:]
@@ -185,7 +194,7 @@ def propose(ctx: Context, solved: frozenset, sums: frozenset) -> list[dict]:
     return moves
 
 
-def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
+def _orientation_moves(ctx, frames, unknown, known, sums) -> list[Step]:
     moves = []
     revs = [j for j in unknown if ctx.kinds[j] == "R"]
     if not revs:
@@ -206,41 +215,38 @@ def _orientation_moves(ctx, frames, unknown, known, sums) -> list[dict]:
                 for g in gives
             )
             moves.append(
-                {
-                    "kind": "O",
-                    "code": "O-" + "R" * len(runs),
-                    "known": known,
-                    "groups": groups,
-                    "gives": gives,
-                    "solve": [g[0][0] for g in gives if len(g) == 1],
-                    "snapped": snapped,
-                    "rule": f"rule 2: orientation separation; the rotation gives {txt}",
-                }
+                OrientationStep(
+                    code="O-" + "R" * len(runs),
+                    known=known,
+                    groups=groups,
+                    solve=[g[0][0] for g in gives if len(g) == 1],
+                    snapped=snapped,
+                    rule=f"rule 2: orientation separation; the rotation gives {txt}",
+                )
             )
     # OH: leading parallel run, one joint, trailing parallel run: h^T R_mid x = h^T R' x.
     if len(runs) == 3:
         lead, mid, trail = runs
         if len(mid) == 1:
             moves.append(
-                {
-                    "kind": "OH",
-                    "code": "H-R",
-                    "known": known,
-                    "inverted": False,
-                    "lead": lead,
-                    "trail": trail,
-                    "solve": mid,
-                    "snapped": snapped,
-                    "rule": "rules 2 and 6: the axis of "
+                OrientationAxialStep(
+                    code="H-R",
+                    known=known,
+                    inverted=False,
+                    lead=lead,
+                    trail=trail,
+                    solve=mid,
+                    snapped=snapped,
+                    rule="rules 2 and 6: the axis of "
                     f"{ctx.names[trail[-1]]} keeps its direction under its own run, its component "
                     f"along the axis of {ctx.names[lead[0]]} is unchanged by that run: "
                     f"rotate-to-plane in {ctx.names[mid[0]]}",
-                }
+                )
             )
     return moves
 
 
-def _coupled_distance_move(ctx, frames, base, lead, mid, why) -> list[dict]:
+def _coupled_distance_move(ctx, frames, base, lead, mid, why) -> list[Step]:
     """Rule 3 when the two middle joints are coupled revolute joints: one unknown, a root search."""
     pair = {(dep, master): (a, b) for dep, master, a, b in ctx.couplings}
     j, k = mid
@@ -262,7 +268,8 @@ def _coupled_distance_move(ctx, frames, base, lead, mid, why) -> list[dict]:
         f"{_name_list(ctx, mid)} are coupled: one angle, all roots of the distance equation"
     )
     extra = {"solve_pair": list(mid), "var": var, "coupling": [float(coupling[0]), float(coupling[1])]}
-    return [_lead_move(base, c_exact, "S3C", "S3-1D", [var], lead, rule, c0=[float(x) for x in c0], **extra)]
+    centre = [float(x) for x in c0]
+    return [_lead_move(base, c_exact, CoupledDistanceStep, "S3-1D", [var], lead, rule, c0=centre, **extra)]
 
 
 def _fixed_center(ctx, frames, lead):
@@ -272,19 +279,19 @@ def _fixed_center(ctx, frames, lead):
     return _concurrent(ctx, frames, lead)
 
 
-def _lead_move(base, exact, kind, code, solve, lead, rule, **extra) -> dict:
+def _lead_move(base, exact, step_type, code, solve, lead, rule, **extra) -> Step:
     """A point move that also uses the leading joints ``lead`` (rules 3 and 6)."""
-    snapped = base["snapped"] or not exact
-    return dict(base, snapped=snapped, kind=kind, code=code, solve=list(solve), lead=lead, rule=rule, **extra)
+    fields = dict(base, snapped=base["snapped"] or not exact)
+    return step_type(**fields, code=code, solve=list(solve), lead=lead, rule=rule, **extra)
 
 
-def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> list[dict]:
+def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> list[Step]:
     base = {"known": known, "inverted": inverted, "trail": trail, "p0": [float(x) for x in p0]}
     base["snapped"] = not exact
     moves = []
     if 1 <= len(rest) <= 3:
         code = _code("S2", ctx, rest)
-        moves.append(dict(base, kind="S2", code=code, solve=list(rest), rule=f"{why}: point to point"))
+        moves.append(PointStep(**base, code=code, solve=list(rest), rule=f"{why}: point to point"))
     for i in range(1, len(rest)):
         lead, mid = rest[:i], rest[i:]
         if any(ctx.kinds[j] != "R" for j in lead):
@@ -298,11 +305,12 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
         if c0 is not None:
             rule = f"{why}; rule 3: distance to a point fixed by {_name_list(ctx, lead)}"
             code = _code("S3", ctx, mid)
-            moves.append(_lead_move(base, c_exact, "S3", code, mid, lead, rule, c0=[float(x) for x in c0]))
+            centre = [float(x) for x in c0]
+            moves.append(_lead_move(base, c_exact, DistanceStep, code, mid, lead, rule, c0=centre))
         signs, p_exact = _parallel(ctx, frames, lead)
         if signs is not None:
             rule = f"{why}; rule 6: projection on the common axis of {_name_list(ctx, lead)}"
-            moves.append(_lead_move(base, p_exact, "HL", _code("H", ctx, mid), mid, lead, rule))
+            moves.append(_lead_move(base, p_exact, LeadingAxialStep, _code("H", ctx, mid), mid, lead, rule))
     if len(rest) >= 2 and all(ctx.kinds[j] == "R" for j in rest[1:]):
         signs, p_exact = _parallel(ctx, frames, rest[1:])
         if signs is not None:
@@ -310,5 +318,6 @@ def _point_moves(ctx, frames, rest, trail, p0, exact, known, inverted, why) -> l
                 f"{why}; rule 6: the parallel axes of {_name_list(ctx, rest[1:])} keep the "
                 "component along their direction"
             )
-            moves.append(_lead_move(base, p_exact, "HT", _code("H", ctx, rest[:1]), rest[:1], rest[1:], rule))
+            code = _code("H", ctx, rest[:1])
+            moves.append(_lead_move(base, p_exact, TrailingAxialStep, code, rest[:1], rest[1:], rule))
     return moves

@@ -16,6 +16,7 @@ read back along the parent links from the goal (no second graph search: docs/des
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import itertools
 import math
@@ -24,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ikcompiler.rules.moves import Context, propose
+from ikcompiler.steps import OrientationStep, Step, SumStep
 from subproblems import codes, max_solutions
 from subproblems.core import SubproblemError
 from subproblems.plan_runtime import COUPLED_ROOT_SLOTS, solve_step
@@ -110,34 +112,34 @@ def _angle_close(a, b, kinds, cols, tol):
     return np.abs(d).max(axis=-1) <= tol
 
 
-def validate(ctx: Context, move: dict, trials: Trials, couplings, tol: float) -> str | None:
+def validate(ctx: Context, move: Step, trials: Trials, couplings, tol: float) -> str | None:
     """None when the move recovers the trial values; otherwise the reason it fails."""
-    if move["kind"] == "SUM":
+    if isinstance(move, SumStep):
         return None
     th = trials.theta
-    TH = np.where(np.isin(np.arange(ctx.n), move["known"]), th, np.nan)
+    TH = np.where(np.isin(np.arange(ctx.n), move.needs), th, np.nan)
     try:
         res = solve_step(move, ctx.twists, ctx.kinds, trials.Td, TH)
     except (SubproblemError, KeyError, ValueError, np.linalg.LinAlgError) as exc:
         return f"{type(exc).__name__}: {exc}"
     if res.continuum.any():
         return "the subproblem has a continuum of solutions here"
-    if move["kind"] == "O":
-        truth = np.stack([sum(s * th[:, j] for j, s in g) for g in move["groups"]], axis=1)
+    if isinstance(move, OrientationStep):
+        truth = np.stack([sum(s * th[:, j] for j, s in g) for g in move.groups], axis=1)
         cols_kinds = "R" * truth.shape[1]
         ok = _angle_close(res.q, truth[:, None, :], cols_kinds, range(truth.shape[1]), tol)
     else:
-        truth = th[:, move["solve"]]
-        ok = _angle_close(res.q, truth[:, None, :], ctx.kinds, move["solve"], tol * max(1.0, ctx.scale))
+        solve = list(move.solves)
+        ok = _angle_close(res.q, th[:, solve][:, None, :], ctx.kinds, solve, tol * max(1.0, ctx.scale))
     found = np.any(ok & res.valid, axis=1)
     if not found.all():
         return f"misses the sampled joint values in {int((~found).sum())} of {len(found)} trials"
     return None
 
 
-def move_key(move: dict) -> str:
+def move_key(move: Step) -> str:
     """A stable identity of a move (its fields, minus the prose)."""
-    return repr(sorted((k, v) for k, v in move.items() if k != "rule"))
+    return repr(sorted((k, v) for k, v in move.to_dict().items() if k != "rule"))
 
 
 def search(
@@ -166,8 +168,8 @@ def search(
         if move is not None:
             why = validate(ctx, move, trials, couplings, 1e-2 if move.get("snapped") else 1e-6)
             if why is not None:
-                names = ", ".join(ctx.names[j] for j in move.get("solve", []))
-                report.tried.append(f"{move['code']} for ({names}) via {move['rule']}: {why}")
+                names = ", ".join(ctx.names[j] for j in move.solves)
+                report.tried.append(f"{move.code} for ({names}) via {move.rule}: {why}")
                 continue
             parent_of[state] = (parent, move)
         done[state] = cost
@@ -179,14 +181,14 @@ def search(
         for mv in propose(ctx, solved, sums):
             if state == start_state and move_key(mv) in banned_first:
                 continue
-            new_sums = set(sums) | {g for g in mv.get("gives", ()) if len(g) > 1}
+            new_sums = set(sums) | set(mv.gives_sums)
             nxt = (
-                _closure(frozenset(solved) | frozenset(mv.get("solve", [])), couplings),
+                _closure(frozenset(solved) | frozenset(mv.solves), couplings),
                 frozenset(new_sums),
             )
-            step_cost = move_cost(mv["code"])
+            step_cost = move_cost(mv.code)
             if math.isinf(step_cost):
-                report.tried.append(f"{mv['code']} via {mv['rule']}: no solver for this subproblem type")
+                report.tried.append(f"{mv.code} via {mv.rule}: no solver for this subproblem type")
             elif nxt != state and nxt not in done:
                 heapq.heappush(heap, (cost + step_cost, next(counter), nxt, state, mv))
     if goal is None:
@@ -199,20 +201,16 @@ def search(
     return steps[::-1], done[goal], report
 
 
-def finalize_steps(steps: list[dict]) -> tuple[list[dict], int]:
-    """Number the parallel groups and strip search-only fields; returns (steps, group count)."""
+def finalize_steps(steps: list[Step]) -> tuple[list[Step], int]:
+    """Number the parallel groups (the ids the runtime keeps the sums under); returns (steps, count)."""
     ids: dict = {}
     out = []
     for s in steps:
-        s = dict(s)
-        if s["kind"] == "O":
-            gids = []
-            for g in s["gives"]:
-                gids.append(ids.setdefault(g, len(ids)) if len(g) > 1 else -1)
-            s["group_ids"] = gids
-            s.pop("gives")
-        if s["kind"] == "SUM":
-            s["group"] = ids[s["group"]]
+        if isinstance(s, OrientationStep):
+            gids = [ids.setdefault(g, len(ids)) if len(g) > 1 else -1 for g in s.groups]
+            s = dataclasses.replace(s, group_ids=gids)
+        if isinstance(s, SumStep):
+            s = dataclasses.replace(s, group=ids[s.members])
         out.append(s)
     return out, len(ids)
 
