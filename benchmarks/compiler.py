@@ -7,8 +7,8 @@ For every zoo robot (or those named with ``--robots``):
   ``sample_configurations``), plus solution counts, recovery of the sampled joint vector and the worst
   pose error, all checked with our chain's FK;
 * batch throughput of ``solve_batch`` in poses/s (10 000 poses, fewer for slow solvers: see ``--budget``);
-* all on the module's default path: the native backend where the module carries its fast chain in C
-  (``_NATIVE_SOURCE``; built with the system C compiler on first use, into a fresh temporary
+* all on the module's default path: the native backend where the module's fast chain has a C
+  translation (``NATIVE``; printed and built with the system C compiler on first use, into a fresh temporary
   ``IKC_CACHE`` for this run, and the one-off build timed apart from the Python compile), else the
   Python fast path where the plan has one, else the reference runtime;
 * for modules with a fast path, the same timings again on the Python fast path (``NATIVE = False``)
@@ -534,7 +534,7 @@ def _native_reason(module) -> str:
     """Why a module with a fast path runs it in Python (no C chain, or the C chain did not build)."""
     from subproblems import native as _native
 
-    if getattr(module, "_NATIVE_SOURCE", None):
+    if getattr(module, "NATIVE", False):
         return f"C build unavailable: {_native.last_error}"
     if module._SEARCH:
         return "no C chain (search plan)"
@@ -563,8 +563,8 @@ def bench_robot(name: str, opts) -> dict:
 
     fast = bool(getattr(module, "FAST_PATH", False)) and getattr(module, "_fast_chain", None) is not None
     native = None
-    if fast and getattr(module, "NATIVE", False) and getattr(module, "_NATIVE_SOURCE", None):
-        # the one-off C build (into this run's fresh IKC_CACHE) and load, before any timing
+    if fast and getattr(module, "NATIVE", False):
+        # the one-off C print and build (into this run's fresh IKC_CACHE) and load, before any timing
         t0 = time.perf_counter()
         native = module._native_chain()
         row["native_build_s"] = time.perf_counter() - t0

@@ -48,7 +48,7 @@ def _cmd_compile(args) -> int:
         f"up to {module.MAX_SOLUTIONS} solutions, "
         + ("fast path" if module.FAST_PATH else "reference runtime only (a step has no fast kernel)")
     )
-    if getattr(module, "_NATIVE_SOURCE", None):
+    if getattr(module, "NATIVE", False):
         print(_native_status(module))
     if module.METHOD != "closed-form":
         print(

@@ -12,6 +12,8 @@ arithmetic, the same answers, slower.
 The code shared by every generated chain lives beside this file: ``fast_kernels.h``, a C port of the
 kernels of :mod:`subproblems.fast` that keeps their operation order (so the two backends agree to
 rounding), and ``fast_finish.h``, the port of its ``finish_one`` and a threaded driver over N poses.
+The finish is compiled once per machine into its own cached shared library and each chain alone
+against it (:func:`build`; docs/design.md, section 14): a new robot costs only its chain's build.
 
 Settings (environment): ``IKC_NATIVE=0`` disables the native backend; ``IKC_CACHE`` names the cache
 directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); ``CC`` the compiler.
@@ -20,6 +22,7 @@ directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); `
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import os
 import shutil
@@ -30,6 +33,8 @@ from pathlib import Path
 # -ffp-contract=off: no fused multiply-adds, so C rounds like the Python path; -fno-math-errno lets
 # sqrt inline (errno is never read).  No -ffast-math: NaN and infinity checks must keep working.
 FLAGS = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
+# A chain alone, against the shared finish (split build, below): the same flags for now.
+CHAIN_FLAGS = FLAGS
 
 last_error: str | None = None  # why the last load returned None (for `ikc compile` to report)
 _loaded: dict[str, ctypes.CDLL] = {}
@@ -66,7 +71,9 @@ def cache_dir() -> Path:
     return Path(base) / "ikcompiler"
 
 
+@functools.lru_cache(maxsize=8)
 def _compiler_id(cc: str) -> str:
+    """The compiler's first ``--version`` line (part of every cache key); asked once per process."""
     try:
         out = subprocess.run(cc.split() + ["--version"], capture_output=True, text=True, timeout=30)
         return out.stdout.splitlines()[0] if out.stdout else cc
@@ -74,51 +81,117 @@ def _compiler_id(cc: str) -> str:
         return cc
 
 
-def build(source: str, *, include_kernels: bool = True) -> Path | None:
-    """Compile ``source`` (with the kernels in front) into a cached shared library; its path or None."""
-    global last_error
-    cc = compiler()
-    if cc is None:
-        last_error = "no C compiler found (set CC, or install gcc)"
-        return None
-    try:
-        text = (kernels_source() + "\n" if include_kernels else "") + source
-    except OSError as exc:
-        last_error = f"the C kernels are missing from the installation: {exc}"
-        return None
-    key = hashlib.sha256("\0".join((text, _compiler_id(cc), " ".join(FLAGS))).encode()).hexdigest()[:20]
+def _cache_directory() -> Path:
     directory = cache_dir()
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError:
         directory = Path(tempfile.gettempdir()) / "ikcompiler-cache"
         directory.mkdir(parents=True, exist_ok=True)
-    target = directory / f"ikc_{key}.so"
+    return directory
+
+
+def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
+    """Compile ``text`` into the shared library ``target`` (kept when it exists); False with
+    :data:`last_error` set when the compiler fails."""
+    global last_error
     if target.exists():
-        return target
+        return True
     with tempfile.TemporaryDirectory(prefix="ikc-build-") as tmp:
         src = Path(tmp) / "chain.c"
         src.write_text(text)
         lib = Path(tmp) / "chain.so"
         try:
-            done = subprocess.run(cc.split() + list(FLAGS) + ["-o", str(lib), str(src), "-lm"],
+            done = subprocess.run(cc.split() + list(flags) + ["-o", str(lib), str(src), *extra, "-lm"],
                                   capture_output=True, text=True, timeout=300)
         except (OSError, subprocess.SubprocessError) as exc:
             last_error = f"{cc} failed to run: {exc}"
-            return None
+            return False
         if done.returncode != 0:
             last_error = f"{cc} failed: {done.stderr.strip()[:2000]}"
-            return None
+            return False
         # Another process may build the same library at the same time: copy next to the target, then
         # rename (atomic on one file system), so nobody loads a half-written file.
-        partial = directory / f".{target.name}.{os.getpid()}"
+        partial = target.with_name(f".{target.name}.{os.getpid()}")
         try:
             shutil.copyfile(lib, partial)
             os.replace(partial, target)
         except OSError as exc:
-            last_error = f"cannot write the C build to {directory} ({exc}); set IKC_CACHE to a writable one"
-            return None
-    return target
+            last_error = (f"cannot write the C build to {target.parent} ({exc}); "
+                          "set IKC_CACHE to a writable one")
+            return False
+    return True
+
+
+def _key(*parts: str) -> str:
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()[:20]
+
+
+# The split build (docs/design.md, section 14): the finish is the same for every chain, so it is
+# compiled once per machine (per header text, compiler and flags) into a shared library that exports
+# its entry points under SHARED names (aliases of the header's static functions); a chain is then
+# compiled alone, with the kernels (static inline: they must inline into the chain) and the header's
+# declarations in front, and its entry points' calls renamed to the shared ones.  `__typeof__` takes
+# each signature from the header itself, so the two sides cannot disagree.  The finish calls the
+# chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
+FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many")  # what a chain's entry points call
+SHARED_PREFIX = "ikc_shared_"
+
+
+def _finish_library_source() -> str:
+    aliases = [f'__typeof__({name}) {SHARED_PREFIX}{name[4:]} __attribute__((alias("{name}")));'
+               for name in FINISH_ENTRIES]
+    head = "\n/* exported for the chains (subproblems/native.py) */\n"
+    return kernels_source() + head + "\n".join(aliases) + "\n"
+
+
+def _chain_prelude() -> str:
+    lines = ["/* the finish is in a shared library (subproblems/native.py): its entry points by name */"]
+    for name in FINISH_ENTRIES:
+        lines.append(f"extern __typeof__({name}) {SHARED_PREFIX}{name[4:]};")
+        lines.append(f"#define {name} {SHARED_PREFIX}{name[4:]}")
+    return kernels_source() + "\n" + "\n".join(lines) + "\n"
+
+
+def _finish_library(cc: str, cc_id: str, directory: Path) -> Path | None:
+    """The cached shared finish library (built on first use), or None when the split build fails."""
+    text = _finish_library_source()
+    target = directory / f"ikc_finish_{_key(text, cc_id, ' '.join(FLAGS))}.so"
+    return target if _compile(cc, FLAGS, text, target) else None
+
+
+def build(source: str, *, include_kernels: bool = True) -> Path | None:
+    """Compile ``source`` (with the kernels in front) into a cached shared library; its path or None.
+
+    With the kernels, the chain is built alone against the shared finish library (compiled once);
+    where that split build fails (a compiler without ``__typeof__`` or symbol aliases) the whole text
+    is compiled in one piece, as before."""
+    global last_error
+    cc = compiler()
+    if cc is None:
+        last_error = "no C compiler found (set CC, or install gcc)"
+        return None
+    try:
+        kernels = kernels_source() if include_kernels else ""
+    except OSError as exc:
+        last_error = f"the C kernels are missing from the installation: {exc}"
+        return None
+    cc_id = _compiler_id(cc)
+    try:
+        directory = _cache_directory()
+    except OSError as exc:
+        last_error = f"cannot create a cache directory ({exc}); set IKC_CACHE to a writable one"
+        return None
+    if include_kernels:
+        finish = _finish_library(cc, cc_id, directory)
+        if finish is not None:
+            text = _chain_prelude() + source
+            target = directory / f"ikc_{_key(text, cc_id, ' '.join(CHAIN_FLAGS), str(finish))}.so"
+            if _compile(cc, CHAIN_FLAGS, text, target, extra=(str(finish),)):
+                return target
+    text = (kernels + "\n" if include_kernels else "") + source
+    target = directory / f"ikc_{_key(text, cc_id, ' '.join(FLAGS))}.so"
+    return target if _compile(cc, FLAGS, text, target) else None
 
 
 def load(source: str) -> ctypes.CDLL | None:

@@ -88,7 +88,8 @@ def test_generated_source_is_deterministic_and_clean(rhino, tmp_path):
             imported |= {n.name for n in node.names}
         elif isinstance(node, ast.ImportFrom):
             imported |= {f"{node.module}.{n.name}" for n in node.names}
-    # the standard library, numpy, subproblems and, of ikcompiler, only its runtime (docs/design.md 6)
+    # the standard library, numpy, subproblems and, of ikcompiler, only its runtime (docs/design.md
+    # section 6; the runtime prints the C chain with ikcompiler.codegen.csource on first native use)
     allowed = {"numpy", "subproblems"} | set(sys.stdlib_module_names)
     outside = {m for m in imported if m.split(".")[0] not in allowed}
     assert outside == {"ikcompiler.runtime"}

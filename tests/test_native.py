@@ -1,6 +1,7 @@
 """The native backend (the fast chain in C, ``subproblems.native``) against the Python fast path.
 
-Every closed-form zoo robot carries its chain as C (``_NATIVE_SOURCE``): its raw leaves must equal the
+Every closed-form zoo robot has its chain in C (``NATIVE``; printed from the module's data by
+``ikcompiler.codegen.csource.native_source``): its raw leaves must equal the
 Python chain's, its solution sets those of the Python path (``NATIVE = False``), single and batched,
 with and without threads; free joints keep their given values; bad input raises the Python path's
 errors; without a compiler (or with ``IKC_NATIVE=0``) the module falls back to the Python path.
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 
 from ikcompiler import compile_robot, load_robot
+from ikcompiler.codegen import csource
 from ikcompiler.inputs.zoo import zoo_names
 from ikcompiler.verify import _same, sample_configurations
 from subproblems import fast, native
@@ -31,6 +33,7 @@ ROBOTS = sorted(NATIVE_ROBOTS) + [CALIBRATED]
 SAME = 1e-6  # solution sets agree to this (angles modulo 2 pi)
 
 _CACHE: dict[tuple, tuple] = {}
+_HAS_C: dict[int, bool] = {}  # id(module) -> NATIVE as compiled (tests switch it off and back)
 
 
 def _compiled(name, **kw):
@@ -45,12 +48,13 @@ def _compiled(name, **kw):
         else:
             robot = load_robot(name)
         module = compile_robot(robot, **kw)
+        _HAS_C[id(module)] = module.NATIVE
         with pytest.MonkeyPatch.context() as mp:  # a developer's IKC_NATIVE=0 must not hide the backend
             mp.delenv("IKC_NATIVE", raising=False)
             chain = module._native_chain()
         _CACHE[key] = (module, robot, chain)
     module, robot, chain = _CACHE[key]
-    module.FAST_PATH, module.NATIVE = True, module._NATIVE_SOURCE is not None
+    module.FAST_PATH, module.NATIVE = True, _HAS_C[id(module)]
     return module, robot, chain
 
 
@@ -67,7 +71,7 @@ def _python(module, fn, *args, **kw):
     try:
         return fn(*args, **kw)
     finally:
-        module.NATIVE = module._NATIVE_SOURCE is not None
+        module.NATIVE = _HAS_C[id(module)]
 
 
 def _exact_round_trip(module, rows, T, what):
@@ -82,8 +86,8 @@ def _exact_round_trip(module, rows, T, what):
 @pytest.mark.parametrize("name", sorted(zoo_names()))
 def test_native_coverage(name):
     module, _, chain = _compiled(name)
-    has = module._NATIVE_SOURCE is not None
-    assert has == (name in NATIVE_ROBOTS), f"{name}: _NATIVE_SOURCE {has}"
+    has = csource.native_source(vars(module)) is not None
+    assert has == (name in NATIVE_ROBOTS), f"{name}: C chain {has}"
     assert module.NATIVE == has
     assert (chain is not None) == has, native.last_error
 
@@ -397,10 +401,41 @@ def test_missing_or_failing_compiler_falls_back_to_python(cc, monkeypatch, tmp_p
         assert native.last_error.startswith("false failed"), native.last_error
     else:
         assert "C compiler" in native.last_error, native.last_error
-    assert not cache.exists() or not any(cache.iterdir())  # nothing half-built left in the cache
+    # nothing half-built left in the cache (the printed C text may be there: it is complete)
+    assert not cache.exists() or all(p.name.startswith("ikc_src_") for p in cache.iterdir())
     _, Ts, _ = _poses(module, chain, 40, seed=17)
     _same_results(module, fresh, Ts)
     assert len(fresh.solve(Ts[0])) and fresh._native_chain() is None
+
+
+def test_chains_share_one_finish_library(monkeypatch, tmp_path):
+    """The split build (docs/design.md, section 14): the finish is built once into the cache, each
+    chain alone against it, and a chain library names that finish library as its dependency."""
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "_loaded", {})
+    built = [compile_robot(name) for name in ("ur5", "puma560")]
+    assert all(m._native_chain() is not None for m in built), native.last_error
+    finish = sorted(tmp_path.glob("ikc_finish_*.so"))
+    chains = sorted(p for p in tmp_path.glob("ikc_*.so") if p not in finish)
+    assert len(finish) == 1 and len(chains) == 2, sorted(p.name for p in tmp_path.iterdir())
+    for chain_lib in chains:
+        assert str(finish[0]).encode() in chain_lib.read_bytes()
+
+
+def test_one_piece_fallback_gives_the_split_builds_answers(monkeypatch, tmp_path):
+    """Where the split build fails, the kernels, finish and chain are compiled as one file: same answers."""
+    module, chain, split = _compiled("ur5")
+    assert split is not None
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "_finish_library", lambda *args, **kw: None)  # as if the split build failed
+    whole = compile_robot("ur5")
+    assert whole._native_chain() is not None, native.last_error
+    assert not list(tmp_path.glob("ikc_finish_*.so"))
+    _, Ts, _ = _poses(module, chain, 60, seed=19)
+    _same_results(module, whole, Ts)
 
 
 # --- 7. the generated C --------------------------------------------------------------------------------
@@ -410,15 +445,18 @@ def test_missing_or_failing_compiler_falls_back_to_python(cc, monkeypatch, tmp_p
 def test_native_source_is_deterministic(name):
     module, _, _ = _compiled(name)
     again = compile_robot(name, free=FREE.get(name, ()))
-    assert again._NATIVE_SOURCE == module._NATIVE_SOURCE
+    first = csource.module_c_source(vars(module))  # printed anew each time (native_source caches)
+    assert first is not None and csource.module_c_source(vars(again)) == first
+    assert csource.native_source(vars(again)) == first
 
 
-def test_native_source_lines_fit_ruff():
+def test_native_source_lines_are_wrapped():
     modules = [_compiled(name)[0] for name in ROBOTS]
     modules += [_compiled(name, target=target, free=free)[0] for name, target, free in REDUCED]
     for module in modules:
-        assert module._NATIVE_SOURCE and '"""' not in module._NATIVE_SOURCE
-        long = [line for line in module._NATIVE_SOURCE.splitlines() if len(line) > 110]
+        source = csource.native_source(vars(module))
+        assert source, module.__name__
+        long = [line for line in source.splitlines() if len(line) > 110]
         assert not long, (module.__name__, long[:3])
 
 

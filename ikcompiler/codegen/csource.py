@@ -1,10 +1,9 @@
-"""Translate a fast chain into C: the native backend of a generated module.
+"""Print a fast chain in C: the native backend of a generated module (docs/design.md section 11).
 
-The fast chain (:mod:`ikcompiler.codegen.fastpath`) is a small, regular subset of Python: assignments
-of arithmetic on floats, loops over the slots of a kernel of :mod:`subproblems.fast`, and one leaf per
-candidate.  This module walks its syntax tree and writes the same computation as a C function
-``ikc_chain``, expression for expression (every operation parenthesised as Python grouped it, so C
-rounds the same way), calling the C port of the kernels (``subproblems/fast_kernels.h``).  The
+The fast chain is a code IR program (:mod:`ikcompiler.codegen.ir`, built by
+:mod:`ikcompiler.codegen.fastpath`); :func:`ikcompiler.codegen.printers.c_function` prints it as a C
+function ``ikc_chain``, expression for expression (every operation parenthesised as the tree groups,
+so C rounds as Python does), calling the C port of the kernels (``subproblems/fast_kernels.h``).  The
 module's settings (joint kinds, limits, tolerances) become an ``ikc_robot`` and three exported entry
 points wrap the shared finish and driver (``subproblems/fast_finish.h``):
 
@@ -19,221 +18,65 @@ always uses 0); the C finish reruns the chain with other values when the represe
 be completed inside the limits.
 
 :func:`chain_c_source` returns None for a chain it cannot translate (a step that calls a reference
-solver, which has no C port): such modules keep their Python fast path alone.
+solver, which has no C port): such modules keep their Python fast path alone.  The generated module
+does not carry the C: :func:`native_source` prints it again from the module's own data on first
+native use (cached by a hash of those data).
 """
 
 from __future__ import annotations
 
-import ast
-import math
+import hashlib
 
-# slots of each kernel of subproblems.fast (its outputs per slot come from the loop's targets)
-KERNEL_SLOTS = {
-    "plane_r": 2, "plane_t": 1, "dist_r": 2, "dist_t": 2, "slide3": 1, "turn_slide2": 1, "point_r": 1,
-    "point_rr_meet": 2, "point_rr_parallel": 2, "rot_r": 1, "rot_rr": 1, "rot_rrr": 2,
-}
-_MATH = {"cos": "cos", "sin": "sin", "sqrt": "sqrt", "atan2": "atan2"}
-_BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.BitOr: "|"}
+import numpy as np
+
+from ikcompiler.codegen import ir
+from ikcompiler.codegen.printers import KERNEL_SLOTS, Untranslatable, c_function, c_number, wrap
+
+__all__ = [
+    "KERNEL_SLOTS", "TARGET_CODES", "chain_c_source", "module_c_source", "native_source", "translatable",
+]
+
 TARGET_CODES = {"pose": 0, "position": 1, "orientation": 2}
-WIDTH = 100  # the C is embedded in the Python module, whose lines ruff keeps under 110
-
-
-class Untranslatable(Exception):
-    """The chain has a construct with no C counterpart."""
+_wrap = wrap
 
 
 def _number(x: float) -> str:
-    x = float(x)
-    if math.isinf(x):
-        return "HUGE_VAL" if x > 0 else "(-HUGE_VAL)"
-    if not math.isfinite(x):
-        raise Untranslatable(f"constant {x}")
-    text = repr(x)
-    return text if any(ch in text for ch in ".en") else text + ".0"
-
-
-class _Translator:
-    def __init__(self, dof: int):
-        self.dof = dof
-        self.lines: list[str] = []
-        self.depth = 1
-        self.leaves = 0
-        self.slots = [1]  # product of the slots of the enclosing loops
-
-    def emit(self, text: str) -> None:
-        self.lines.append("    " * self.depth + text)
-
-    # -- expressions -------------------------------------------------------------------------------
-    def expr(self, node) -> str:
-        if isinstance(node, ast.Constant):
-            if isinstance(node.value, bool):
-                return "1" if node.value else "0"
-            if isinstance(node.value, (int, float)):
-                return _number(node.value)
-        elif isinstance(node, ast.Name):
-            return node.id
-        elif isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id == "free":
-            if isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, int):
-                return f"fr[{node.slice.value}]"
-        elif isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
-            return f"({self.expr(node.left)} {_BINOPS[type(node.op)]} {self.expr(node.right)})"
-        elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
-            return f"(-{self.expr(node.operand)})"
-        elif isinstance(node, ast.Call) and _backend_call(node):
-            name = node.func.attr
-            args = [self.expr(a) for a in node.args]
-            if name in _MATH:
-                return f"{_MATH[name]}({', '.join(args)})"
-            if name == "max2":
-                return f"ikc_max2({', '.join(args)})"
-            if name == "maxabs":
-                return f"ikc_maxabs({len(args)}, (const double[]){{{', '.join(args)}}})"
-        raise Untranslatable(ast.dump(node)[:200])
-
-    def argument(self, node) -> str:
-        if isinstance(node, ast.Tuple):
-            return f"(const double[]){{{', '.join(self.expr(e) for e in node.elts)}}}"
-        return self.expr(node)
-
-    # -- statements --------------------------------------------------------------------------------
-    def statements(self, body) -> None:
-        for node in body:
-            self.statement(node)
-
-    def statement(self, node) -> None:
-        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
-            return  # the docstring
-        if isinstance(node, ast.Return):
-            return
-        if isinstance(node, ast.Assign) and len(node.targets) == 1:
-            target, value = node.targets[0], node.value
-            if isinstance(target, ast.Name) and target.id == "out":
-                return
-            if isinstance(target, ast.Tuple) and isinstance(value, ast.Name) and value.id == "goal":
-                for i, name in enumerate(target.elts):
-                    self.emit(f"const double {name.id} = goal[{i}];")
-                return
-            if isinstance(target, ast.Name):
-                self.emit(f"const double {target.id} = {self.expr(value)};")
-                return
-        if isinstance(node, ast.For) and isinstance(node.target, ast.Tuple) and _kernel_call(node.iter):
-            self.loop(node)
-            return
-        if (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
-                and isinstance(node.value.func, ast.Attribute) and node.value.func.attr == "append"):
-            self.leaf(node.value.args[0])
-            return
-        raise Untranslatable(ast.dump(node)[:200])
-
-    def loop(self, node) -> None:
-        kernel = node.iter.func.attr
-        if kernel not in KERNEL_SLOTS:
-            raise Untranslatable(f"kernel {kernel}")
-        names = [e.id for e in node.target.elts]
-        outs, flag, slots = len(names) - 1, names[-1], KERNEL_SLOTS[kernel]
-        args = [self.argument(a) for a in node.iter.args[1:]]
-        self.emit("{")
-        self.depth += 1
-        self.emit(f"double {flag}_q[{slots * outs}];")
-        self.emit(f"int {flag}_f[{slots}];")
-        self.emit(f"ikc_{kernel}({', '.join(args + [f'{flag}_q', f'{flag}_f'])});")
-        self.emit(f"for (int {flag}_k = 0; {flag}_k < {slots}; {flag}_k++) {{")
-        self.depth += 1
-        for j, name in enumerate(names[:-1]):
-            self.emit(f"const double {name} = {flag}_q[{flag}_k * {outs} + {j}];")
-        self.emit(f"const int {flag} = {flag}_f[{flag}_k];")
-        self.slots.append(self.slots[-1] * slots)
-        self.statements(node.body)
-        self.slots.pop()
-        self.depth -= 1
-        self.emit("}")
-        self.depth -= 1
-        self.emit("}")
-
-    def leaf(self, node) -> None:
-        if not isinstance(node, ast.Tuple) or len(node.elts) != self.dof + 2:
-            raise Untranslatable("leaf")
-        for j, e in enumerate(node.elts[: self.dof]):
-            self.emit(f"Q[n * {self.dof} + {j}] = {self.expr(e)};")
-        self.emit(f"E[n] = {self.expr(node.elts[self.dof])};")
-        self.emit(f"F[n] = {self.expr(node.elts[self.dof + 1])};")
-        self.emit("n++;")
-        self.leaves += self.slots[-1]
-
-
-def _backend_call(node) -> bool:
-    f = node.func
-    return isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name) and f.value.id == "m"
-
-
-def _kernel_call(node) -> bool:
-    return (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-            and isinstance(node.func.value, ast.Name) and node.func.value.id == "_fk")
-
-
-def _wrap(line: str) -> list[str]:
-    """Break a long line at spaces (C does not care where), continuation lines indented deeper."""
-    if len(line) <= WIDTH:
-        return [line]
-    indent = len(line) - len(line.lstrip()) + 8
-    out, current = [], line
-    while len(current) > WIDTH:
-        cut = current.rfind(" ", indent + 1, WIDTH)
-        if cut <= indent:
-            break
-        out.append(current[:cut])
-        current = " " * indent + current[cut + 1:]
-    return out + [current]
+    """A C literal for an initialiser (no parentheses needed there)."""
+    text = c_number(x)
+    return text[1:-1] if text.startswith("(") else text
 
 
 def _array(values, fmt) -> str:
     return "{" + ", ".join(fmt(v) for v in values) + "}"
 
 
-def _translate(python_source: str, name: str, c_name: str, dof: int):
-    """(C lines of function ``name`` of ``python_source`` as ``c_name``, its leaf count), or None."""
-    tree = ast.parse(python_source)
-    fn = next((n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == name), None)
-    if fn is None:
-        return None
-    tr = _Translator(dof)
-    try:
-        tr.statements(fn.body)
-    except Untranslatable:
-        return None
-    head = [
-        f"static int {c_name}(const double *goal, const double *fr, double rep, double *Q, double *E,",
-        "                     int *F) {",
-        "    int n = 0;",
-        "    (void)fr;",
-        "    (void)rep;",
-    ]
-    lines = head + [w for line in tr.lines for w in _wrap(line)] + ["    return n;", "}", ""]
-    return lines, tr.leaves
-
-
-def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target: str, scale: float,
+def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, target: str, scale: float,
                    tol: float, slots: int, twists, home, A, b, search: int = 0, grid: int = 0,
-                   polish: int = 0, alternative: str | None = None, near_singular: float = 0.0) -> str | None:
-    """C source of the chain ``python_source`` (the text of ``_fast_chain``), or None if untranslatable.
+                   polish: int = 0, alternative: ir.Program | None = None,
+                   near_singular: float = 0.0) -> str | None:
+    """C source of the chain ``program`` (the IR of ``_fast_chain``), or None if untranslatable.
 
     ``kinds``, ``lower``, ``upper`` are the returned joints' types and limits (JOINT_NAMES order),
     ``free`` the positions of the free joints among them; ``twists`` (all joints, mimic ones too),
     ``home`` (4x4) and ``A``, ``b`` (all joint values = A q + b) describe the true robot for the
-    Newton steps of the finish.  ``alternative``: the source of ``_fast_chain`` for the plan's
-    alternative chain (the C finish runs it where the chain cannot settle a target), or None.
-    ``search`` joints gridded over ``grid`` values each (a search plan:
-    the chain takes their values after the free ones).  ``polish``: Newton steps on the true robot for
-    every leaf of a snapped plan (the chain itself runs on the snapped robot); ``near_singular``: the
-    weakest singular value below which such a leaf's target goes to the Python continuation.
+    Newton steps of the finish.  ``alternative``: the IR of the plan's alternative chain (the C finish
+    runs it where the chain cannot settle a target), or None.  ``search`` joints gridded over
+    ``grid`` values each (a search plan: the chain takes their values after the free ones).
+    ``polish``: Newton steps on the true robot for every leaf of a snapped plan (the chain itself runs
+    on the snapped robot); ``near_singular``: the weakest singular value below which such a leaf's
+    target goes to the Python continuation.
     """
-    if target not in TARGET_CODES:
+    if target not in TARGET_CODES or program is None:
         return None
     dof = len(kinds)
-    main = _translate(python_source, "_fast_chain", "ikc_chain", dof)
-    if main is None:
+    try:
+        main = c_function(program, "ikc_chain", dof)
+    except Untranslatable:
         return None
-    alt = _translate(alternative, "_fast_chain", "ikc_chain_alt", dof) if alternative else None
+    try:
+        alt = c_function(alternative, "ikc_chain_alt", dof) if alternative is not None else None
+    except Untranslatable:
+        alt = None
     nall = len(twists)
     flat_home = [home[i][j] for i in range(3) for j in range(3)] + [home[i][3] for i in range(3)]
     robot = [
@@ -279,3 +122,112 @@ def chain_c_source(python_source: str, *, kinds: str, lower, upper, free, target
         "}",
     ]
     return "\n".join(head + body + tail) + "\n"
+
+
+def translatable(program: ir.Program | None, *, target: str, dof: int) -> bool:
+    """Whether :func:`chain_c_source` gives C for ``program`` (the module's ``NATIVE``)."""
+    if program is None or target not in TARGET_CODES:
+        return False
+    try:
+        c_function(program, "ikc_chain", dof)
+    except Untranslatable:
+        return False
+    return True
+
+
+# -- the C of a generated module, printed from the module's own data ---------------------------------
+
+_MODULE_FIELDS = (  # what the C depends on, besides the code of this package (section 11)
+    "METHOD", "TARGET", "_SOLVE_TARGET", "JOINT_TYPES", "LOWER", "UPPER", "SCALE", "TOLERANCE",
+    "MAX_SOLUTIONS", "_TWISTS", "_PLAN_TWISTS", "_KINDS", "_HOME", "_COUPLINGS", "_A", "_B",
+    "_INDEPENDENT", "_VARY", "_VARY_LOWER", "_VARY_UPPER", "_FREE", "_POLISH", "_SEARCH", "_GRID",
+    "_STEPS", "_ALT_STEPS",
+)
+_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py")  # a change to these changes the C
+_SOURCES: dict[str, str | None] = {}  # data hash -> C text, for this process
+
+
+def _plain(x):
+    """``x`` as plain lists, numbers and strings (for a stable hash of a module's data)."""
+    if isinstance(x, np.ndarray):
+        return _plain(x.tolist())
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in sorted(x.items())}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if hasattr(x, "keys") and hasattr(x, "__getitem__"):  # a typed step read as a mapping
+        return {str(k): _plain(x[k]) for k in sorted(x.keys())}
+    return x
+
+
+def data_key(namespace) -> str:
+    """A hash of the data a module's C is printed from and of the code that prints it."""
+    from pathlib import Path
+
+    here = Path(__file__).parent
+    code = "".join((here / name).read_text() for name in _GENERATORS)
+    snapped = namespace["_PLAN_TWISTS"] is not namespace["_TWISTS"]
+    data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [snapped])
+    return hashlib.sha256((code + "\0" + data).encode()).hexdigest()[:24]
+
+
+def native_source(namespace) -> str | None:
+    """The C of a generated module (``ikc_chain`` and its entry points), or None when its chain has no
+    C translation.  ``namespace``: the module's globals.
+
+    The module holds its Python chain only; the C is printed from the same IR, rebuilt from the data
+    the module holds (steps, twists, home, kinds, couplings, limits, free joints, scale), on the first
+    native use, and kept per process and on disk (beside the C builds, ``subproblems.native``) under a
+    hash of those data and of this package's code generators."""
+    if namespace.get("_fast_chain") is None:
+        return None
+    key = data_key(namespace)
+    if key in _SOURCES:
+        return _SOURCES[key]
+    from subproblems import native
+
+    path = native.cache_dir() / f"ikc_src_{key}.c"
+    try:
+        text = path.read_text()
+    except OSError:
+        text = module_c_source(namespace)
+        if text is not None and native.enabled() and native.compiler() is not None:
+            _store(path, text)  # only where it will be built (a disabled backend writes nothing)
+    _SOURCES[key] = text
+    return text
+
+
+def _store(path, text: str) -> None:
+    """Write the cache file next to its place, then rename (another process may write it too)."""
+    import os
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_name(f".{path.name}.{os.getpid()}")
+        partial.write_text(text)
+        os.replace(partial, path)
+    except OSError:
+        pass  # an unwritable cache costs a reprint next time, nothing else
+
+
+def module_c_source(ns) -> str | None:
+    """The C of the module with globals ``ns``, printed now (:func:`native_source` caches it)."""
+    from ikcompiler.codegen.fastpath import ChainData, build_program
+
+    program = build_program(ChainData.from_module(ns))
+    alternative = None
+    if ns["_ALT_STEPS"] and not ns["_SEARCH"]:
+        alternative = build_program(ChainData.from_module(ns, "_ALT_STEPS"))
+    near = 0.0
+    if ns["_POLISH"] and ns["_PLAN_TWISTS"] is not ns["_TWISTS"]:  # a snapped plan (its own twists)
+        from subproblems.continuation import near_singular
+
+        near = near_singular(np.asarray(ns["_PLAN_TWISTS"], float), np.asarray(ns["_TWISTS"], float),
+                             ns["SCALE"])
+    return chain_c_source(
+        program, alternative=alternative, kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+        free=list(ns["_FREE"]), target=ns["TARGET"], scale=ns["SCALE"], tol=ns["TOLERANCE"],
+        slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"], home=np.asarray(ns["_HOME"], float), A=ns["_A"],
+        b=ns["_B"], search=len(ns["_SEARCH"]), grid=ns["_GRID"], polish=ns["_POLISH"], near_singular=near)

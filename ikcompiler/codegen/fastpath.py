@@ -13,15 +13,21 @@ kinematics, and a ``defer`` flag for instances near a degenerate geometry (which
 reference path).  :func:`fast_chain_source` returns ``None`` when a plan has a step this path does
 not cover (searches, snapped robots, coupled-pair roots, subproblems without a kernel); such modules
 use the reference path alone.
+
+The chain is built as the code IR of :mod:`ikcompiler.codegen.ir` (constants folded, common
+subexpressions named) and printed by :mod:`ikcompiler.codegen.printers`, in Python here and in C by
+:mod:`ikcompiler.codegen.csource` (docs/design.md section 11).  It is built from :class:`ChainData`,
+data a generated module holds as well, so the C can be printed again from a module (``native_source``).
 """
 
 from __future__ import annotations
 
 import math
-import re
+from dataclasses import dataclass
 
 import numpy as np
 
+from ikcompiler.codegen import ir, printers
 from subproblems import plan_runtime as rt
 
 ZERO = 1e-15  # constants below this (rounding noise of a URDF's rpy) fold to zero
@@ -32,69 +38,81 @@ class Unsupported(Exception):
     """The plan has a step the fast path does not cover."""
 
 
-def _fmt(x: float) -> str:
-    return repr(float(x)) if x != 0.0 else "0.0"
+def _is_expr(v) -> bool:
+    return isinstance(v, (ir.Const, ir.Name, ir.Free, ir.BinOp, ir.Neg, ir.Call))
+
+
+def _product(factors) -> ir.Expr:
+    """``f0*f1*...`` grouped from the left, as Python reads it."""
+    out = factors[0]
+    for f in factors[1:]:
+        out = ir.binop("*", out, f)
+    return out
 
 
 class _Code:
-    """Lines of the emitted function, with constant folding of linear combinations."""
+    """The IR being built: a stack of open blocks (each loop nests the rest of the chain), with
+    constant folding of linear combinations.  A value is a float (a constant known now) or an IR
+    expression; a term of :meth:`lin` multiplies a float by a value or by a pair of values."""
 
     def __init__(self):
-        self.lines: list[str] = []
-        self.depth = 1
+        self.body: list = []
+        self.blocks = [self.body]
         self.count = 0
 
-    def emit(self, text: str) -> None:
-        self.lines.append("    " * self.depth + text)
+    def emit(self, stmt) -> None:
+        self.blocks[-1].append(stmt)
 
-    def let(self, expr: str, hint: str = "t") -> str:
+    def let(self, expr, hint: str = "t") -> ir.Name:
         name = f"{hint}{self.count}"
         self.count += 1
-        self.emit(f"{name} = {expr}")
-        return name
+        self.emit(ir.Assign(name, ir.const(expr)))
+        return ir.Name(name)
 
     def lin(self, terms, hint: str = "t"):
-        """``sum coef * value`` with values floats or names; folds to a float or a name when it can."""
+        """``sum coef * value``; folds to a float or an existing value when it can, else a new name.
+        The sum is grouped from the left, first term first, the constant last."""
         const = 0.0
-        coefs: dict[str, float] = {}
+        coefs: dict = {}
         for coef, value in terms:
             if abs(coef) <= ZERO:
                 continue
-            if isinstance(value, str):
+            if isinstance(value, tuple) or _is_expr(value):
                 coefs[value] = coefs.get(value, 0.0) + coef
             else:
                 const += coef * value
         coefs = {k: v for k, v in coefs.items() if abs(v) > ZERO}
         if not coefs:
             return const if abs(const) > ZERO else 0.0
-        parts = []
-        for name, coef in coefs.items():
-            if abs(coef) <= ZERO:
-                continue
-            if coef == 1.0:
-                parts.append(f"+ {name}")
-            elif coef == -1.0:
-                parts.append(f"- {name}")
+        items = list(coefs.items())
+        value, coef = items[0]
+        if len(items) == 1 and coef == 1.0 and not isinstance(value, tuple) and abs(const) <= ZERO:
+            return value
+        expr = None
+        for value, coef in items:
+            factors = value if isinstance(value, tuple) else (value,)
+            if expr is None:  # the first term carries its sign: -x, -x*y, -0.5*x
+                if coef == 1.0:
+                    expr = _product(factors)
+                elif coef == -1.0:
+                    expr = _product((ir.neg(factors[0]),) + factors[1:])
+                else:
+                    expr = _product((ir.Const(coef),) + factors)
             else:
-                parts.append(f"{'-' if coef < 0 else '+'} {_fmt(abs(coef))}*{name}")
+                term = _product(factors if abs(coef) == 1.0 else (ir.Const(abs(coef)),) + factors)
+                expr = ir.binop("+" if coef > 0 else "-", expr, term)
         if abs(const) > ZERO:
-            parts.append(f"{'-' if const < 0 else '+'} {_fmt(abs(const))}")
-        if not parts:
-            return 0.0
-        if len(parts) == 1 and parts[0].startswith("+ ") and "*" not in parts[0] and abs(const) <= ZERO:
-            return parts[0][2:]
-        expr = " ".join(parts)
-        expr = expr[2:] if expr.startswith("+ ") else "-" + expr[2:]
+            expr = ir.binop("+" if const > 0 else "-", expr, abs(const))
         return self.let(expr, hint)
 
     @staticmethod
     def product(a, b):
         """A term (coef, value) for ``a * b``, or None when it is zero."""
-        if isinstance(a, str) and isinstance(b, str):
-            return (1.0, f"{a}*{b}")
-        if isinstance(a, str):
+        if _is_expr(a) and _is_expr(b):
+            return (1.0, (a, b))
+        if _is_expr(a):
             return None if abs(b) <= ZERO else (b, a)
-        if isinstance(b, str):
+        if _is_expr(b):
             return None if abs(a) <= ZERO else (a, b)
         return None if abs(a * b) <= ZERO else (a * b, 1.0)
 
@@ -132,24 +150,34 @@ class _Code:
     def scaled(self, sign: float, x):
         if sign > 0:
             return list(x)
-        return [self.lin([(-1.0, v)]) if isinstance(v, str) else -v for v in x]
+        return [self.lin([(-1.0, v)]) if _is_expr(v) else -v for v in x]
 
 
-def _render(x) -> str:
+def _arg(x):
+    """A kernel argument: a vector (tuple) or a scalar, as IR."""
     if isinstance(x, (list, tuple)):
-        return "(" + ", ".join(_render(v) for v in x) + ("," if len(x) == 1 else "") + ")"
-    return x if isinstance(x, str) else _fmt(x)
+        return tuple(_arg(v) for v in x)
+    return ir.const(x)
 
 
-def _call(kernel: str, *args) -> str:
-    return f"_fk.{kernel}(m, {', '.join(_render(a) for a in args)})"
+def _call(kernel: str, *args):
+    return ("kernel", kernel, tuple(_arg(a) for a in args))
+
+
+def _sumsq(xs):
+    """``x0*x0 + x1*x1 + ...`` grouped from the left."""
+    out = None
+    for x in xs:
+        sq = ir.binop("*", x, x)
+        out = sq if out is None else ir.binop("+", out, sq)
+    return ir.Const(0.0) if out is None else out
 
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
 
 
 class _Emitter:
-    """Walks the plan, emitting the loop nest."""
+    """Walks the plan, building the loop nest as IR."""
 
     def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans):
         self.c = _Code()
@@ -161,14 +189,13 @@ class _Emitter:
         self.couplings = couplings
         self.scale = scale
         self.target = target
-        self.q: dict[int, str] = {}  # joint -> variable holding its value
-        self.sig: dict[int, str] = {}
-        self.cs: dict[int, tuple[str, str]] = {}
+        self.q: dict = {}  # joint -> its value: a float or an IR expression (a name, a free value)
+        self.sig: dict = {}  # parallel group -> the name holding the sum of its angles
         self.exps: dict[int, list] = {}
         self.products: dict[tuple, list] = {(): IDENTITY}
         self.flags: list[str] = []
         for k, j in enumerate(free_joints):
-            self.q[j] = f"free[{k}]"
+            self.q[j] = ir.Free(k)
         self._couple()
 
     # -- joint values and their motions ------------------------------------------------------------
@@ -205,8 +232,8 @@ class _Emitter:
             E = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0] + [c.lin([(vi, self.q[j])], "p") for vi in v]
         else:
             w, r = self.axis(j)
-            cj = c.let(f"m.cos({self.q[j]})", "c")
-            sj = c.let(f"m.sin({self.q[j]})", "s")
+            cj = c.let(ir.call("cos", self.q[j]), "c")
+            sj = c.let(ir.call("sin", self.q[j]), "s")
             skew = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
             E = []
             for i in range(3):
@@ -244,7 +271,8 @@ class _Emitter:
         ``rep = pi`` stands for (pi for an angle, the joint's travel for a slide)."""
         self.reps += 1
         factor = (self.reps if self.reps % 2 else -self.reps) * length / math.pi
-        return "rep" if factor == 1.0 else self.c.lin([(factor, "rep")])
+        rep = ir.Name("rep")
+        return rep if factor == 1.0 else self.c.lin([(factor, rep)])
 
     def twist(self, j, key, sign):
         """Joint j's axis carried by the motion ``key``: ``(w, r)`` (revolute) or ``(v,)`` (prismatic)."""
@@ -269,9 +297,8 @@ class _Emitter:
     def reference_call(self, code, tws, inputs):
         """A step with no plain-arithmetic kernel: its subproblem's reference solver (``_fk.reference``)."""
         kinds = code.split("-")[1]
-        screws = ", ".join(_render(self.screw(t, k)) for t, k in zip(tws, kinds))
-        fields = ", ".join(f"{k!r}: {_render(v)}" for k, v in inputs.items())
-        return f"_fk.reference(m, {code!r}, ({screws},), {{{fields}}})"
+        screws = tuple(_arg(self.screw(t, k)) for t, k in zip(tws, kinds))
+        return ("reference", code, screws, tuple((k, _arg(v)) for k, v in inputs.items()))
 
     # -- steps -------------------------------------------------------------------------------------
     def step(self, step, Td):
@@ -304,8 +331,7 @@ class _Emitter:
                 call = _call("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
             else:
                 call = self.reference_call(code, tws, {"T": Tp})
-            outs = [f"a{c.count}_{i}" for i in range(len(step["solve"]))]
-            self._loop(outs, call)
+            outs = self._loop([f"a{c.count}_{i}" for i in range(len(step["solve"]))], call)
             for j, name in zip(step["solve"], outs):
                 self.q[j] = name
             self._couple(step["solve"])
@@ -313,8 +339,8 @@ class _Emitter:
         if kind == "O":
             ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
             fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
-            outs = [f"a{c.count}_{i}" for i in range(len(ws))]
-            self._loop(outs, _call(fn, *ws, Tp[:9], *([self.rep()] if len(ws) == 3 else [])))
+            outs = self._loop([f"a{c.count}_{i}" for i in range(len(ws))],
+                              _call(fn, *ws, Tp[:9], *([self.rep()] if len(ws) == 3 else [])))
             for col, g in enumerate(step["group_ids"]):
                 group = step["groups"][col]
                 if len(group) == 1:
@@ -348,7 +374,7 @@ class _Emitter:
         elif kind == "S3":
             centre = c.mat_vec(self.prefix(G_u[step["lead"][0]]), step["c0"], True)
             diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
-            d = c.let(f"m.sqrt({_render(c.dot(diff, diff))})", "d")
+            d = c.let(ir.call("sqrt", c.dot(diff, diff)), "d")
             if code == "S3-R":
                 call = _call("dist_r", args[0][0], args[0][1], point, centre, d, self.rep())
             elif code == "S3-T":
@@ -374,8 +400,7 @@ class _Emitter:
                 if kind == "HT":
                     args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
                 call = self.reference_call(code, args, {"p": p_in, "h": h, "d": d})
-        outs = [f"a{c.count}_{i}" for i in range(len(solve))]
-        self._loop(outs, call)
+        outs = self._loop([f"a{c.count}_{i}" for i in range(len(solve))], call)
         for j, name in zip(solve, outs):
             self.q[j] = name
         self._couple(solve)
@@ -383,9 +408,14 @@ class _Emitter:
     def _loop(self, outs, call):
         flag = f"f{self.c.count}"
         self.c.count += 1
-        self.c.emit(f"for {', '.join(outs)}, {flag} in {call}:")
-        self.c.depth += 1
+        if call[0] == "kernel":
+            loop = ir.Loop(call[1], call[2], tuple(outs), flag, [])
+        else:
+            loop = ir.ReferenceLoop(call[1], call[2], call[3], tuple(outs), flag, [])
+        self.c.emit(loop)
+        self.c.blocks.append(loop.body)  # the rest of the chain runs once per slot
         self.flags.append(flag)
+        return [ir.Name(name) for name in outs]
 
     def leaf(self, independent, goal):
         c = self.c
@@ -398,38 +428,12 @@ class _Emitter:
         parts = []
         if self.target in ("pose", "position"):
             dp = [c.lin([(1.0, F[9 + i]), (-1.0, goal[9 + i])]) for i in range(3)]
-            parts.append(c.let(f"m.sqrt({_sumsq(dp)})", "ep"))
+            parts.append(c.let(ir.call("sqrt", _sumsq(dp)), "ep"))
         if self.target in ("pose", "orientation"):
             dR = [c.lin([(1.0, F[i]), (-1.0, goal[i])]) for i in range(9)]
             # Frobenius norm of the rotation error: the precision contract (docs/finish.md)
-            parts.append(c.let(f"{_fmt(self.scale)}*m.sqrt({_sumsq(dR)})", "er"))
-        err = f"m.max2({parts[0]}, {parts[1]})" if len(parts) == 2 else parts[0]
-        defer = " | ".join(self.flags) if self.flags else "False"
-        qs = ", ".join(_render(self.q[j]) for j in independent)
-        c.emit(f"out.append(({qs}, {err}, {defer}))")
-
-
-_ASSIGN = re.compile(r"^\s*(\w+) = ")
-_NAME = re.compile(r"\b[A-Za-z_]\w*\b")
-
-
-def _without_dead_code(lines: list[str]) -> list[str]:
-    """Drop assignments whose name is never read (the emitter computes some axis points eagerly)."""
-    while True:
-        reads: dict[str, int] = {}
-        for line in lines:
-            m = _ASSIGN.match(line)
-            rhs = line[m.end():] if m else line
-            for name in _NAME.findall(rhs):
-                reads[name] = reads.get(name, 0) + 1
-        kept = [ln for ln in lines if not ((m := _ASSIGN.match(ln)) and m.group(1) not in reads)]
-        if len(kept) == len(lines):
-            return kept
-        lines = kept
-
-
-def _sumsq(xs) -> str:
-    return " + ".join(f"{_render(x)}*{_render(x)}" for x in xs) or "0.0"
+            parts.append(c.let(ir.binop("*", self.scale, ir.call("sqrt", _sumsq(dR))), "er"))
+        c.emit(ir.Leaf(tuple(ir.const(self.q[j]) for j in independent), tuple(parts), tuple(self.flags)))
 
 
 def classify_pairs(steps, twists, kinds, scale, samples: int = 6, seed: int = 5):
@@ -457,52 +461,122 @@ def classify_pairs(steps, twists, kinds, scale, samples: int = 6, seed: int = 5)
     return out
 
 
-def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | None:
-    """Source of ``_fast_chain(m, goal, free)`` for ``plan``, or None when the plan is not covered.
+@dataclass(frozen=True)
+class ChainData:
+    """What the fast chain is built from; a generated module holds every field (``from_module``).
 
-    ``free`` holds the values of ``free_joints`` and then, for a search plan, of the searched joints
-    (the chain is then the closed form that treats them as known).  A snapped plan is emitted on the
-    snapped robot's twists: its leaves are candidates that Newton steps then correct on the true robot.
-    """
-    if plan.method not in ("closed-form", "1d-search", "2d-search") or plan.virtual:
+    ``twists`` are the plan's (the snapped robot's for a snapped plan), ``kinds`` / ``home`` /
+    ``couplings`` (joint, master, a, b) the chain's with its mimic joints; ``known`` the joints the
+    chain takes as inputs ``free[0], free[1], ...`` (the free joints, then a search plan's searched
+    joints); ``independent`` the joints a leaf returns; ``vary`` / ``lower`` / ``upper`` the
+    independent joints and their limits (the slide length a representative stands for)."""
+
+    method: str
+    target: str
+    steps: tuple
+    twists: np.ndarray
+    kinds: str
+    home: np.ndarray
+    couplings: tuple
+    known: tuple
+    independent: tuple
+    vary: tuple
+    lower: tuple
+    upper: tuple
+    scale: float
+    search: bool
+
+    @classmethod
+    def from_plan(cls, plan, chain, *, independent, free_joints, scale) -> ChainData:
+        couplings = tuple((chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b)
+                          for cp in chain.couplings)
+        return cls(
+            method=plan.method, target="virtual" if plan.virtual else plan.target, steps=tuple(plan.steps),
+            twists=np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float),
+            kinds=chain.joint_types, home=np.asarray(chain.home, float), couplings=couplings,
+            known=tuple(free_joints) + tuple(plan.search), independent=tuple(independent),
+            vary=tuple(chain.independent), lower=tuple(map(float, chain.lower)),
+            upper=tuple(map(float, chain.upper)), scale=float(scale), search=bool(plan.search))
+
+    @classmethod
+    def from_module(cls, ns, steps_name: str = "_STEPS") -> ChainData:
+        """The data of a generated module's namespace (its globals), for its chain ``steps_name``."""
+        search = tuple(ns["_SEARCH"])
+        return cls(
+            method=ns["METHOD"], target=ns["TARGET"] if ns["_SOLVE_TARGET"] == ns["TARGET"] else "virtual",
+            steps=tuple(ns[steps_name]), twists=np.asarray(ns["_PLAN_TWISTS"], float), kinds=ns["_KINDS"],
+            home=np.asarray(ns["_HOME"], float), couplings=tuple(tuple(c) for c in ns["_COUPLINGS"]),
+            known=tuple(ns["_INDEPENDENT"][k] for k in ns["_FREE"]) + search,
+            independent=tuple(ns["_INDEPENDENT"]), vary=tuple(ns["_VARY"]),
+            lower=tuple(map(float, ns["_VARY_LOWER"])), upper=tuple(map(float, ns["_VARY_UPPER"])),
+            scale=float(ns["SCALE"]), search=bool(search))
+
+    def spans(self) -> list:
+        """Per joint, the slide length a representative ``rep = pi`` stands for: the larger limit's
+        size (the robot's size when a limit is infinite); a mimic joint's from its master's limits."""
+        own = {}
+        for j, lo, hi in zip(self.vary, self.lower, self.upper):
+            own[j] = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else self.scale
+        for dep, master, a, b in self.couplings:
+            if master in own and dep not in own:
+                k = self.vary.index(master)
+                ends = (a * self.lower[k] + b, a * self.upper[k] + b)
+                own[dep] = max(map(abs, ends)) if all(map(math.isfinite, ends)) else self.scale
+        return [own.get(j, self.scale) for j in range(len(self.kinds))]
+
+
+def build_program(data: ChainData, *, cse: bool = True) -> ir.Program | None:
+    """The IR of ``_fast_chain`` for ``data``, or None when the plan is not covered.
+
+    The chain takes the values of ``data.known`` (free joints, then a search plan's searched joints:
+    it is then the closed form that treats them as known).  A snapped plan is built on the snapped
+    robot's twists: its leaves are candidates that Newton steps then correct on the true robot.
+    ``cse``: name common subexpressions (off only to measure what it saves)."""
+    if data.method not in ("closed-form", "1d-search", "2d-search") or data.target not in FAST_TARGETS:
         return None
-    if plan.target not in FAST_TARGETS:
-        return None
-    twists = np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float)
-    couplings = [(chain.index(cp.joint), chain.index(cp.master), cp.a, cp.b) for cp in chain.couplings]
-    steps = classify_pairs(plan.steps, twists, chain.joint_types, scale)
-    known = list(free_joints) + list(plan.search)
-    spans = [max(abs(j.lower), abs(j.upper)) if math.isfinite(j.lower) and math.isfinite(j.upper) else scale
-             for j in chain.joints]
-    em = _Emitter(twists, chain.joint_types, np.asarray(chain.home, float), couplings, known, scale,
-                  plan.target, spans)
+    steps = classify_pairs(data.steps, data.twists, data.kinds, data.scale)
+    em = _Emitter(data.twists, data.kinds, data.home, data.couplings, list(data.known), data.scale,
+                  data.target, data.spans())
     c = em.c
-    goal = [f"g{i}" for i in range(12)]
-    c.emit(f"{', '.join(goal)} = goal")
-    H = np.asarray(chain.home, float)
+    goal = [ir.Name(f"g{i}") for i in range(12)]
+    H = data.home
     Hinv = np.linalg.inv(H)
-    if plan.target == "position":
+    if data.target == "position":
         Td = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0] + [c.lin([(1.0, goal[9 + i]), (-H[i, 3], 1.0)])
                                                              for i in range(3)]
     else:
-        Td = c.mat_mul(goal if plan.target == "pose" else goal[:9] + [0.0, 0.0, 0.0],
+        Td = c.mat_mul(goal if data.target == "pose" else goal[:9] + [0.0, 0.0, 0.0],
                        [float(x) for x in Hinv[:3, :3].ravel()] + [float(x) for x in Hinv[:3, 3]])
-    c.emit("out = []")
     try:
         for step in steps:
             em.step(step, Td)
-        em.leaf(independent, goal)
+        em.leaf(data.independent, goal)
     except Unsupported:
         return None
-    body = "\n".join(_without_dead_code(c.lines))
-    if plan.search and "_fk.reference(" in body:
+    program = ir.without_dead_code(ir.Program(tuple(g.id for g in goal), c.body))
+    if data.search and has_reference(program):
         # A search runs the chain on every grid value; a general solver inside it would run on every
         # parent slot, valid or not (measured up to 4x slower than the reference runtime, which runs
         # it on the valid rows only), so such a search keeps the reference runtime.
         return None
-    doc = (
-        '    """Every candidate of the chain above as straight-line arithmetic on backend ``m``: a list of\n'
-        '    (joint values..., pose error, defer) over the solution slots of each step.  ``rep`` picks the\n'
-        '    representative a step returns where its joint is free (a self-motion)."""\n'
-    )
-    return "\n\ndef _fast_chain(m, goal, free=(), rep=0.0):\n" + doc + body + "\n    return out\n"
+    return ir.eliminate_common(program) if cse else program
+
+
+def has_reference(program: ir.Program) -> bool:
+    """Whether a step of the program calls its subproblem's reference solver (no C port)."""
+    def walk(block):
+        return any(isinstance(s, ir.ReferenceLoop) or (ir.body_of(s) is not None and walk(ir.body_of(s)))
+                   for s in block)
+    return walk(program.body)
+
+
+def fast_chain_program(plan, chain, *, independent, free_joints, scale, cse: bool = True):
+    """The IR of ``plan``'s fast chain (:func:`build_program`), or None when the plan is not covered."""
+    data = ChainData.from_plan(plan, chain, independent=independent, free_joints=free_joints, scale=scale)
+    return build_program(data, cse=cse)
+
+
+def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | None:
+    """Source of ``_fast_chain(m, goal, free, rep)`` for ``plan``, or None when the plan is not covered."""
+    program = fast_chain_program(plan, chain, independent=independent, free_joints=free_joints, scale=scale)
+    return None if program is None else printers.python_source(program)

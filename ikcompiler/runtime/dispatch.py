@@ -1,6 +1,6 @@
 """Which path a target takes, and the batch driver (docs/design.md section 6).
 
-Paths, cheapest first: the C chain (``_NATIVE_SOURCE``, where built), the Python fast chain
+Paths, cheapest first: the C chain (where the chain has one: ``NATIVE``), the Python fast chain
 (``_fast_chain``), the reference runtime (:mod:`ikcompiler.runtime.reference`).  Each runs at most
 once per target: a target the C chain hands back goes straight to what settles it (the reference
 runtime; a search or snapped plan's Python fast path, whose search / continuation the C does not
@@ -43,15 +43,18 @@ class Solver:
         return bool(self._ns.get("FAST_PATH")) and self.robot.fast_chain is not None
 
     def native_chain(self):
-        """The C build of the fast chain (compiled and cached on first use), or None."""
-        if not (self.fast_path() and self._ns.get("NATIVE") and self.robot.native_source):
+        """The C build of the fast chain (printed from the module's data and compiled on first use, both
+        cached: ikcompiler.codegen.csource.native_source, subproblems.native), or None."""
+        if not (self.fast_path() and self._ns.get("NATIVE")):
             return None
         if not self._native:
+            from ikcompiler.codegen.csource import native_source
             from subproblems import native
 
             r = self.robot
-            self._native.append(native.bind(r.native_source, dof=len(r.joint_names), slots=r.slots,
-                                            nfree=len(r.free_joints), target=r.target))
+            source = native_source(self._ns)
+            self._native.append(source and native.bind(source, dof=len(r.joint_names), slots=r.slots,
+                                                       nfree=len(r.free_joints), target=r.target))
         return self._native[0]
 
     def general6(self):

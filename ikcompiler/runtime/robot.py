@@ -51,7 +51,6 @@ class Robot:
     alt_steps: list
     general6: Any  # subproblems.general6.General6 for the general-6r method, else None
     fast_chain: Any  # the module's _fast_chain or None
-    native_source: str | None
     target_error: type
     free_error: type
 
@@ -68,7 +67,7 @@ class Robot:
             solve_target=ns["_SOLVE_TARGET"], free=tuple(ns["_FREE"]), n_groups=int(ns["_N_GROUPS"]),
             polish=int(ns["_POLISH"]), search=tuple(ns["_SEARCH"]), grid=int(ns["_GRID"]),
             steps=ns["_STEPS"], alt_steps=ns["_ALT_STEPS"], general6=ns.get("_GENERAL6"),
-            fast_chain=ns.get("_fast_chain"), native_source=ns.get("_NATIVE_SOURCE"),
+            fast_chain=ns.get("_fast_chain"),
             target_error=ns["InvalidTargetError"], free_error=ns["InvalidFreeValueError"],
         )
 
