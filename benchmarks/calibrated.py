@@ -54,8 +54,8 @@ def _exact_rows(module, G, limits=False, native=True):
 
 def _plain_newton(module):
     """The module as before the continuation: plain Newton steps from the snapped answers."""
-    if hasattr(module, "_correct"):
-        module._correct = lambda TH, owner, goals: (module._newton(TH, goals[owner], module._POLISH), owner)
+    solver = module._SOLVER
+    solver.correct = lambda TH, owner, goals: (solver.robot.newton(TH, goals[owner], module._POLISH), owner)
 
 
 def measure(chain, poses: int, seed: int, special: float = 0.25, plain: bool = False, snap=None) -> dict:

@@ -407,34 +407,43 @@ def _deferred_batch(module, Ts, free_values) -> float:
     the same).  NaN for search and snapped plans, whose batches always take Newton steps on the fast
     chain's candidates.
     """
+    from ikcompiler.runtime import fastchain, targets
     from subproblems import fast as _fk
 
     if module._SEARCH or module._POLISH:
         return float("nan")
-    goals, _ = module._targets(Ts)
-    init = module._init(len(goals), free_values)
-    Q, err, flag = module._fast_leaves(goals, init)
-    _, route = _fk.finish_many(Q, err, flag, **module._finish_kwargs(True))
+    robot = module._SOLVER.robot
+    goals, _ = targets.valid_targets(robot, Ts)
+    init = targets.initial_values(robot, len(goals), free_values)
+    Q, err, flag = fastchain.leaves(robot, goals, init)
+    _, route = _fk.finish_many(Q, err, flag, **robot.finish_kwargs(True))
     sent = route == _fk.ROUTE_REFERENCE
     return float(np.mean(sent)) if len(sent) else float("nan")
 
 
 def _deferred_one(module, T, free_values) -> bool:
-    """Whether a single-pose ``solve`` of T leaves the scalar Python fast path (``_fast_one`` with
-    ``NATIVE = False`` gives None)."""
-    with np.errstate(all="ignore"), _flags(module, PYTHON_FAST):
-        return module._fast_one(T, tuple(free_values), True) is None
+    """Whether a single-pose ``solve`` of T leaves the scalar Python fast path (its leaves, finished by
+    ``subproblems.fast.finish_one``, give None)."""
+    from ikcompiler.runtime import fastchain
+    from subproblems import fast as _fk
+
+    robot = module._SOLVER.robot
+    with np.errstate(all="ignore"):
+        leaves = fastchain.scalar_leaves(robot, T, tuple(free_values))
+        return leaves is None or _fk.finish_one(leaves, **robot.finish_kwargs(True)) is None
 
 
 def _native_deferred_batch(module, Ts, free_values) -> tuple[float, int]:
     """Fraction of the batch targets the native backend hands to the Python path (its per-target code
     from ``_native_chain().many`` below 0, as ``_native_batch`` reads it), and how many it calls
     invalid (code -2; the sampled poses are all valid)."""
+    from ikcompiler.runtime import targets
     from subproblems import native as _native
 
     raw = np.asarray(Ts, dtype=float)
-    init = module._init(len(raw), free_values)
-    _, code = module._native_chain().many(raw, module._free_columns(init), True)
+    robot = module._SOLVER.robot
+    init = targets.initial_values(robot, len(raw), free_values)
+    _, code = module._native_chain().many(raw, targets.free_columns(robot, init), True)
     return (float(np.mean(code < 0)) if len(code) else float("nan")), int((code == _native.INVALID).sum())
 
 

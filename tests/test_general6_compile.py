@@ -55,10 +55,13 @@ def test_random_arm_compiles_to_general_6r_and_recovers_every_pose():
         assert len(module.solve(T[n])) == V[n].sum()
 
 
-def test_generated_module_imports_only_numpy_and_subproblems(tmp_path):
+def test_generated_module_imports_only_numpy_subproblems_and_the_runtime(tmp_path):
     source = compile_source(_random_chain(5))
-    imports = {line.split()[1] for line in source.splitlines() if line.startswith(("import ", "from "))}
-    assert imports <= {"math", "numpy", "subproblems", "__future__"}, imports
+    lines = [line for line in source.splitlines() if line.startswith(("import ", "from "))]
+    imports = {line.split()[1] for line in lines}
+    assert imports <= {"math", "numpy", "subproblems", "__future__", "ikcompiler"}, imports
+    # of ikcompiler only its runtime (docs/design.md section 6)
+    assert [x for x in lines if "ikcompiler" in x] == ["from ikcompiler import runtime as _runtime"]
     assert "from subproblems import general6 as _g6" in source
     assert "METHOD = 'general-6r'" in source
     path = tmp_path / "random_ik.py"

@@ -1,0 +1,191 @@
+"""Single-pose ``solve`` time on special poses against random ones, and the peak memory of a large
+batch, for every zoo robot (issue 11 item 6, issue 10; docs/design.md section 6).
+
+Special poses: FK of joint vectors whose values are drawn from {0, +-pi/2, pi} (home and taught
+positions are such poses; wrists line up, self-motions appear); random poses: joint values uniform
+inside the limits (at most +-pi).  300 of each per robot (fixed seeds); each pose is timed three
+times and its fastest time kept (the machine is shared).  Reported: median and 99th percentile of
+each set and their ratios to the random median (goal: special median <= 3x, p99 <= 30x).
+
+Memory: ``solve_batch`` of 100,000 random poses in a fresh subprocess per robot; its peak resident
+set (``resource.getrusage`` ``ru_maxrss``) before and after the batch (goal: within 2 GB).
+
+``python benchmarks/special_poses.py`` writes ``benchmarks/results/special_poses.md``;
+``--robots NAME ...`` a subset, ``--batch N`` another batch size, ``--no-memory`` timing only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+SPECIAL = (0.0, np.pi / 2, -np.pi / 2, np.pi)
+POSES = 300
+REPEATS = 3
+MEMORY_GOAL_MB = 2048
+
+
+def _setup(name: str):
+    """(chain, module, free joint positions) of a zoo robot as the other benchmarks compile it."""
+    from ikcompiler import load_robot
+    from ikcompiler.compiler import compile_robot
+
+    chain = load_robot(name)
+    free = (chain.independent_names[-1],) if chain.dof > 6 else ()
+    module = compile_robot(chain, free=free)
+    module._native_chain()  # the one-off C build before any timing
+    return chain, module, [module.JOINT_NAMES.index(f) for f in free]
+
+
+def _targets(module, Q: np.ndarray) -> np.ndarray:
+    G = np.array([module.fk(q) for q in Q])
+    return {"position": G[:, :3, 3], "orientation": G[:, :3, :3]}.get(module.TARGET, G)
+
+
+def _joint_sets(module, rng, n: int):
+    lo = np.maximum(module.LOWER, -np.pi)
+    hi = np.minimum(module.UPPER, np.pi)
+    random = rng.uniform(lo, hi, size=(n, len(lo)))
+    special = rng.choice(SPECIAL, size=(n, len(lo)))
+    prismatic = np.array([k == "T" for k in module.JOINT_TYPES])
+    special[:, prismatic] = random[:, prismatic]  # a prismatic joint has no special angle: in range
+    return special, random
+
+
+def _times(module, T, Q, free_cols) -> np.ndarray:
+    out = np.empty(len(T))
+    for i in range(len(T)):
+        free = tuple(Q[i, free_cols])
+        best = np.inf
+        for _ in range(REPEATS):
+            t0 = time.perf_counter()
+            module.solve(T[i], *free)
+            best = min(best, time.perf_counter() - t0)
+        out[i] = best
+    return out
+
+
+def time_robot(name: str) -> dict:
+    chain, module, free_cols = _setup(name)
+    special, random = _joint_sets(module, np.random.default_rng(7), POSES)
+    row = {"robot": name, "method": module.METHOD,
+           "path": "native" if module._native_chain() is not None else
+           ("fast" if module.FAST_PATH else "reference")}
+    for label, Q in (("random", random), ("special", special)):
+        T = _targets(module, Q)
+        module.solve(T[0], *tuple(Q[0, free_cols]))  # warm
+        t = _times(module, T, Q, free_cols)
+        row[f"{label}_median_us"] = float(np.median(t) * 1e6)
+        row[f"{label}_p99_us"] = float(np.percentile(t, 99) * 1e6)
+        row[f"{label}_over_1ms"] = int((t > 1e-3).sum())
+    base = row["random_median_us"]
+    row["special_median_ratio"] = row["special_median_us"] / base
+    row["special_p99_ratio"] = row["special_p99_us"] / base
+    return row
+
+
+def memory_robot(name: str, batch: int) -> dict:
+    """Peak RSS (MB) before and after solve_batch of ``batch`` random poses (run in its own process)."""
+    import resource
+
+    _, module, free_cols = _setup(name)
+    rng = np.random.default_rng(3)
+    _, Q = _joint_sets(module, rng, 2000)
+    T = _targets(module, Q)
+    reps = -(-batch // len(T))
+    Ts = np.concatenate([T] * reps)[:batch]
+    free = [np.concatenate([Q[:, c]] * reps)[:batch] for c in free_cols]
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    t0 = time.perf_counter()
+    module.solve_batch(Ts, *free)
+    dt = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return {"robot": name, "rss_before_mb": before, "rss_peak_mb": after, "batch": batch, "batch_s": dt}
+
+
+def _subprocess(args: list[str]) -> dict:
+    res = subprocess.run([sys.executable, __file__, *args], capture_output=True, text=True)
+    if res.returncode != 0:
+        return {"error": (res.stderr.strip().splitlines() or ["failed"])[-1]}
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def _table(rows, mem, batch) -> str:
+    lines = [
+        "# Special poses and batch memory",
+        "",
+        f"Written by `python benchmarks/special_poses.py` on {datetime.date.today()}, "
+        f"{platform.machine()}, Python {platform.python_version()} (2 cores shared with other jobs).",
+        f"{POSES} special poses (joint values in {{0, +-pi/2, pi}}) and {POSES} random ones per robot; "
+        f"single-pose `solve`, fastest of {REPEATS} runs per pose, in us.  Goal (issue 11): special "
+        "median <= 3x and p99 <= 30x the random median.  Memory: peak RSS of a fresh process around "
+        f"`solve_batch` of {batch:,} random poses (goal: <= {MEMORY_GOAL_MB} MB).",
+        "",
+        "| robot | method | path | random median | random p99 | special median | special p99 | "
+        "median ratio | p99 ratio | special > 1 ms | RSS before (MB) | peak RSS (MB) | batch (s) |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        m = mem.get(r["robot"], {})
+        if "error" in r:
+            lines.append(f"| {r['robot']} | error: {r['error']} |" + " |" * 12)
+            continue
+        mb = (f"{m['rss_before_mb']:.0f} | {m['rss_peak_mb']:.0f} | {m['batch_s']:.1f}" if "rss_peak_mb" in m
+              else f"{m.get('error', 'not measured')} | | ")
+        lines.append(
+            f"| {r['robot']} | {r['method']} | {r['path']} | {r['random_median_us']:.1f} | "
+            f"{r['random_p99_us']:.1f} | {r['special_median_us']:.1f} | {r['special_p99_us']:.1f} | "
+            f"{r['special_median_ratio']:.2f} | {r['special_p99_ratio']:.1f} | {r['special_over_1ms']} | "
+            f"{mb} |")
+    miss = [r["robot"] for r in rows if "error" not in r
+            and (r["special_median_ratio"] > 3 or r["special_p99_ratio"] > 30)]
+    over = [n for n, m in mem.items() if m.get("rss_peak_mb", 0) > MEMORY_GOAL_MB or "error" in m]
+    lines += ["", f"Timing goal missed by: {', '.join(miss) or 'none'}.  "
+              f"Memory goal missed by: {', '.join(over) or 'none'}.", ""]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robots", nargs="*")
+    ap.add_argument("--batch", type=int, default=100_000)
+    ap.add_argument("--no-memory", action="store_true")
+    ap.add_argument("--time-one", help=argparse.SUPPRESS)
+    ap.add_argument("--memory-one", help=argparse.SUPPRESS)
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "special_poses.md"))
+    args = ap.parse_args(argv)
+    if args.time_one:
+        print(json.dumps(time_robot(args.time_one)))
+        return 0
+    if args.memory_one:
+        print(json.dumps(memory_robot(args.memory_one, args.batch)))
+        return 0
+    from ikcompiler.inputs.zoo import zoo_names
+
+    rows, mem = [], {}
+    for name in args.robots or zoo_names():
+        row = _subprocess(["--time-one", name])
+        row.setdefault("robot", name)
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+        if not args.no_memory:
+            mem[name] = _subprocess(["--memory-one", name, "--batch", str(args.batch)])
+            print(json.dumps(mem[name]), flush=True)
+    Path(args.out).write_text(_table(rows, mem, args.batch))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,285 @@
+"""Which path a target takes, and the batch driver (docs/design.md section 6).
+
+Paths, cheapest first: the C chain (where the chain has one: ``NATIVE``), the Python fast chain
+(``_fast_chain``), the reference runtime (:mod:`ikcompiler.runtime.reference`).  Each runs at most
+once per target: a target the C chain hands back goes straight to what settles it (the reference
+runtime; a search or snapped plan's Python fast path, whose search / continuation the C does not
+finish), and the Python fast chain's leaves, when its finish cannot settle them, are routed once
+(Newton steps on them, or the reference runtime) instead of being computed again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ikcompiler.runtime import fastchain, reference, selection, targets
+from ikcompiler.runtime.robot import Robot
+from subproblems import fast as _fk
+
+# Bytes of intermediate arrays a batch holds at a time (its output excluded): chunks of targets are
+# sized so that a search plan's grid x targets instances, or the reference runtime's branches, stay
+# within it; issue 10's bound is a 100,000-pose batch within 2 GB in all.
+MEMORY_BUDGET = 256 * 1024 * 1024
+CHUNK = 4096  # targets per chunk of the Python paths (no search)
+NATIVE_CHUNK = 65536  # targets per call of the C batch driver
+
+
+class Solver:
+    """The runtime of one generated module, built from its namespace (``Solver(globals())``).
+
+    The module's ``FAST_PATH`` and ``NATIVE`` switches are read at each call.
+    """
+
+    def __init__(self, namespace: dict, *, memory_budget: int = MEMORY_BUDGET):
+        self._ns = namespace
+        self.robot = Robot.from_namespace(namespace)
+        self.memory_budget = memory_budget
+        self._native = []  # [NativeChain] or [None] once bound
+        self._general6 = []  # the true robot's general 6R solver, for doubtful snapped targets
+
+    # -- the paths -------------------------------------------------------------------------------
+
+    def fast_path(self) -> bool:
+        return bool(self._ns.get("FAST_PATH")) and self.robot.fast_chain is not None
+
+    def native_chain(self):
+        """The C build of the fast chain (printed from the module's data and compiled on first use, both
+        cached: ikcompiler.codegen.csource.native_source, subproblems.native), or None."""
+        if not (self.fast_path() and self._ns.get("NATIVE")):
+            return None
+        if not self._native:
+            from ikcompiler.codegen.csource import native_source
+            from subproblems import native
+
+            r = self.robot
+            source = native_source(self._ns)
+            self._native.append(source and native.bind(source, dof=len(r.joint_names), slots=r.slots,
+                                                       nfree=len(r.free_joints), target=r.target))
+        return self._native[0]
+
+    def general6(self):
+        if not self._general6:
+            self._general6.append(reference.true_general6(self.robot))
+        return self._general6[0]
+
+    def correct(self, TH, owner, goals):
+        """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct)."""
+        return reference.correct(self.robot, TH, owner, goals, self.general6)
+
+    def reference_chunk(self, goals, Td, init, limits):
+        """The reference runtime on targets (chunked so that a search stays within the budget)."""
+        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
+        step = max(1, self.memory_budget // width)
+        if len(goals) <= step:
+            return self._reference(goals, Td, init, limits)
+        return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits)
+                        for i in range(0, len(goals), step)])
+
+    def _reference(self, goals, Td, init, limits):
+        r = self.robot
+        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct), goals, limits)
+
+    def settle_leaves(self, goals, Td, init, limits, Q, err, flag):
+        """Finish the fast chain's leaves of targets: done here, Newton steps on the near misses, or the
+        reference runtime for targets near a degenerate geometry (fast.finish_many's routes)."""
+        r = self.robot
+        parts, route = _fk.finish_many(Q, err, flag, **r.finish_kwargs(limits))
+        newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
+        if len(newton):
+            rows, leaf = np.nonzero(_fk.usable(Q[newton], flag[newton]))
+            TH = Q[newton[rows], leaf] @ r.A.T + r.B
+            cont = (flag[newton[rows], leaf] & _fk.FAMILY) != 0
+            done = reference.complete(r, TH, rows, np.zeros(len(TH), dtype=bool), cont, goals[newton], limits)
+            _scatter(parts, newton, _fk.merge_split_roots(done, r.joint_types))
+        defer = np.nonzero(route == _fk.ROUTE_REFERENCE)[0]
+        if len(defer):
+            _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits))
+        return tuple(parts)
+
+    def python_chunk(self, goals, Td, init, limits):
+        """Targets on the Python paths: the fast chain on arrays (its search, or its snapped plan's
+        continuation) and the reference runtime for what it cannot settle."""
+        r = self.robot
+        if not self.fast_path():
+            return self.reference_chunk(goals, Td, init, limits)
+        if r.search:
+            return reference.complete(r, *fastchain.search_candidates(r, goals, init, self.memory_budget),
+                                      goals, limits)
+        Q, err, flag = fastchain.leaves(r, goals, init)
+        if not r.polish:
+            return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
+        # snapped plan: the leaves are candidates on the snapped robot; the continuation corrects them
+        defer = (flag & _fk.DEFER).any(axis=1)
+        rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
+        TH, rows = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals)
+        none = np.zeros(len(TH), dtype=bool)
+        parts = list(reference.complete(r, TH, rows, none, none, goals, limits))
+        idx = np.nonzero(defer)[0]
+        if len(idx):
+            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits))
+        return tuple(parts)
+
+    def handed_back(self, goals, Td, init, limits):
+        """Targets the C chain could not settle.  It ran the fast path already: what is left is the
+        reference runtime, except for a search plan (its Python search is much cheaper than the
+        reference runtime's) and a snapped plan (the continuation starts from the fast leaves)."""
+        if self.robot.search or self.robot.polish:
+            return self.python_chunk(goals, Td, init, limits)
+        return self.reference_chunk(goals, Td, init, limits)
+
+    # -- one target ------------------------------------------------------------------------------
+
+    def rows(self, T, free, limits, exact_only=False):
+        """(q, residual, ls, continuum) of one target, exact rows first; with ``exact_only`` just the
+        exact rows' q (``solve``'s answer)."""
+        r = self.robot
+        native = self.native_chain()
+        if native is not None:
+            found = native.exact(T, free, limits) if exact_only else native.one(T, free, limits)
+            if found is not None:
+                return found
+            goals, Td, init = self._one_target(T, free)
+            return _unpack(self.handed_back(goals, Td, init, limits), exact_only)
+        # the scalar fast chain once; its leaves, if its finish cannot settle them, routed once
+        leaves = fastchain.scalar_leaves(r, T, free) if self.fast_path() else None
+        if leaves is not None:
+            found = _fk.finish_one(leaves, **r.finish_kwargs(limits))
+            if found is not None:
+                q, res, ls, cont = fastchain.rows_of_one(found, len(r.joint_names))
+                return q[~ls] if exact_only else (q, res, ls, cont)
+        goals, Td, init = self._one_target(T, free)
+        if leaves is not None:
+            Q, err, flag = _fk.leaf_arrays(leaves, 1, len(r.joint_names))
+            parts = self.settle_leaves(goals, Td, init, limits, Q, err, flag)
+        else:
+            parts = self.python_chunk(goals, Td, init, limits)
+        return _unpack(parts, exact_only)
+
+    def _one_target(self, T, free):
+        """One validated target (goals, Td, init); an invalid target or free value raises."""
+        goals, Td = targets.valid_targets(self.robot, np.asarray(T, dtype=float)[None])
+        return goals, Td, targets.initial_values(self.robot, 1, free)
+
+    # -- many targets ----------------------------------------------------------------------------
+
+    def solve_batch_info(self, Ts, *free, limits=True, chunk=CHUNK):
+        """Every solution of N targets: Q (N, K, n), valid, ls, residual and continuum (N, K).
+
+        Rows with ls True are least-squares answers (their residual says how far they miss); valid marks
+        the filled slots; continuum marks solutions that are one representative of a self-motion (the
+        target is at a singular configuration with infinitely many solutions).  Vectorised over the
+        targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
+        the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
+        """
+        done = self._native_batch(Ts, free, limits)
+        if done is not None:
+            return done
+        goals, Td, reasons = targets.check_targets(self.robot, Ts)
+        init = targets.initial_values(self.robot, len(goals), free)
+        parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
+                                                           init[i:i + chunk], limits), reasons[i:i + chunk])
+                 for i in range(0, len(goals), chunk)]
+        return _joined(parts) if parts else self._empty()
+
+    def _native_batch(self, Ts, free, limits):
+        """solve_batch_info on the C chain (it checks the targets itself), or None when there is none or
+        the targets' shape is not the target's (the Python path then raises the error)."""
+        native = self.native_chain()
+        if native is None:
+            return None
+        Ts = np.asarray(Ts, dtype=float)
+        shape = native.target_shape
+        if Ts.ndim < len(shape) or Ts.shape[Ts.ndim - len(shape):] != shape:
+            return None
+        raw = Ts.reshape((-1,) + shape)
+        init = targets.initial_values(self.robot, len(raw), free)
+        from subproblems.native import PYTHON
+
+        parts = []
+        for i in range(0, len(raw), NATIVE_CHUNK):
+            free_values = targets.free_columns(self.robot, init[i:i + NATIVE_CHUNK])
+            part, code = native.many(raw[i:i + NATIVE_CHUNK], free_values, limits)
+            idx = np.nonzero(code == PYTHON)[0]  # invalid targets (code INVALID) keep their empty slots
+            for j in range(0, len(idx), CHUNK):
+                sub = idx[j:j + CHUNK]
+                goals, Td, reasons = targets.check_targets(self.robot, raw[i + sub])
+                done = self.handed_back(goals, Td, init[i + sub], limits)
+                _scatter(part, sub, targets.without_invalid(done, reasons))
+            parts.append(part)
+        return _joined(parts) if parts else self._empty()
+
+    def _empty(self):
+        n, K = len(self.robot.joint_names), self.robot.slots
+        empty = np.zeros((0, K), bool)
+        return np.zeros((0, K, n)), empty, empty, np.zeros((0, K)), empty
+
+    def solve_batch(self, Ts, *free, limits=True):
+        """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
+        Q, valid, ls, _, _ = self.solve_batch_info(Ts, *free, limits=limits)
+        return Q, valid & ~ls
+
+    # -- the public API of one target -------------------------------------------------------------
+
+    def solve(self, T, *free, limits=True, aliases=False, q_seed=None, weights=None):
+        """Every exact solution of one target inside the joint limits, one row each in JOINT_NAMES order;
+        (0, n) if unreachable.  ``limits=False`` also returns solutions outside the limits.
+
+        ``aliases=True``: a revolute joint whose range exceeds 2 pi gives one row per value of the angle
+        inside its limits (every combination; with ``limits=False`` rows are as solved).  ``q_seed``:
+        rows sorted by their distance to q_seed (radians; prismatic joints in units of SCALE; times the
+        optional per-joint ``weights``; wrapped to [-pi, pi] only with ``limits=False``); with limits,
+        without aliases, each wide-range revolute value is the alias nearest the seed.
+        """
+        q = self.rows(T, free, limits, exact_only=True)
+        if aliases or q_seed is not None:
+            return selection.select(self.robot, q, np.ones(len(q), dtype=bool), limits, aliases, q_seed,
+                                    weights)[0]
+        return q
+
+    def solve_info(self, T, *free, limits=True, aliases=False, q_seed=None, weights=None):
+        """Every candidate of one target with residuals and flags: a SolveInfo.
+
+        ``q, residual, ls, continuum`` per row (exact rows first); ``sigma_min`` per row (the smallest
+        singular value of the Jacobian with its length rows divided by SCALE: near 0 at a singular
+        configuration); ``excluded``: with ``limits`` (the default) the solutions that the joint limits
+        leave out, each with the joints outside their limits.  ``aliases`` and ``q_seed`` / ``weights`` as
+        in ``solve``.
+        """
+        found = self.rows(T, free, limits)
+        unlimited = self.rows(T, free, False) if limits else None
+        return selection.info(self.robot, found, unlimited, limits, aliases, q_seed, weights)
+
+    def nearest(self, T, q_seed, *free, limits=True, aliases=True, weights=None):
+        """The exact solution closest to q_seed (see solve), or None when there is none.
+
+        With ``aliases`` (the default here) every in-limit alias of a wide-range joint competes.
+        """
+        q = self.solve(T, *free, limits=limits, aliases=aliases, q_seed=q_seed, weights=weights)
+        return q[0] if len(q) else None
+
+    def fk(self, q):
+        """Tool pose (4x4) for joint values q in JOINT_NAMES order (exactly len(JOINT_NAMES) of them)."""
+        return self.robot.fk(q)
+
+    def invalid_reasons(self, Ts):
+        """{index: reason} of the targets that are not valid (NaN or infinity, a bottom row not [0, 0, 0, 1],
+        a rotation that is not one to 1e-6); ``solve_batch`` and ``solve_batch_info`` leave their slots
+        empty (all False) instead of failing the batch.  A wrong shape raises."""
+        return targets.invalid_reasons(self.robot, Ts)
+
+
+def _scatter(parts, idx, done):
+    for whole, part in zip(parts, done):
+        whole[idx] = part
+
+
+def _joined(parts):
+    return tuple(np.concatenate(x) for x in zip(*parts))
+
+
+def _unpack(parts, exact_only):
+    Q, valid, ls, res, cont = parts
+    v = valid[0]
+    if exact_only:
+        return Q[0][v & ~ls[0]]
+    return Q[0][v], res[0][v], ls[0][v], cont[0][v]
