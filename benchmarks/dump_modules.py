@@ -18,8 +18,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
 # benchmarks/subproblems.py would shadow the package of that name when this folder is on the path
 HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
@@ -32,27 +30,8 @@ VARIANTS = [
 ]
 
 
-def general_chain(kinds: str, seed: int = 11):
-    """A chain of joint string ``kinds`` with random axes and points (fixed seed): no relation holds."""
-    from ikcompiler.model import Chain, Joint
-    from subproblems.screw import revolute_twist
-
-    rng = np.random.default_rng(seed)
-    joints = []
-    for k, kind in enumerate(kinds):
-        w = rng.normal(size=3)
-        w /= np.linalg.norm(w)
-        if kind == "T":
-            joints.append(Joint(f"j{k}", "T", np.r_[w, 0.0, 0.0, 0.0], -1.0, 1.0))
-        else:
-            joints.append(Joint(f"j{k}", "R", revolute_twist(w, rng.normal(size=3))))
-    home = np.eye(4)
-    home[:3, 3] = rng.normal(size=3)
-    return Chain(f"general_{kinds.lower()}", tuple(joints), home)
-
-
 def cases(configurations: bool = False):
-    from ikcompiler.configs import joint_strings, modular_chain, perturbed
+    from ikcompiler.configs import joint_strings, modular_chain, perturbed, random_chain
     from ikcompiler.inputs import load_robot
     from ikcompiler.inputs.zoo import zoo_names
 
@@ -62,7 +41,7 @@ def cases(configurations: bool = False):
         yield f"{name}_{target.replace('+', '_')}", (lambda n=name: load_robot(n)), target, free, True
     yield "jaco_search", (lambda: load_robot("jaco")), "pose", (), False
     for kinds in ("TRRRRR", "TTTTR"):  # the 2-D search fallback; the numerical fallback
-        yield f"general_{kinds.lower()}", (lambda k=kinds: general_chain(k)), "pose", (), True
+        yield f"general_{kinds.lower()}", (lambda k=kinds: random_chain(k)), "pose", (), True
     for name in ("puma560", "ur5", "kr6_r700", "stanford"):  # calibrated: snapped plans (_PLAN_TWISTS)
         yield f"{name}_perturbed", (lambda n=name: perturbed(load_robot(n), 1e-6)), "pose", (), True
     if configurations:
@@ -81,7 +60,11 @@ def main(argv=None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     configurations = "--configurations" in args
-    out = Path([a for a in args if not a.startswith("--")][0])
+    folders = [a for a in args if not a.startswith("--")]
+    if len(folders) != 1 or "--help" in args or "-h" in args:
+        print("usage: python benchmarks/dump_modules.py OUT_FOLDER [--configurations]  (diff -r two of them)")
+        return 0 if "--help" in args or "-h" in args else 2
+    out = Path(folders[0])
     out.mkdir(parents=True, exist_ok=True)
     for case, load, target, free, general6 in cases(configurations):
         compiler.USE_GENERAL6 = general6

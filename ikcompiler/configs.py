@@ -111,6 +111,24 @@ def random_6r_chain(seed: int) -> Chain:
     return Chain(f"random-6r-{seed}", joints, home)
 
 
+def random_chain(kinds: str, seed: int = 11) -> Chain:
+    """A chain of joint string ``kinds`` with random unit axes and points (fixed seed), prismatic
+    joints limited to [-1, 1]: no relation between the axes holds (TRRRRR takes general-6r, TTTTR the
+    numerical fallback).  The typed-steps tests and ``benchmarks/dump_modules.py`` share it."""
+    rng = np.random.default_rng(seed)
+    joints = []
+    for k, kind in enumerate(kinds):
+        w = rng.normal(size=3)
+        w /= np.linalg.norm(w)
+        if kind == "T":
+            joints.append(Joint(f"j{k}", "T", np.r_[w, 0.0, 0.0, 0.0], -1.0, 1.0))
+        else:
+            joints.append(Joint(f"j{k}", "R", revolute_twist(w, rng.normal(size=3))))
+    home = np.eye(4)
+    home[:3, 3] = rng.normal(size=3)
+    return Chain(f"general_{kinds.lower()}", tuple(joints), home)
+
+
 def free_candidates(chain: Chain) -> list[tuple[str, ...]]:
     """Free-joint choices tried for a chain with more than 6 independent joints: the 3rd joint (the
     elbow of a 7-joint arm), then the last, then the first; ``[()]`` for 6 joints or fewer."""

@@ -12,20 +12,17 @@ from __future__ import annotations
 import dataclasses
 import json
 
-import numpy as np
 import pytest
 
 from ikcompiler import compiler
 from ikcompiler.cli import main
 from ikcompiler.compiler import compile_plan, plan_source
-from ikcompiler.configs import perturbed
+from ikcompiler.configs import perturbed, random_chain
 from ikcompiler.errors import PlanFormatError
 from ikcompiler.inputs import load_robot
 from ikcompiler.inputs.zoo import zoo_names
-from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.steps import STEP_KINDS, Step, SumStep, step_class, step_from_dict
-from subproblems.screw import revolute_twist
 
 VARIANTS = {  # the README's variants beside the default pose target
     "panda": ("pose", ("panda_joint7",)),
@@ -33,23 +30,6 @@ VARIANTS = {  # the README's variants beside the default pose target
     "shadow_thumb": ("position+direction", ()),
     "puma560": ("orientation", ("j1", "j2", "j3")),
 }
-
-
-def general_chain(kinds: str, seed: int = 11) -> Chain:
-    """Random axes and points (fixed seed): TRRRRR takes general-6r (the 2-D search with it off), TTTTR
-    the numerical fallback."""
-    rng = np.random.default_rng(seed)
-    joints = []
-    for k, kind in enumerate(kinds):
-        w = rng.normal(size=3)
-        w /= np.linalg.norm(w)
-        if kind == "T":
-            joints.append(Joint(f"j{k}", "T", np.r_[w, 0.0, 0.0, 0.0], -1.0, 1.0))
-        else:
-            joints.append(Joint(f"j{k}", "R", revolute_twist(w, rng.normal(size=3))))
-    home = np.eye(4)
-    home[:3, 3] = rng.normal(size=3)
-    return Chain(f"general_{kinds.lower()}", tuple(joints), home)
 
 
 CASES = [n for n in zoo_names() if n != "panda"] + [f"{n}:{t}" for n, (t, _) in VARIANTS.items()]
@@ -61,7 +41,7 @@ def compiled(request, monkeypatch_module):
     name, _, variant = request.param.partition(":")
     target, free = "pose", ()
     if name == "general":
-        chain = general_chain(variant)
+        chain = random_chain(variant)
         if variant == "TRRRRR":  # general-6r solves it now (prismatic joint 1): the 2-D search kept covered
             monkeypatch_module.setattr(compiler, "USE_GENERAL6", False)
     else:
