@@ -245,6 +245,22 @@ CONTINUATION_SAME_SOLUTION = 1e-6
 #: Rescue rows missing by less than this are kept for the caller's check (it polishes them further).
 CONTINUATION_NEAR_MISS = 1e-4
 
+# ------------------------------------------------------ generated module runtime (ikcompiler/runtime/)
+
+#: A target rotation orthonormal to this (absolute, ``|R^T R - I|`` and ``|det R - 1|``) is projected
+#: onto the nearest rotation; a worse one is an invalid target (as ``fast.goal_entries`` and the C).
+TARGET_RIGID = 1e-6
+#: Below this defect a target rotation is used as given (no projection).
+TARGET_EXACT_ROTATION = 1e-14
+#: A pose target's bottom row must be [0, 0, 0, 1] to this (absolute).
+TARGET_BOTTOM_ROW = 1e-12
+#: Seeds of the search fallback missing the target by more than this times the size are dropped.
+SEARCH_SEED_ERROR = 1.0
+#: Newton steps stop at this fraction of the exactness threshold (as the C finish): on to well inside
+#: the precision contract.
+FINISH_MARGIN = 1e-3
+
+
 # ------------------------------------------------------------------------- compiler (ikcompiler/)
 
 #: verify: a sampled revolute value (radians) / prismatic value (of the size) counts as recovered.

@@ -10,12 +10,13 @@ import math
 import numpy as np
 
 from subproblems import fast as _fk
+from subproblems import tolerances as _tol
 
 # Bytes one search instance (a target at one grid value, through the fast chain) may hold at its peak:
 # an estimate with margin (its leaves are L x (n + 2) floats, the chain's temporaries a few hundred
 # floats), not a measurement: no zoo robot takes the search by default.
 BYTES_PER_INSTANCE = 16 * 1024
-SEED_ERROR = 1.0  # search seeds missing by more than this (relative to the robot size) are dropped
+SEED_ERROR = _tol.SEARCH_SEED_ERROR  # search seeds missing by more (of the size) are dropped
 
 
 def leaves(robot, goals, init, searched=()):

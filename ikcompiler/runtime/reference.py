@@ -13,11 +13,12 @@ import numpy as np
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
+from subproblems import tolerances as _tol
 
 CONTINUUM_NEWTON = 60  # Newton steps pulling a self-motion's representative onto the family
 SEARCH_NEWTON = 8  # Newton steps on the search's seeds
-NEAR_MISS = 1e-4  # rows missing by less (of the size) get more Newton steps in _complete
-FINISH_MARGIN = 1e-3  # as the C finish: on to well inside the precision
+NEAR_MISS = _tol.NEAR_MISS  # rows missing by less (of the size) get more Newton steps in _complete
+FINISH_MARGIN = _tol.FINISH_MARGIN  # as the C finish: on to well inside the precision
 
 
 def correct(robot, TH, owner, goals, general6):

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems import tolerances as _tol
+
 NOT_ROTATION = "rotation is not a rotation matrix (R^T R != I or det != 1)"
-RIGID = 1e-6  # a rotation orthonormal to this is projected onto the nearest one; worse is invalid
-EXACT_ROTATION = 1e-14  # no projection needed below this defect
-BOTTOM_ROW = 1e-12
+RIGID = _tol.TARGET_RIGID  # orthonormal to this: projected onto the nearest rotation; worse: invalid
+EXACT_ROTATION = _tol.TARGET_EXACT_ROTATION  # no projection needed below this defect
+BOTTOM_ROW = _tol.TARGET_BOTTOM_ROW
 
 
 def _goals(robot, Ts) -> np.ndarray:
