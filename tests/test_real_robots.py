@@ -126,6 +126,21 @@ def test_rescue_rows_on_a_numerical_self_motion_are_not_returned(catalogue):
     assert np.all(sv >= ct.RESOLVED), f"unresolved rescue rows at sigma {sv}"
 
 
+@pytest.mark.parametrize("name", ["ur5_gripper.urdf", "ur3_gripper.urdf"])
+def test_a_snapped_self_motion_is_returned_as_one(catalogue, name):
+    """The same files (pi/2 written as 1.570796327, a snapped plan): at q5 = 0 the wrist's leaves are
+    representatives of a self-motion of the snapped arm, and the true arm is singular there to ~1e-17.
+    Before the runtime kept their continuum flag through the continuation, 7 of 30 special-angle poses
+    were counted missed (the sampled q4, q6 is one point of a numerical family); now every pose is
+    recovered or a self-motion that verify shows rank-deficient (ikcompiler/runtime/dispatch.py)."""
+    chain = _entry(catalogue, "example-robot-data", name, "wrist_3_link").load()
+    module = configs.compile_chain(chain).module
+    assert module._POLISH, "the file's rounded pi/2 no longer gives a snapped plan: pick another chain"
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.self_motion > 0, rep.text()
+    assert rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
 def test_snapping_repeats_until_the_snapped_robot_has_the_relations_the_plan_uses(catalogue):
     """kuka_kr16_2 (rtb-data) perturbed by 1e-3 (seed 7): the wrist axes miss one point by 1.4e-3 (not
     snapped as a run), the pairs 4-5 and 5-6 are snapped, and then the three miss one point by 8.2e-4,

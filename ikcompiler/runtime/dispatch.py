@@ -111,9 +111,14 @@ class Solver:
         # snapped plan: the leaves are candidates on the snapped robot; the continuation corrects them
         defer = (flag & _fk.DEFER).any(axis=1)
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
+        # a leaf on a self-motion of the snapped robot stays a representative of it on the true robot
+        # (the relation missed by ~1e-9: numerically the same family); the continuation keeps the
+        # tracked rows first, in order, and appends its rescue rows (not representatives)
+        family = (flag[rows, leaf] & _fk.FAMILY) != 0
         TH, rows = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals)
         none = np.zeros(len(TH), dtype=bool)
-        parts = list(reference.complete(r, TH, rows, none, none, goals, limits))
+        cont = np.concatenate([family, none[len(family):]])
+        parts = list(reference.complete(r, TH, rows, none, cont, goals, limits))
         idx = np.nonzero(defer)[0]
         if len(idx):
             _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits))
