@@ -26,6 +26,7 @@ from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
 from ikcompiler.steps import General6Step, NumericalStep
+from ikcompiler.steps.kinds import WHOLE_CHAIN_SLOTS
 
 TARGETS = ("pose", "position", "orientation", "position+direction")
 VIRTUAL_ROLL = "_tool_roll"
@@ -250,7 +251,7 @@ def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):
 
 def solution_slots(plan: Plan) -> int:
     if plan.method != "closed-form":
-        return 16
+        return WHOLE_CHAIN_SLOTS
     k = 1
     for s in plan.steps:
         k *= s.slots

@@ -23,10 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ikcompiler.verify import joint_distance
+from subproblems import tolerances as _tol
+
 SAMPLE_POSES = 64
 SAMPLE_SEED = 140
 FIRST = 8  # poses measured first; the rest only if the 1-D search is complete and faster on them
-SAME = 1e-6  # rad: a row is "among" the other's rows (verify's tolerance)
+SAME = _tol.VERIFY_SAME_ANGLE  # a row is "among" the other's rows (verify's tolerance)
 
 
 @dataclass(frozen=True)
@@ -47,11 +50,12 @@ def sample_joints(chain, count: int = SAMPLE_POSES, seed: int = SAMPLE_SEED) -> 
     return np.random.default_rng(seed).uniform(lo, hi, size=(count, len(lo)))
 
 
-def _gap(rows: np.ndarray, q: np.ndarray) -> float:
-    """Smallest max-joint angle distance (modulo 2 pi) from q to the rows; inf without rows."""
+def _gap(rows: np.ndarray, q: np.ndarray, chain) -> float:
+    """Smallest joint distance from q to the rows (verify's: revolute modulo 2 pi, prismatic over the
+    size); inf without rows."""
     if not len(rows):
         return math.inf
-    return float(np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1).min())
+    return float(joint_distance(rows, q, chain.joint_types, chain.scale).min())
 
 
 def _cpu(call):
@@ -78,9 +82,9 @@ def compare(chain, search_module, solver, method: str) -> Verdict:
         q = Q[part]
         rows = [b.Q[k][b.valid[k]] for k in range(len(q))]
         tally[0] += len(q)
-        tally[1] += sum(_gap(S[k][V[k]], q[k]) < SAME for k in range(len(q)))
+        tally[1] += sum(_gap(S[k][V[k]], q[k], chain) < SAME for k in range(len(q)))
         tally[2] += sum(len(r) for r in rows)
-        tally[3] += sum(_gap(S[k][V[k]], r) < SAME for k in range(len(q)) for r in rows[k])
+        tally[3] += sum(_gap(S[k][V[k]], r, chain) < SAME for k in range(len(q)) for r in rows[k])
         complete = tally[1] == tally[0] and tally[3] == tally[2]
         faster = spent[0] <= spent[1]
         if not (complete and faster):

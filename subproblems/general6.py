@@ -82,16 +82,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from subproblems import tolerances as _tol
+from subproblems.angles import wrap_array
 from subproblems.core import SubproblemError, SubproblemInputError
+from subproblems.screw import inverse_transform as _inv
 
 __all__ = ["General6", "General6Error", "Batch", "prepare", "solve", "solve_batch", "MAX_SOLUTIONS"]
 
 MAX_SOLUTIONS = 16
 IMAG_TOL = 2e-3  # |imaginary part| of a candidate angle kept for Newton (near-real roots)
 NEAR_REAL = 1e-9  # a kept candidate with a larger imaginary part makes its target doubtful
-EXACT = 1e-12  # accepted pose error: position / size and rotation (Frobenius)
+EXACT = _tol.PRECISION  # accepted pose error: position / size and rotation (Frobenius)
 NEWTON_ITERS = 6
-SAME = 1e-6  # polished rows closer than this (rad, max over joints) are one solution: verify's tolerance
+SAME = _tol.VERIFY_SAME_ANGLE  # polished rows closer than this (rad, max over joints) are one solution
 SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
 LEADING_OK = 1e-9  # |det L| / prod(row norms of L) above which the leading matrix is used as is
 
@@ -205,15 +208,6 @@ def _exp_h(H, th):
     if H[2]:
         return _EYE4 + th * H[0]
     return _EYE4 + np.sin(th) * H[0] + (1 - np.cos(th)) * H[1]
-
-
-def _inv(g):
-    h = np.zeros_like(g)
-    Rt = np.swapaxes(g[..., :3, :3], -1, -2)
-    h[..., :3, :3] = Rt
-    h[..., :3, 3] = -(Rt @ g[..., :3, 3, None])[..., 0]
-    h[..., 3, 3] = 1.0
-    return h
 
 
 def _fourteen(p, l):
@@ -732,8 +726,7 @@ def _read_ratio(den, num):
 
 def _wrap(Q, prism=None):
     """Revolute values in (-pi, pi]; prismatic columns (``prism`` True) unchanged."""
-    W = np.mod(Q + math.pi, 2 * math.pi) - math.pi
-    W = np.where(W <= -math.pi, W + 2 * math.pi, W)
+    W = wrap_array(Q)
     return W if prism is None else np.where(prism, Q, W)
 
 

@@ -81,8 +81,6 @@ S1_POLISH = 1e-6
 S1_SAME_SOLUTION = 1e-6
 #: Relative singular value under which prismatic directions count as dependent.
 S1_DEPENDENT_SLIDES = 1e-9
-#: Lengths under this (relative) count as zero (a point on an axis, coincident axes).
-S1_ZERO_LENGTH = 1e-10
 #: Revolute axes parallel within this (``|w_i x w_j|``) also get candidates from the parallel geometry;
 #: the batch path leaves them, and prismatic directions this close to dependent, to the scalar one.
 S1_NEAR_PARALLEL = 1e-6
