@@ -460,6 +460,11 @@ def reference(m, code, twists, inputs):
 NEAR_MISS = tolerances.NEAR_MISS  # candidates missing by less need Newton steps
 
 
+# target checks as the runtime and the C make them (subproblems/tolerances.py)
+_TARGET_RIGID = tolerances.TARGET_RIGID
+_TARGET_EXACT_ROTATION = tolerances.TARGET_EXACT_ROTATION
+
+
 def goal_entries(T, target: str):
     """The 12 entries (rotation row-major, translation) of one clean target as floats, else None.
 
@@ -488,19 +493,19 @@ def goal_entries(T, target: str):
         x0, y0, z0, x1, y1, z1, x2, y2, z2 = g[:9]  # columns x, y, z
         det = (x1 * y2 - x2 * y1) * z0 + (x2 * y0 - x0 * y2) * z1 + (x0 * y1 - x1 * y0) * z2
         if (
-            abs(x0 * x0 + x1 * x1 + x2 * x2 - 1.0) > 1e-6
-            or abs(y0 * y0 + y1 * y1 + y2 * y2 - 1.0) > 1e-6
-            or abs(z0 * z0 + z1 * z1 + z2 * z2 - 1.0) > 1e-6
-            or abs(x0 * y0 + x1 * y1 + x2 * y2) > 1e-6
-            or abs(x0 * z0 + x1 * z1 + x2 * z2) > 1e-6
-            or abs(y0 * z0 + y1 * z1 + y2 * z2) > 1e-6
-            or abs(det - 1.0) > 1e-6
+            abs(x0 * x0 + x1 * x1 + x2 * x2 - 1.0) > _TARGET_RIGID
+            or abs(y0 * y0 + y1 * y1 + y2 * y2 - 1.0) > _TARGET_RIGID
+            or abs(z0 * z0 + z1 * z1 + z2 * z2 - 1.0) > _TARGET_RIGID
+            or abs(x0 * y0 + x1 * y1 + x2 * y2) > _TARGET_RIGID
+            or abs(x0 * z0 + x1 * z1 + x2 * z2) > _TARGET_RIGID
+            or abs(y0 * z0 + y1 * z1 + y2 * z2) > _TARGET_RIGID
+            or abs(det - 1.0) > _TARGET_RIGID
         ):
             return None
         defect = (x0 * x0 + x1 * x1 + x2 * x2 - 1.0, y0 * y0 + y1 * y1 + y2 * y2 - 1.0,
                   z0 * z0 + z1 * z1 + z2 * z2 - 1.0, x0 * y0 + x1 * y1 + x2 * y2,
                   x0 * z0 + x1 * z1 + x2 * z2, y0 * z0 + y1 * z1 + y2 * z2)
-        if max(map(abs, defect)) > 1e-14:
+        if max(map(abs, defect)) > _TARGET_EXACT_ROTATION:
             return None  # a rotation to 1e-6 only: the batch path projects it onto the nearest one
     return g
 

@@ -257,6 +257,9 @@ SEARCH_SEED_ERROR = 1.0
 #: Newton steps stop at this fraction of the exactness threshold (as the C finish): on to well inside
 #: the precision contract.
 FINISH_MARGIN = 1e-3
+#: A self-motion's representative already within this fraction of the exactness threshold takes no
+#: more Newton steps toward its family (``Robot.newton_until_exact``).
+CONTINUUM_MARGIN = 1e-2
 
 
 # ------------------------------------------------------------------------- compiler (ikcompiler/)

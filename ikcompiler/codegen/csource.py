@@ -25,19 +25,19 @@ native use (cached by a hash of those data).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 
 import numpy as np
 
 from ikcompiler.codegen import ir
-from ikcompiler.codegen.printers import KERNEL_SLOTS, Untranslatable, c_function, c_number, wrap
+from ikcompiler.codegen.printers import Untranslatable, c_function, c_number, wrap
 
 __all__ = [
-    "KERNEL_SLOTS", "TARGET_CODES", "chain_c_source", "module_c_source", "native_source", "translatable",
+    "TARGET_CODES", "chain_c_source", "module_c_source", "native_source", "translatable",
 ]
 
 TARGET_CODES = {"pose": 0, "position": 1, "orientation": 2}
-_wrap = wrap
 
 
 def _number(x: float) -> str:
@@ -101,7 +101,7 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
     ]
     body = main[0] + (alt[0] if alt else [])
     tail = [
-        *[w for line in robot for w in _wrap(line)],
+        *[w for line in robot for w in wrap(line)],
         "",
         "int ikc_solve_one(const double *T, const double *fr, int limits, double *q, double *res, int *ls,",
         "                  int *cont) {",
@@ -143,7 +143,10 @@ _MODULE_FIELDS = (  # what the C depends on, besides the code of this package (s
     "_INDEPENDENT", "_VARY", "_VARY_LOWER", "_VARY_UPPER", "_FREE", "_POLISH", "_SEARCH", "_GRID",
     "_STEPS", "_ALT_STEPS",
 )
-_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py")  # a change to these changes the C
+# a change to these changes the C: the code generator, and what it reads from subproblems (the pair
+# classification runs plan_runtime; the snapped plan's threshold comes from continuation.near_singular)
+_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py")
+_READ_FROM_SUBPROBLEMS = ("plan_runtime.py", "continuation.py", "tolerances.py")
 _SOURCES: dict[str, str | None] = {}  # data hash -> C text, for this process
 
 
@@ -162,12 +165,21 @@ def _plain(x):
     return x
 
 
-def data_key(namespace) -> str:
-    """A hash of the data a module's C is printed from and of the code that prints it."""
+@functools.cache
+def _generator_code() -> str:
+    """The text of the code that prints the C (read once per process)."""
     from pathlib import Path
 
-    here = Path(__file__).parent
-    code = "".join((here / name).read_text() for name in _GENERATORS)
+    import subproblems
+
+    here, sub = Path(__file__).parent, Path(subproblems.__file__).parent
+    files = [here / name for name in _GENERATORS] + [sub / name for name in _READ_FROM_SUBPROBLEMS]
+    return "".join(f.read_text() for f in files)
+
+
+def data_key(namespace) -> str:
+    """A hash of the data a module's C is printed from and of the code that prints it."""
+    code = _generator_code()
     snapped = namespace["_PLAN_TWISTS"] is not namespace["_TWISTS"]
     data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [snapped])
     return hashlib.sha256((code + "\0" + data).encode()).hexdigest()[:24]

@@ -10,7 +10,7 @@ poses; the solution slots of each step become nested loops over a fixed, small n
 
 Each leaf of the loop nest is one candidate: the joint values, its pose error measured by forward
 kinematics, and a ``defer`` flag for instances near a degenerate geometry (which the module hands to the
-reference path).  :func:`fast_chain_source` returns ``None`` when a plan has a step this path does
+reference path).  :func:`fast_chain_program` returns ``None`` when a plan has a step this path does
 not cover (searches, snapped robots, coupled-pair roots, subproblems without a kernel); such modules
 use the reference path alone.
 
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ikcompiler.codegen import ir, printers
+from ikcompiler.codegen import ir
 from subproblems import plan_runtime as rt
 
 ZERO = 1e-15  # constants below this (rounding noise of a URDF's rpy) fold to zero
@@ -36,10 +36,6 @@ FAST_TARGETS = ("pose", "position", "orientation")
 
 class Unsupported(Exception):
     """The plan has a step the fast path does not cover."""
-
-
-def _is_expr(v) -> bool:
-    return isinstance(v, (ir.Const, ir.Name, ir.Free, ir.BinOp, ir.Neg, ir.Call))
 
 
 def _product(factors) -> ir.Expr:
@@ -77,7 +73,7 @@ class _Code:
         for coef, value in terms:
             if abs(coef) <= ZERO:
                 continue
-            if isinstance(value, tuple) or _is_expr(value):
+            if isinstance(value, tuple) or ir.is_expr(value):
                 coefs[value] = coefs.get(value, 0.0) + coef
             else:
                 const += coef * value
@@ -108,11 +104,11 @@ class _Code:
     @staticmethod
     def product(a, b):
         """A term (coef, value) for ``a * b``, or None when it is zero."""
-        if _is_expr(a) and _is_expr(b):
+        if ir.is_expr(a) and ir.is_expr(b):
             return (1.0, (a, b))
-        if _is_expr(a):
+        if ir.is_expr(a):
             return None if abs(b) <= ZERO else (b, a)
-        if _is_expr(b):
+        if ir.is_expr(b):
             return None if abs(a) <= ZERO else (a, b)
         return None if abs(a * b) <= ZERO else (a * b, 1.0)
 
@@ -150,7 +146,7 @@ class _Code:
     def scaled(self, sign: float, x):
         if sign > 0:
             return list(x)
-        return [self.lin([(-1.0, v)]) if _is_expr(v) else -v for v in x]
+        return [self.lin([(-1.0, v)]) if ir.is_expr(v) else -v for v in x]
 
 
 def _arg(x):
@@ -574,9 +570,3 @@ def fast_chain_program(plan, chain, *, independent, free_joints, scale, cse: boo
     """The IR of ``plan``'s fast chain (:func:`build_program`), or None when the plan is not covered."""
     data = ChainData.from_plan(plan, chain, independent=independent, free_joints=free_joints, scale=scale)
     return build_program(data, cse=cse)
-
-
-def fast_chain_source(plan, chain, *, independent, free_joints, scale) -> str | None:
-    """Source of ``_fast_chain(m, goal, free, rep)`` for ``plan``, or None when the plan is not covered."""
-    program = fast_chain_program(plan, chain, independent=independent, free_joints=free_joints, scale=scale)
-    return None if program is None else printers.python_source(program)

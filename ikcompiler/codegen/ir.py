@@ -91,6 +91,11 @@ class Call(_Hashed):
 
 
 Expr = Const | Name | Free | BinOp | Neg | Call
+
+
+def is_expr(v) -> bool:
+    """``v`` is an IR expression (not a plain number)."""
+    return isinstance(v, Expr)
 Arg = Expr | tuple  # a kernel argument: a scalar or a tuple of scalars (a vector, a matrix)
 
 
@@ -147,7 +152,7 @@ class Program:
 
 
 def const(x) -> Expr:
-    return x if isinstance(x, (Const, Name, Free, BinOp, Neg, Call)) else Const(float(x))
+    return x if is_expr(x) else Const(float(x))
 
 
 def binop(op: str, a, b) -> Expr:

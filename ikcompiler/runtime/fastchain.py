@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ikcompiler.runtime.reference import SEARCH_NEWTON
 from subproblems import fast as _fk
 from subproblems import tolerances as _tol
 
@@ -53,7 +54,7 @@ def search_candidates(robot, goals, init, budget: int):
         THs.append(Q[rows, leaf] @ robot.A.T + robot.B)
         owners.append(rep[rows])
     TH, owner = np.concatenate(THs), np.concatenate(owners)
-    TH = robot.newton(TH, goals[owner], 8)
+    TH = robot.newton(TH, goals[owner], SEARCH_NEWTON)
     none = np.zeros(len(TH), dtype=bool)
     return TH, owner, none, none
 

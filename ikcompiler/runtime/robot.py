@@ -8,12 +8,14 @@ time, so the dispatch reads them from the module each call.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from subproblems import plan_runtime as _rt
+from subproblems import tolerances as _tol
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,9 +75,14 @@ class Robot:
 
     def finish_kwargs(self, limits) -> dict:
         """The fast finish's arguments (subproblems.fast.finish_one / finish_many)."""
-        return {"kinds": self.joint_types, "lower": tuple(self.lower.tolist()),
-                "upper": tuple(self.upper.tolist()), "limits": bool(limits), "scale": self.scale,
-                "tol": self.tol, "slots": self.slots}
+        return self._finish_arguments[bool(limits)]
+
+    @functools.cached_property
+    def _finish_arguments(self) -> dict:
+        # built once: a single-pose solve asks for them on every call
+        return {limits: {"kinds": self.joint_types, "lower": tuple(self.lower.tolist()),
+                         "upper": tuple(self.upper.tolist()), "limits": limits, "scale": self.scale,
+                         "tol": self.tol, "slots": self.slots} for limits in (False, True)}
 
     def error(self, G, goals) -> np.ndarray:
         """How far tool poses G miss their goals, in lengths (rotation scaled by the robot's size)."""
@@ -97,7 +104,7 @@ class Robot:
         q = np.concatenate([q, np.zeros(len(self.vary) - n)]).reshape(1, -1)  # virtual joints at 0
         return _rt.fk_batch(self.twists, q @ self.A.T + self.B, self.home)[0]
 
-    def newton_until_exact(self, TH, goals, iters: int, margin: float = 1e-2) -> np.ndarray:
+    def newton_until_exact(self, TH, goals, iters: int, margin: float = _tol.CONTINUUM_MARGIN) -> np.ndarray:
         """Newton steps as :meth:`newton`, up to ``iters``, in rounds of 4 on the rows still missing by
         more than ``margin`` of the precision: a row already exact takes none (a self-motion's
         representative usually is: then 60 steps on it only cost time, about 5 ms a pose)."""
