@@ -83,7 +83,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from subproblems import tolerances as _tol
-from subproblems.angles import wrap_array
 from subproblems.core import SubproblemError, SubproblemInputError
 from subproblems.screw import inverse_transform as _inv
 
@@ -725,8 +724,13 @@ def _read_ratio(den, num):
 
 
 def _wrap(Q, prism=None):
-    """Revolute values in (-pi, pi]; prismatic columns (``prism`` True) unchanged."""
-    W = wrap_array(Q)
+    """Revolute values in (-pi, pi]; prismatic columns (``prism`` True) unchanged.
+
+    Not ``angles.wrap_array`` (exact): this rounding wrap moves an in-range value by up to an ulp of pi,
+    and swapping it for the exact one turned a recovered sample of ur5_gripper.urdf at a numerical
+    self-motion (tests/test_real_robots.py) into a miss; the sensitivity is open (session 6 note)."""
+    W = np.mod(Q + math.pi, 2 * math.pi) - math.pi
+    W = np.where(W <= -math.pi, W + 2 * math.pi, W)
     return W if prism is None else np.where(prism, Q, W)
 
 
