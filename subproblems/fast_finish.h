@@ -39,6 +39,27 @@ typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double rep, do
 #define IKC_FAMILY_MISS (-3)  /* a self-motion whose representatives all miss: try others */
 #define IKC_REPS 16           /* representatives tried: rep = k pi / 8, k = 1 .. 8 and -1 .. -7 */
 
+/* Why the last target this thread handed back (IKC_PYTHON) was handed back: one of IKC_WHY_*, of the
+ * main chain and (times IKC_WHY_ALT) of the alternative chain; 0 when it was settled.  Read by
+ * benchmarks/special_poses.py through ikc_last_reason (docs/design.md section 6). */
+#define IKC_WHY_DEFER 1       /* a leaf near a degenerate geometry (DEFER) */
+#define IKC_WHY_NAN 2         /* a leaf's values or error NaN, or NaN after Newton steps */
+#define IKC_WHY_CLAMPED 3     /* a value clamped onto a limit */
+#define IKC_WHY_REPS 4        /* the chain's leaf count changed with the representative */
+#define IKC_WHY_FAMILY 5      /* a self-motion with no exact representative inside the limits */
+#define IKC_WHY_ROTATION 6    /* a target rotation orthonormal only to 1e-6 */
+#define IKC_WHY_SEARCH 7      /* the search fallback could not run or finish */
+#define IKC_WHY_SNAPPED 8     /* a snapped plan's correction is not certain */
+#define IKC_WHY_ALT 16
+static __thread int ikc_why;
+
+static int ikc_last_reason(void) { return ikc_why; }
+
+static int ikc_hand_back(int why) {
+    ikc_why = why;
+    return IKC_PYTHON;
+}
+
 typedef struct {
     int dof, nfree, leaves, slots;
     int target;  /* 0 pose, 1 position, 2 orientation */
@@ -336,20 +357,21 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         int flag = F[k];
         if (flag & IKC_EMPTY) continue;
         err[k] = E[k];
-        if ((flag & IKC_DEFER) || err[k] != err[k]) return IKC_PYTHON;
+        if (flag & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
+        if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
             /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
             err[k] = ikc_newton(rb, g, w, 15);
-            if (err[k] != err[k]) return IKC_PYTHON;
+            if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
         for (int j = 0; j < dof; j++)
-            if (w[j] != w[j]) return IKC_PYTHON;
+            if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
         const int status = ikc_represent(rb, w, limits), ok = status != IKC_OUTSIDE;
-        if (status == IKC_CLAMPED) return IKC_PYTHON;  /* Newton with the clamped joint held: Python */
+        if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* Newton, joint held: Python */
         if (status == IKC_ADJUSTED) err[k] = ikc_measure(rb, g, w);  /* the values as returned */
         inexact[k] = !(err[k] <= exact_tol);
         if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
@@ -465,7 +487,7 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
         int n2 = chain(g, fr, rep, Q2, E2, F2);
-        if (n2 != n) return IKC_PYTHON;
+        if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
         for (int j = 0; j < n; j++) {
             if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
                 continue;
@@ -493,15 +515,18 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         }
     }
     k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
-    return k == IKC_FAMILY_MISS ? IKC_PYTHON : k;
+    return k == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : k;
 }
 
 /* The chain, then (where it cannot settle the target) the alternative chain. */
 static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                       double *res, int *ls, int *cont) {
     int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont);
-    if (k == IKC_PYTHON && rb->chain_alt)
+    if (k == IKC_PYTHON && rb->chain_alt) {
+        const int why = ikc_why;
         k = ikc_settle_chain(rb, rb->chain_alt, rb->leaves_alt, g, fr, limits, q, res, ls, cont);
+        ikc_why = k == IKC_PYTHON ? why + IKC_WHY_ALT * ikc_why : 0;
+    }
     return k;
 }
 
@@ -515,7 +540,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
                       double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof, G = rb->grid, S = rb->nsearch;
     const int cells = S == 1 ? G : G * G;
-    if (S < 1 || S > 2 || G < 3) return IKC_PYTHON;
+    if (S < 1 || S > 2 || G < 3) return ikc_hand_back(IKC_WHY_SEARCH);
     double *E = malloc(sizeof(double) * (size_t)cells * L);
     double *Q = malloc(sizeof(double) * (size_t)cells * L * dof);
     int *F = malloc(sizeof(int) * (size_t)L);
@@ -566,6 +591,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
         if (status < 0) status = IKC_PYTHON;
     }
+    if (status == IKC_PYTHON) ikc_why = IKC_WHY_SEARCH;
     free(E);
     free(Q);
     free(F);
@@ -654,10 +680,10 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
         good[k] = 0;
-        if (F[k] & IKC_DEFER) return IKC_PYTHON;
+        if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
         if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
-            if (E[k] <= rb->near_singular * rb->scale) return IKC_PYTHON;
+            if (E[k] <= rb->near_singular * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
         } else {
             good[k] = 1;
         }
@@ -665,22 +691,23 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
         E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
         if (good[k]) {
-            if (!(E[k] <= exact)) return IKC_PYTHON;
-            if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return IKC_PYTHON;
-            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return IKC_PYTHON;
+            if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
+            if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return ikc_hand_back(IKC_WHY_SNAPPED);
+            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
         }
     }
     for (int a = 0; a < n; a++)
         for (int c = a + 1; c < n; c++)
             if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&
                 ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) > IKC_SEPARATE)
-                return IKC_PYTHON;  /* a collision: one branch went to the other's solution */
+                return ikc_hand_back(IKC_WHY_SNAPPED);  /* a collision: one branch went to the other's */
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
-    return k < 0 ? IKC_PYTHON : k;
+    return k == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : k;
 }
 
 static int ikc_solve_goal(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                           double *res, int *ls, int *cont) {
+    ikc_why = 0;
     if (rb->nsearch) return ikc_search(rb, g, fr, limits, q, res, ls, cont);
     if (rb->polish) return ikc_polished(rb, g, fr, limits, q, res, ls, cont);
     return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
@@ -691,7 +718,7 @@ static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int l
                    double *res, int *ls, int *cont) {
     double g[12];
     const int checked = ikc_goal_checked(rb, T, g);
-    if (checked != 1) return checked == 0 ? IKC_INVALID : IKC_PYTHON;
+    if (checked != 1) return checked == 0 ? IKC_INVALID : ikc_hand_back(IKC_WHY_ROTATION);
     return ikc_solve_goal(rb, g, fr, limits, q, res, ls, cont);
 }
 
