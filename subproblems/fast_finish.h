@@ -460,13 +460,159 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
     return 1;
 }
 
+
+/* ---- self-motions that are straight lines (docs/design.md section 6, "Self-motions in C") ----
+ * A family leaf whose joint values, over the chain's representatives rep, are q(rep) = q(0) + s rep
+ * (modulo 2 pi) with integer slopes s on the revolute joints and none on the prismatic ones is a closed
+ * line in joint space covered once by rep in (-pi, pi].  Where the Jacobian's null space is exactly one
+ * direction along it (the second smallest singular value clear of 0), the solution set near each of
+ * its points is that line alone, so the line is the whole component: where it misses the limit box,
+ * no in-limit representative of this self-motion exists (the leaf is dropped); where it meets the
+ * box, the middle of the widest in-limit stretch of rep is a representative inside the limits. */
+#define IKC_LINE_FIT 1e-9       /* a representative's values off the line by more: not a line */
+#define IKC_LINE_RANK 1e-5      /* second smallest singular value (size-free) below this: not alone */
+#define IKC_LINE_POINTS 3       /* points of the line where the rank is checked: t = 0, +-2 pi / 3 */
+
+/* The two smallest singular values of the size-free Jacobian at q (rows of the target, lengths over
+ * the size, prismatic columns times the size, free joints left out), by Jacobi rotations on J^T J;
+ * sig[1] = 0 when the returned joints outnumber the target's rows (no isolated direction to show). */
+static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2]) {
+    const int dof = rb->dof;
+    double G[12], J[6 * dof];
+    ikc_fk_jacobian(rb, q, G, J);
+    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0, col[dof];
+    for (int j = 0; j < dof; j++)
+        if (!rb->is_free[j]) col[m++] = j;
+    sig[0] = sig[1] = 0.0;
+    if (m < 2 || m > r1 - r0) return;
+    double S[m][m];
+    for (int a = 0; a < m; a++)
+        for (int c = 0; c < m; c++) {
+            double t = 0.0;
+            for (int r = r0; r < r1; r++) {
+                double f = r < 3 ? 1.0 / (rb->scale * rb->scale) : 1.0;
+                t += f * J[r * dof + col[a]] * J[r * dof + col[c]];
+            }
+            double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
+            S[a][c] = t * ua * uc;
+        }
+    for (int sweep = 0; sweep < 30; sweep++) {  /* cyclic Jacobi: S -> diagonal of its eigenvalues */
+        double off = 0.0, diag = 0.0;
+        for (int a = 0; a < m; a++) {
+            diag += S[a][a] * S[a][a];
+            for (int c = a + 1; c < m; c++) off += S[a][c] * S[a][c];
+        }
+        if (off <= 1e-34 * diag) break;
+        for (int a = 0; a < m; a++)
+            for (int c = a + 1; c < m; c++) {
+                if (S[a][c] == 0.0) continue;
+                double theta = (S[c][c] - S[a][a]) / (2.0 * S[a][c]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+                double cs = 1.0 / sqrt(t * t + 1.0), sn = t * cs;
+                for (int k = 0; k < m; k++) {  /* S <- S R (columns a, c) */
+                    double x = S[k][a], y = S[k][c];
+                    S[k][a] = cs * x - sn * y;
+                    S[k][c] = sn * x + cs * y;
+                }
+                for (int k = 0; k < m; k++) {  /* S <- R^T S (rows a, c) */
+                    double x = S[a][k], y = S[c][k];
+                    S[a][k] = cs * x - sn * y;
+                    S[c][k] = sn * x + cs * y;
+                }
+            }
+    }
+    double lo0 = INFINITY, lo1 = INFINITY;
+    for (int a = 0; a < m; a++) {
+        double e = S[a][a];
+        if (e < lo0) lo1 = lo0, lo0 = e;
+        else if (e < lo1) lo1 = e;
+    }
+    sig[0] = sqrt(lo0 > 0.0 ? lo0 : 0.0);
+    sig[1] = sqrt(lo1 > 0.0 ? lo1 : 0.0);
+}
+
+/* The difference a - b of two joint values: modulo 2 pi into (-pi, pi] for a revolute joint. */
+static double ikc_joint_step(const ikc_robot *rb, int j, double a, double b) {
+    return rb->revolute[j] ? ikc_wrap(a - b) : a - b;
+}
+
+/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above). */
+static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s) {
+    const int dof = rb->dof;
+    int moves = 0;
+    for (int j = 0; j < dof; j++) moves |= s[j] != 0.0;
+    if (!moves) return 0;  /* rep moves no joint: the family is not this line */
+    for (int p = 0; p < IKC_LINE_POINTS; p++) {
+        double t = (p == 0 ? 0.0 : (p == 1 ? 1.0 : -1.0)) * IKC_TWO_PI / 3.0, q[dof], sig[2];
+        for (int j = 0; j < dof; j++) q[j] = q0[j] + s[j] * t;
+        ikc_two_weakest(rb, q, sig);
+        if (!(sig[1] >= IKC_LINE_RANK)) return 0;
+    }
+    return 1;
+}
+
+/* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`). */
+static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack) {
+    for (int j = 0; j < rb->dof; j++) {
+        double x = q0[j] + s[j] * t, lo = rb->lower[j] - slack, hi = rb->upper[j] + slack;
+        if (rb->revolute[j]) {
+            if (hi - lo >= IKC_TWO_PI) continue;
+            x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
+        }
+        if (!(lo <= x && x <= hi)) return 0;
+    }
+    return 1;
+}
+
+/* The in-limit stretch of the line q0 + s t, t in [-pi, pi]: 0 when none (even with the limits
+ * widened by IKC_LIMIT_EPS, as ikc_represent clamps), else 1 and *t_mid the middle of the widest stretch
+ * inside the limits.  The stretches end where some joint's value (or an alias) crosses a limit. */
+static int ikc_line_in_limits(const ikc_robot *rb, const double *q0, const double *s, double *t_mid) {
+    enum { MAXCUTS = 256 };
+    double cut[MAXCUTS];
+    int nc = 0;
+    cut[nc++] = -IKC_PI_F;
+    cut[nc++] = IKC_PI_F;
+    for (int j = 0; j < rb->dof; j++) {
+        if (s[j] == 0.0) continue;
+        const double bound[2] = {rb->lower[j], rb->upper[j]};
+        if (rb->revolute[j] && bound[1] - bound[0] >= IKC_TWO_PI) continue;
+        const int wraps = rb->revolute[j] ? (int)ceil(fabs(s[j])) + 1 : 0;
+        for (int b = 0; b < 2; b++)
+            for (int k = -wraps; k <= wraps; k++) {
+                double t = (bound[b] + IKC_TWO_PI * k - q0[j]) / s[j];
+                if (-IKC_PI_F < t && t < IKC_PI_F) {
+                    if (nc == MAXCUTS) return -1;
+                    cut[nc++] = t;
+                }
+            }
+    }
+    for (int a = 1; a < nc; a++)  /* insertion sort */
+        for (int b = a; b > 0 && cut[b - 1] > cut[b]; b--) {
+            double tmp = cut[b];
+            cut[b] = cut[b - 1];
+            cut[b - 1] = tmp;
+        }
+    double widest = -1.0;
+    int any = 0;
+    for (int a = 0; a + 1 < nc; a++) {
+        double mid = 0.5 * (cut[a] + cut[a + 1]), width = cut[a + 1] - cut[a];
+        if (ikc_line_inside(rb, q0, s, mid, IKC_LIMIT_EPS)) any = 1;
+        if (width > widest && ikc_line_inside(rb, q0, s, mid, 0.0)) widest = width, *t_mid = mid;
+    }
+    for (int a = 0; a < nc && !any; a++) any = ikc_line_inside(rb, q0, s, cut[a], IKC_LIMIT_EPS);
+    return !any ? 0 : (widest > 0.0 ? 1 : -1);
+}
+
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
  * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
  * representative that is exact and inside the limits (the family's interval of reachable values may
  * not contain 0, or 0 may lie outside a limit).  Family leaves that no
- * representative completes (an interval narrower than the grid: a stretched arm at a wrist lock) get
- * Newton steps from their best representative, as the reference runtime pulls its representatives
- * onto the family.  Count or IKC_PYTHON. */
+ * representative completes are settled, where the family is a straight line alone (above), by the
+ * line: dropped where it misses the limits, else taken at the middle of its widest in-limit stretch;
+ * the others (an interval narrower than the grid: a stretched arm at a wrist lock) get Newton steps
+ * from their best representative, as the reference runtime pulls its representatives onto the
+ * family.  Count or IKC_PYTHON. */
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont) {
     const int dof = rb->dof;
@@ -476,11 +622,13 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
-    double Q2[L * dof], E2[L], B[L * dof], EB[L];
-    int F2[L];
+    double Q2[L * dof], E2[L], B[L * dof], EB[L], Q0[L * dof], S[L * dof];
+    int F2[L], line[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
-        for (int c = 0; c < dof; c++) B[j * dof + c] = Q[j * dof + c];
+        for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
         EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
+        /* a candidate straight line: exact at rep = 0 (its slopes come from the first other rep) */
+        line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) && E[j] <= exact_tol;
     }
     for (int r = 1; r < IKC_REPS; r++) {
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
@@ -489,6 +637,21 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         int n2 = chain(g, fr, rep, Q2, E2, F2);
         if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
         for (int j = 0; j < n; j++) {
+            if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
+                const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
+                int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) && E2[j] <= exact_tol;
+                for (int c = 0; c < dof && fits; c++) {
+                    double d = ikc_joint_step(rb, c, row[c], q0[c]), unit = rb->revolute[c] ? 1.0 : rb->scale;
+                    if (r == 1) {
+                        double sl = d / rep, whole = nearbyint(sl);
+                        fits = rb->revolute[c] ? fabs(sl - whole) <= IKC_LINE_FIT / rep : fabs(d) <= IKC_LINE_FIT * unit;
+                        S[j * dof + c] = rb->revolute[c] ? whole : 0.0;
+                    } else {
+                        fits = fabs(ikc_joint_step(rb, c, d, S[j * dof + c] * rep)) <= IKC_LINE_FIT * unit;
+                    }
+                }
+                line[j] = fits;
+            }
             if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
                 continue;
             if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;  /* settled */
@@ -508,6 +671,21 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     for (int j = 0; j < n; j++) {
         if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
         if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
+        if (line[j] && ikc_line_alone(rb, Q0 + j * dof, S + j * dof)) {
+            double t = 0.0;
+            const int found = ikc_line_in_limits(rb, Q0 + j * dof, S + j * dof, &t);
+            if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
+                F[j] |= IKC_EMPTY;
+                continue;
+            }
+            if (found == 1 && chain(g, fr, t, Q2, E2, F2) == n && (F2[j] & IKC_FAMILY) &&
+                !(F2[j] & (IKC_DEFER | IKC_EMPTY)) && E2[j] <= exact_tol && ikc_row_inside(rb, Q2 + j * dof)) {
+                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
+                E[j] = E2[j];
+                F[j] = F2[j];
+                continue;
+            }
+        }
         double e = ikc_newton(rb, g, B + j * dof, 60);
         if (e <= exact_tol && (!limits || ikc_row_inside(rb, B + j * dof))) {
             for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
