@@ -205,7 +205,8 @@ static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
  * `guarded`: at a doubly singular configuration the plain step runs off along the null directions.
  * Unguarded, every step is taken (far seeds of the search may need to climb before they descend).  At most `iters`
  * steps, fewer once the error is far inside the exact tolerance.  Returns the new pose error. */
-static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded) {
+static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
+                               const int *held) {
     const int dof = rb->dof;
     const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
     double G[12], J[6 * dof], trial[dof], G2[12], J2[6 * dof];
@@ -230,7 +231,8 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
             double s = 0.0;
             for (int r = r0; r < r1; r++) s += J[r * dof + j] * J[r * dof + j];
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
-            for (int r = r0; r < r1; r++) Js[r * dof + j] = rb->is_free[j] ? 0.0 : J[r * dof + j] / col[j];
+            const int hold = rb->is_free[j] || (held && held[j]);
+            for (int r = r0; r < r1; r++) Js[r * dof + j] = hold ? 0.0 : J[r * dof + j] / col[j];
         }
         for (int a = 0; a < dof; a++) {
             for (int c = 0; c < dof; c++) {
@@ -250,7 +252,8 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
                 M[a][dof] = Jte[a];
             }
             if (!ikc_solve_linear(dof, M, dq)) return now;
-            for (int j = 0; j < dof; j++) trial[j] = q[j] + (rb->is_free[j] ? 0.0 : dq[j] / col[j]);
+            for (int j = 0; j < dof; j++)
+                trial[j] = q[j] + ((rb->is_free[j] || (held && held[j])) ? 0.0 : dq[j] / col[j]);
             ikc_fk_jacobian(rb, trial, G2, J2);
             double next = ikc_pose_error(rb, G2, g);
             if (next < now || !guarded) {  /* accept; trust the linear model more next time */
@@ -271,7 +274,7 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
 
 /* Newton steps that never raise the error (near misses, self-motion representatives). */
 static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
-    return ikc_newton_steps(rb, g, q, iters, 1);
+    return ikc_newton_steps(rb, g, q, iters, 1, NULL);
 }
 
 /* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
@@ -290,12 +293,14 @@ static double ikc_wrap(double x) {
 #define IKC_ADJUSTED 1      /* a value snapped or clamped: the row's error must be measured again */
 #define IKC_OUTSIDE 2
 #define IKC_CLAMPED 3       /* a value clamped onto a limit: the other joints need Newton steps */
+#define IKC_CLAMPED_NEWTON 3  /* Newton steps with a clamped joint held (reference.clamped_onto_limits) */
 
 /* fast.represent_one: joint values q (in place) as returned -- a revolute value as its representative in
  * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status. */
-static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
+static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
     int status = IKC_INSIDE;
     for (int j = 0; j < rb->dof; j++) {
+        if (clamped) clamped[j] = 0;
         double x = q[j];
         const int rev = rb->revolute[j];
         if (rev) {
@@ -317,6 +322,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
                     x = c[k] < lo ? lo : (c[k] > hi ? hi : c[k]);
                     found = 1;
                     status = IKC_CLAMPED;
+                    if (clamped) clamped[j] = 1;
                 }
             if (!found) return IKC_OUTSIDE;
         }
@@ -329,7 +335,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
 static int ikc_row_inside(const ikc_robot *rb, const double *q) {
     double w[rb->dof];
     for (int j = 0; j < rb->dof; j++) w[j] = q[j];
-    return ikc_represent(rb, w, 1) != IKC_OUTSIDE;
+    return ikc_represent(rb, w, 1, NULL) != IKC_OUTSIDE;
 }
 
 /* The pose error of returned joint values q against goal g, measured on the true robot. */
@@ -370,8 +376,18 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
         for (int j = 0; j < dof; j++)
             if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-        const int status = ikc_represent(rb, w, limits), ok = status != IKC_OUTSIDE;
-        if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* Newton, joint held: Python */
+        int held[dof], status = ikc_represent(rb, w, limits, held);
+        if (status == IKC_CLAMPED) {
+            /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
+             * the other joints with it held, as reference.clamped_onto_limits; then the row as returned */
+            ikc_newton_steps(rb, g, w, IKC_CLAMPED_NEWTON, 1, held);
+            for (int j = 0; j < dof; j++)
+                if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
+            status = ikc_represent(rb, w, limits, held);
+            if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* again: Python */
+            if (status != IKC_OUTSIDE) status = IKC_ADJUSTED;
+        }
+        const int ok = status != IKC_OUTSIDE;
         if (status == IKC_ADJUSTED) err[k] = ikc_measure(rb, g, w);  /* the values as returned */
         inexact[k] = !(err[k] <= exact_tol);
         if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
@@ -761,7 +777,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         int CF[count > 0 ? count : 1];
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
-            CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0);  /* plain steps, as the Python search */
+            CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0, NULL);  /* plain steps, as the Python search */
             /* merged within IKC_SPLIT_ROOT, as the Python search: two seeds of one double root stop on
              * its flat valley up to ~1e-7 apart */
             CF[a] = IKC_TANGENT_ROOT;
@@ -866,7 +882,7 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
             good[k] = 1;
         }
         for (int j = 0; j < dof; j++) Q0[k * dof + j] = Q[k * dof + j];
-        E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0);  /* plain steps, as the Python path */
+        E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0, NULL);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
         if (good[k]) {
             if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
