@@ -489,19 +489,20 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
 #define IKC_LINE_RANK 1e-5      /* second smallest singular value (size-free) below this: not alone */
 #define IKC_LINE_POINTS 3       /* points of the line where the rank is checked: t = 0, +-2 pi / 3 */
 
-/* The two smallest singular values of the size-free Jacobian at q (rows of the target, lengths over
- * the size, prismatic columns times the size, free joints left out), by Jacobi rotations on J^T J;
- * sig[1] = 0 when the returned joints outnumber the target's rows (no isolated direction to show). */
-static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2]) {
+/* The size-free J^T J at q (rows of the target, lengths over the size, prismatic columns times the size)
+ * over the m returned joints that are not free (their positions in col), diagonalised by cyclic
+ * Jacobi rotations: its eigenvalues ascending in lam[0..m), and with V (m x m, row-major) their unit
+ * eigenvectors as columns.  Returns m, or 0 when there are fewer than 2 such joints or they outnumber
+ * the target's rows (no isolated direction to show). */
+static int ikc_jtj_eigen(const ikc_robot *rb, const double *q, int *col, double *lam, double *V) {
     const int dof = rb->dof;
     double G[12], J[6 * dof];
     ikc_fk_jacobian(rb, q, G, J);
-    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0, col[dof];
+    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0;
     for (int j = 0; j < dof; j++)
         if (!rb->is_free[j]) col[m++] = j;
-    sig[0] = sig[1] = 0.0;
-    if (m < 2 || m > r1 - r0) return;
-    double S[m][m];
+    if (m < 2 || m > r1 - r0) return 0;
+    double S[m][m], U[m][m];
     for (int a = 0; a < m; a++)
         for (int c = 0; c < m; c++) {
             double t = 0.0;
@@ -511,8 +512,9 @@ static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2])
             }
             double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
             S[a][c] = t * ua * uc;
+            U[a][c] = a == c ? 1.0 : 0.0;
         }
-    for (int sweep = 0; sweep < 30; sweep++) {  /* cyclic Jacobi: S -> diagonal of its eigenvalues */
+    for (int sweep = 0; sweep < 30; sweep++) {  /* cyclic Jacobi: S -> diagonal, U -> eigenvectors */
         double off = 0.0, diag = 0.0;
         for (int a = 0; a < m; a++) {
             diag += S[a][a] * S[a][a];
@@ -525,10 +527,13 @@ static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2])
                 double theta = (S[c][c] - S[a][a]) / (2.0 * S[a][c]);
                 double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
                 double cs = 1.0 / sqrt(t * t + 1.0), sn = t * cs;
-                for (int k = 0; k < m; k++) {  /* S <- S R (columns a, c) */
+                for (int k = 0; k < m; k++) {  /* S <- S R, U <- U R (columns a, c) */
                     double x = S[k][a], y = S[k][c];
                     S[k][a] = cs * x - sn * y;
                     S[k][c] = sn * x + cs * y;
+                    x = U[k][a], y = U[k][c];
+                    U[k][a] = cs * x - sn * y;
+                    U[k][c] = sn * x + cs * y;
                 }
                 for (int k = 0; k < m; k++) {  /* S <- R^T S (rows a, c) */
                     double x = S[a][k], y = S[c][k];
@@ -537,14 +542,31 @@ static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2])
                 }
             }
     }
-    double lo0 = INFINITY, lo1 = INFINITY;
+    int order[m];
+    for (int a = 0; a < m; a++) order[a] = a;
+    for (int a = 1; a < m; a++)  /* ascending eigenvalues (insertion sort, stable) */
+        for (int b = a; b > 0 && S[order[b - 1]][order[b - 1]] > S[order[b]][order[b]]; b--) {
+            int tmp = order[b];
+            order[b] = order[b - 1];
+            order[b - 1] = tmp;
+        }
     for (int a = 0; a < m; a++) {
-        double e = S[a][a];
-        if (e < lo0) lo1 = lo0, lo0 = e;
-        else if (e < lo1) lo1 = e;
+        lam[a] = S[order[a]][order[a]];
+        if (V)
+            for (int k = 0; k < m; k++) V[k * m + a] = U[k][order[a]];
     }
-    sig[0] = sqrt(lo0 > 0.0 ? lo0 : 0.0);
-    sig[1] = sqrt(lo1 > 0.0 ? lo1 : 0.0);
+    return m;
+}
+
+/* The two smallest singular values of the size-free Jacobian at q (free joints left out); both 0 where
+ * ikc_jtj_eigen shows nothing. */
+static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2]) {
+    int col[rb->dof];
+    double lam[rb->dof];
+    sig[0] = sig[1] = 0.0;
+    if (!ikc_jtj_eigen(rb, q, col, lam, NULL)) return;
+    sig[0] = sqrt(lam[0] > 0.0 ? lam[0] : 0.0);
+    sig[1] = sqrt(lam[1] > 0.0 ? lam[1] : 0.0);
 }
 
 /* The difference a - b of two joint values: modulo 2 pi into (-pi, pi] for a revolute joint. */
@@ -567,10 +589,13 @@ static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s
     return 1;
 }
 
-/* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`). */
-static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack) {
+/* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`,
+ * `slide_slack` for a prismatic joint). */
+static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack,
+                           double slide_slack) {
     for (int j = 0; j < rb->dof; j++) {
-        double x = q0[j] + s[j] * t, lo = rb->lower[j] - slack, hi = rb->upper[j] + slack;
+        const double sl = rb->revolute[j] ? slack : slide_slack;
+        double x = q0[j] + s[j] * t, lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
         if (rb->revolute[j]) {
             if (hi - lo >= IKC_TWO_PI) continue;
             x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
@@ -581,9 +606,12 @@ static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *
 }
 
 /* The in-limit stretch of the line q0 + s t, t in [-pi, pi]: 0 when none (even with the limits
- * widened by IKC_LIMIT_EPS, as ikc_represent clamps), else 1 and *t_mid the middle of the widest stretch
- * inside the limits.  The stretches end where some joint's value (or an alias) crosses a limit. */
-static int ikc_line_in_limits(const ikc_robot *rb, const double *q0, const double *s, double *t_mid) {
+ * widened by `slack`, `slide_slack` for a prismatic joint: IKC_LIMIT_EPS, as ikc_represent clamps, or
+ * IKC_TANGENT_MARGIN radians and times the size, for a line known only to that), else 1 and *t_mid the middle of the
+ * widest stretch inside the limits; -1 when undecided.  The stretches end where some joint's value
+ * (or an alias) crosses a limit. */
+static int ikc_line_in_limits(const ikc_robot *rb, const double *q0, const double *s, double slack,
+                              double slide_slack, double *t_mid) {
     enum { MAXCUTS = 256 };
     double cut[MAXCUTS];
     int nc = 0;
@@ -613,11 +641,66 @@ static int ikc_line_in_limits(const ikc_robot *rb, const double *q0, const doubl
     int any = 0;
     for (int a = 0; a + 1 < nc; a++) {
         double mid = 0.5 * (cut[a] + cut[a + 1]), width = cut[a + 1] - cut[a];
-        if (ikc_line_inside(rb, q0, s, mid, IKC_LIMIT_EPS)) any = 1;
-        if (width > widest && ikc_line_inside(rb, q0, s, mid, 0.0)) widest = width, *t_mid = mid;
+        if (ikc_line_inside(rb, q0, s, mid, slack, slide_slack)) any = 1;
+        if (width > widest && ikc_line_inside(rb, q0, s, mid, 0.0, 0.0)) widest = width, *t_mid = mid;
     }
-    for (int a = 0; a < nc && !any; a++) any = ikc_line_inside(rb, q0, s, cut[a], IKC_LIMIT_EPS);
+    for (int a = 0; a < nc && !any; a++) any = ikc_line_inside(rb, q0, s, cut[a], slack, slide_slack);
     return !any ? 0 : (widest > 0.0 ? 1 : -1);
+}
+
+static double ikc_row_distance(const ikc_robot *rb, const double *x, const double *y);  /* below */
+
+#define IKC_TANGENT_MARGIN 1e-3  /* a tangent line's leaves lie this close to the line (radians) */
+#define IKC_TANGENT_PROBE 1e-3   /* the step off the line along the second null direction */
+
+/* A self-motion line whose leaves are a tangent root (two roots of one step coincide: located to about
+ * sqrt(eps)) has, at its exact point p0 (Newton-polished), a Jacobian null space of two directions: the
+ * line's own, f, and one more, n.  Along a double root, n leads to no solution: Newton steps from
+ * p0 + IKC_TANGENT_PROBE n come back to the line (they halve the distance each step); on a sheet of
+ * solutions (a second self-motion, as the Rhino's planar arm) they stop where they start.  So the line
+ * is alone where the null space has exactly two directions and Newton from both sides returns to
+ * within a tenth of the step; or where it has only one (ikc_line_alone's case). */
+static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const double *p0, const double *s) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 3 || !(lam[2] >= floor)) return 0;
+    if (lam[1] >= floor) return 1;  /* one null direction: the line alone */
+    double f[m], fn = 0.0;
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);  /* revolute: scaled and joint units agree */
+    double n[m], best = 0.0;
+    for (int v = 0; v < 2; v++) {  /* the null vector least along f, made orthogonal to it */
+        double d = 0.0, w[m], len = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
+        if (len > best) {
+            best = len;
+            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
+        }
+    }
+    if (!(best > 0.25)) return 0;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_TANGENT_PROBE * n[a] * u;
+        }
+        ikc_newton(rb, g, x, 15);
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the line: a sheet */
+    }
+    return 1;
 }
 
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
@@ -638,13 +721,16 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
-    double Q2[L * dof], E2[L], B[L * dof], EB[L], Q0[L * dof], S[L * dof];
+    double Q2[L * dof], E2[L], B[L * dof], EB[L], Q0[L * dof], E0[L], S[L * dof];
     int F2[L], line[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
         for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
+        E0[j] = E[j];
         EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
-        /* a candidate straight line: exact at rep = 0 (its slopes come from the first other rep) */
-        line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) && E[j] <= exact_tol;
+        /* a candidate straight line: exact at rep = 0, or a tangent root there (its slopes come from the
+         * first other rep) */
+        line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) &&
+                  (E[j] <= exact_tol || ((F[j] & IKC_TANGENT_ROOT) && E[j] < near));
     }
     for (int r = 1; r < IKC_REPS; r++) {
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
@@ -655,7 +741,8 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         for (int j = 0; j < n; j++) {
             if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
                 const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
-                int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) && E2[j] <= exact_tol;
+                int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) &&
+                           (E2[j] <= exact_tol || ((F2[j] & IKC_TANGENT_ROOT) && E2[j] < near));
                 for (int c = 0; c < dof && fits; c++) {
                     double d = ikc_joint_step(rb, c, row[c], q0[c]), unit = rb->revolute[c] ? 1.0 : rb->scale;
                     if (r == 1) {
@@ -687,15 +774,31 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     for (int j = 0; j < n; j++) {
         if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
         if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
-        if (line[j] && ikc_line_alone(rb, Q0 + j * dof, S + j * dof)) {
+        /* a tangent line: its exact point near the leaf of rep = 0 (the line is known to the margin) */
+        const int tangent = line[j] && !(E0[j] <= exact_tol);
+        double p0[dof];
+        for (int c = 0; c < dof; c++) p0[c] = Q0[j * dof + c];
+        if (tangent && !(ikc_newton(rb, g, p0, 15) <= exact_tol &&
+                         ikc_row_distance(rb, p0, Q0 + j * dof) <= IKC_TANGENT_MARGIN))
+            line[j] = 0;
+        if (line[j] && (tangent ? ikc_tangent_line_alone(rb, g, p0, S + j * dof)
+                                : ikc_line_alone(rb, Q0 + j * dof, S + j * dof))) {
             double t = 0.0;
-            const int found = ikc_line_in_limits(rb, Q0 + j * dof, S + j * dof, &t);
+            const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+            const int found = ikc_line_in_limits(rb, Q0 + j * dof, S + j * dof, slack,
+                                                 tangent ? slack * rb->scale : slack, &t);
             if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
                 F[j] |= IKC_EMPTY;
                 continue;
             }
+            double e3 = INFINITY;
             if (found == 1 && chain(g, fr, t, Q2, E2, F2) == n && (F2[j] & IKC_FAMILY) &&
-                !(F2[j] & (IKC_DEFER | IKC_EMPTY)) && E2[j] <= exact_tol && ikc_row_inside(rb, Q2 + j * dof)) {
+                !(F2[j] & (IKC_DEFER | IKC_EMPTY))) {
+                e3 = E2[j];
+                if (exact_tol < e3 && e3 < near) e3 = ikc_newton(rb, g, Q2 + j * dof, 15);
+            }
+            if (e3 <= exact_tol && ikc_row_inside(rb, Q2 + j * dof)) {
+                E2[j] = e3;
                 for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
                 E[j] = E2[j];
                 F[j] = F2[j];

@@ -373,16 +373,18 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
 
 # -- self-motions that are straight lines (ikc_two_weakest, ikc_line_*) --------------------------------
 
-def two_weakest(rb: FinishRobot, q):
-    """The two smallest singular values of the size-free Jacobian at q (free joints left out)."""
+def jtj_eigen(rb: FinishRobot, q, vectors: bool = False):
+    """(col, eigenvalues ascending, eigenvectors as columns V[k][a] or None) of the size-free J^T J over
+    the joints that are not free; (col, None, None) when fewer than 2 or more than the target's rows."""
     dof = rb.dof
     _, J = fk_jacobian(rb, q)
     r0, r1 = (3 if rb.target == 2 else 0), (3 if rb.target == 1 else 6)
     col = [j for j in range(dof) if not rb.is_free[j]]
     m = len(col)
     if m < 2 or m > r1 - r0:
-        return 0.0, 0.0
+        return col, None, None
     S = [[0.0] * m for _ in range(m)]
+    U = [[1.0 if a == c else 0.0 for c in range(m)] for a in range(m)]
     for a in range(m):
         for c in range(m):
             t = 0.0
@@ -412,18 +414,25 @@ def two_weakest(rb: FinishRobot, q):
                     x, y = S[k][a], S[k][c]
                     S[k][a] = cs * x - sn * y
                     S[k][c] = sn * x + cs * y
+                    x, y = U[k][a], U[k][c]
+                    U[k][a] = cs * x - sn * y
+                    U[k][c] = sn * x + cs * y
                 for k in range(m):
                     x, y = S[a][k], S[c][k]
                     S[a][k] = cs * x - sn * y
                     S[c][k] = sn * x + cs * y
-    lo0 = lo1 = math.inf
-    for a in range(m):
-        e = S[a][a]
-        if e < lo0:
-            lo0, lo1 = e, lo0
-        elif e < lo1:
-            lo1 = e
-    return math.sqrt(lo0 if lo0 > 0.0 else 0.0), math.sqrt(lo1 if lo1 > 0.0 else 0.0)
+    order = sorted(range(m), key=lambda a: S[a][a])  # stable, as the C's insertion sort
+    lam = [S[a][a] for a in order]
+    V = [[U[k][a] for a in order] for k in range(m)] if vectors else None
+    return col, lam, V
+
+
+def two_weakest(rb: FinishRobot, q):
+    """The two smallest singular values of the size-free Jacobian at q (free joints left out)."""
+    _, lam, _ = jtj_eigen(rb, q)
+    if lam is None:
+        return 0.0, 0.0
+    return math.sqrt(lam[0] if lam[0] > 0.0 else 0.0), math.sqrt(lam[1] if lam[1] > 0.0 else 0.0)
 
 
 def joint_step(rb: FinishRobot, j: int, a: float, b: float) -> float:
@@ -441,9 +450,10 @@ def line_alone(rb: FinishRobot, q0, s) -> bool:
     return True
 
 
-def line_inside(rb: FinishRobot, q0, s, t: float, slack: float) -> bool:
+def line_inside(rb: FinishRobot, q0, s, t: float, slack: float, slide_slack: float) -> bool:
     for j in range(rb.dof):
-        x, lo, hi = q0[j] + s[j] * t, rb.lower[j] - slack, rb.upper[j] + slack
+        sl = slack if rb.revolute[j] else slide_slack
+        x, lo, hi = q0[j] + s[j] * t, rb.lower[j] - sl, rb.upper[j] + sl
         if rb.revolute[j]:
             if hi - lo >= TWO_PI:
                 continue
@@ -453,7 +463,7 @@ def line_inside(rb: FinishRobot, q0, s, t: float, slack: float) -> bool:
     return True
 
 
-def line_in_limits(rb: FinishRobot, q0, s):
+def line_in_limits(rb: FinishRobot, q0, s, slack: float = LIMIT_EPS, slide_slack: float = LIMIT_EPS):
     """(0, None) when the line q0 + s t, t in [-pi, pi], misses the limits; (1, t) with t the middle of
     its widest in-limit stretch; (-1, None) when undecided."""
     cut = [-PI, PI]
@@ -474,15 +484,84 @@ def line_in_limits(rb: FinishRobot, q0, s):
     widest, t_mid, any_inside = -1.0, None, False
     for a in range(len(cut) - 1):
         mid, width = 0.5 * (cut[a] + cut[a + 1]), cut[a + 1] - cut[a]
-        if line_inside(rb, q0, s, mid, LIMIT_EPS):
+        if line_inside(rb, q0, s, mid, slack, slide_slack):
             any_inside = True
-        if width > widest and line_inside(rb, q0, s, mid, 0.0):
+        if width > widest and line_inside(rb, q0, s, mid, 0.0, 0.0):
             widest, t_mid = width, mid
     if not any_inside:
-        any_inside = any(line_inside(rb, q0, s, t, LIMIT_EPS) for t in cut)
+        any_inside = any(line_inside(rb, q0, s, t, slack, slide_slack) for t in cut)
     if not any_inside:
         return 0, None
     return (1, t_mid) if widest > 0.0 else (-1, None)
+
+
+TANGENT_MARGIN = 1e-3  # IKC_TANGENT_MARGIN
+TANGENT_PROBE = 1e-3  # IKC_TANGENT_PROBE
+
+
+def row_distance(rb: FinishRobot, x, y) -> float:
+    """ikc_row_distance: revolute values modulo 2 pi, prismatic ones over the size; NaN wins."""
+    m = 0.0
+    for j in range(rb.dof):
+        d = abs(x[j] - y[j])
+        if rb.revolute[j]:
+            d = math.fmod(d, TWO_PI)
+            if d > PI:
+                d = TWO_PI - d
+        else:
+            d /= rb.scale
+        if not d <= m:
+            m = d
+    return m
+
+
+def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
+    """Whether the tangent line through its exact point p0 is a self-motion alone: a null space of two
+    directions, the line's and one along which Newton steps come back to the line (a double root),
+    or of one."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 3 or not lam[2] >= floor:
+        return False
+    if lam[1] >= floor:
+        return True
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    n, best = None, 0.0
+    for v in range(2):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        w = [V[a][v] - d * f[a] for a in range(m)]
+        length = 0.0
+        for a in range(m):
+            length += w[a] * w[a]
+        if length > best:
+            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    if not best > 0.25:
+        return False
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * TANGENT_PROBE * n[a] * u
+        newton_steps(rb, g, x, 15)
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) <= 0.1 * TANGENT_PROBE:
+            return False
+    return True
 
 
 # -- the chain and its self-motions (ikc_settle_chain, ikc_settle) ------------------------------------
@@ -502,7 +581,9 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
     Q0 = [list(row) for row in Q]
     B = [list(row) for row in Q]
     EB = [E[j] if (not limits or row_inside(rb, Q[j])) else math.inf for j in range(n)]
-    line = [limits and _plain_family(F[j]) and E[j] <= exact_tol for j in range(n)]
+    E0 = list(E)
+    line = [limits and _plain_family(F[j]) and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near)
+            for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
     for r in range(1, REPS):
         step = (r + 1) // 2
@@ -515,7 +596,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
         for j in range(n):
             if line[j]:
                 row, q0 = Q2[j], Q0[j]
-                fits = _plain_family(F2[j]) and E2[j] <= exact_tol
+                fits = _plain_family(F2[j]) and (
+                    E2[j] <= exact_tol or bool(F2[j] & _fk.TANGENT_ROOT) and E2[j] < near)
                 for c in range(dof):
                     if not fits:
                         break
@@ -546,16 +628,27 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
             continue
         if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
             continue
-        if line[j] and line_alone(rb, Q0[j], S[j]):
-            found, t = line_in_limits(rb, Q0[j], S[j])
+        tangent = line[j] and not E0[j] <= exact_tol
+        p0 = list(Q0[j])
+        if tangent and not (newton_steps(rb, g, p0, 15) <= exact_tol
+                            and row_distance(rb, p0, Q0[j]) <= TANGENT_MARGIN):
+            line[j] = False
+        if line[j] and (tangent_line_alone(rb, g, p0, S[j]) if tangent else line_alone(rb, Q0[j], S[j])):
+            slack = TANGENT_MARGIN if tangent else LIMIT_EPS
+            found, t = line_in_limits(rb, Q0[j], S[j], slack, slack * rb.scale if tangent else slack)
             if found == 0:
                 F[j] |= _fk.EMPTY
                 continue
+            e3, row3 = math.inf, None
             if found == 1:
                 Q3, E3, F3 = rb.leaves(chain, g, free, t)
-                if (len(Q3) == n and _plain_family(F3[j]) and E3[j] <= exact_tol and row_inside(rb, Q3[j])):
-                    Q[j], E[j], F[j] = list(Q3[j]), E3[j], F3[j]
-                    continue
+                if len(Q3) == n and _plain_family(F3[j]):
+                    row3, e3 = Q3[j], E3[j]
+                    if exact_tol < e3 < near:
+                        e3 = newton_steps(rb, g, row3, 15)
+            if e3 <= exact_tol and row_inside(rb, row3):
+                Q[j], E[j], F[j] = list(row3), e3, F3[j]
+                continue
         e = newton_steps(rb, g, B[j], 60)
         if e <= exact_tol and (not limits or row_inside(rb, B[j])):
             Q[j], E[j] = list(B[j]), e
