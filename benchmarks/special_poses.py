@@ -253,7 +253,9 @@ def main(argv=None) -> int:
         for name in args.robots or zoo_names():
             rows.append(_subprocess(["--causes-one", name]) | {"robot": name})
             print(json.dumps(rows[-1]), flush=True)
-        out = Path(args.out).with_name("special_causes.md") if args.out == ap.get_default("out") else Path(args.out)
+        out = Path(args.out)
+        if args.out == ap.get_default("out"):
+            out = out.with_name("special_causes.md")
         out.write_text(_causes_table(rows))
         print(f"wrote {out}")
         return 0

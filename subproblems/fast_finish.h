@@ -6,7 +6,10 @@
  * its loop nest (joint values, pose error, flag bits), and an `ikc_robot` with the module's settings;
  * the entry points it exports call the functions below.  A target this code cannot settle alone (a
  * leaf flagged DEFER, NaN, a self-motion none of whose representatives can be completed inside the
- * limits) returns IKC_PYTHON: the Python module then runs its own path for that target. */
+ * limits and that is no straight line alone in joint space) returns IKC_PYTHON: the Python module then
+ * runs its own path for that target.  The specification of this finish is subproblems/settle.py (the
+ * same statements in Python; tests/test_finish_spec.py holds the two to the same rows bit for bit):
+ * a change here is made there too (docs/design.md section 6). */
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>

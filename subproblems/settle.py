@@ -22,8 +22,9 @@ snapped plans (``ikc_search``, ``ikc_polished``) are not specified here: their P
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 from subproblems import fast as _fk
 from subproblems.angles import wrap
@@ -83,7 +84,8 @@ class FinishRobot:
     def leaves(self, chain, goal, free, rep):
         """(Q rows, errors, flags) of a chain at representative rep."""
         found = chain(_fk.SCALAR, goal, free, rep)
-        return ([list(leaf[:-2]) for leaf in found], [leaf[-2] for leaf in found], [leaf[-1] for leaf in found])
+        return ([list(leaf[:-2]) for leaf in found], [leaf[-2] for leaf in found],
+                [leaf[-1] for leaf in found])
 
 
 # -- forward kinematics, error and Newton steps (ikc_fk_jacobian, ikc_pose_error, ikc_newton_steps) --
@@ -118,11 +120,13 @@ def fk_jacobian(rb: FinishRobot, q):
             for k in range(3):
                 Ewv = E[3 * k] * wv[0] + E[3 * k + 1] * wv[1] + E[3 * k + 2] * wv[2]
                 t.append(wv[k] - Ewv + w[k] * wdv * th)
-        R2 = [R[3 * r] * E[k] + R[3 * r + 1] * E[3 + k] + R[3 * r + 2] * E[6 + k] for r in range(3) for k in range(3)]
+        R2 = [R[3 * r] * E[k] + R[3 * r + 1] * E[3 + k] + R[3 * r + 2] * E[6 + k]
+              for r in range(3) for k in range(3)]
         p = [R[3 * r] * t[0] + R[3 * r + 1] * t[1] + R[3 * r + 2] * t[2] + p[r] for r in range(3)]
         R = R2
     H = rb.home
-    G = [R[3 * r] * H[k] + R[3 * r + 1] * H[3 + k] + R[3 * r + 2] * H[6 + k] for r in range(3) for k in range(3)]
+    G = [R[3 * r] * H[k] + R[3 * r + 1] * H[3 + k] + R[3 * r + 2] * H[6 + k]
+         for r in range(3) for k in range(3)]
     G += [R[3 * r] * H[9] + R[3 * r + 1] * H[10] + R[3 * r + 2] * H[11] + p[r] for r in range(3)]
     tp = G[9:]
     J = [0.0] * (6 * dof)
@@ -582,8 +586,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
     B = [list(row) for row in Q]
     EB = [E[j] if (not limits or row_inside(rb, Q[j])) else math.inf for j in range(n)]
     E0 = list(E)
-    line = [limits and _plain_family(F[j]) and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near)
-            for j in range(n)]
+    line = [limits and _plain_family(F[j])
+            and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
     for r in range(1, REPS):
         step = (r + 1) // 2
@@ -606,7 +610,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
                     if r == 1:
                         sl = d / rep
                         whole = float(round(sl))
-                        fits = abs(sl - whole) <= LINE_FIT / rep if rb.revolute[c] else abs(d) <= LINE_FIT * unit
+                        fits = (abs(sl - whole) <= LINE_FIT / rep if rb.revolute[c]
+                                else abs(d) <= LINE_FIT * unit)
                         S[j][c] = whole if rb.revolute[c] else 0.0
                     else:
                         fits = abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit
