@@ -28,7 +28,7 @@ import numpy as np
 
 from subproblems import tolerances
 from subproblems.angles import wrap_array
-from subproblems.plan_runtime import _cross
+from subproblems.screw import cross as _cross
 from subproblems.screw import twist_exp_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)

@@ -42,6 +42,7 @@ from subproblems._class2 import independent_paths
 from subproblems.angles import wrap_joints
 from subproblems.core import solve_batch
 from subproblems.fast import angle_distance, represent
+from subproblems.screw import cross as _cross
 from subproblems.screw import fk_batch, inverse_transform, twist_exp_batch
 from subproblems.tolerances import DUPLICATE_ROWS, NEWTON_DAMPING, TINY
 
@@ -58,13 +59,6 @@ class InvalidTargetError(ValueError):
 
 class InvalidFreeValueError(ValueError):
     """Free joint values that are NaN or infinite, or not one per free joint."""
-
-
-def _cross(a, b) -> np.ndarray:
-    """Row-wise cross product of (..., 3) arrays (numpy's cross is slow on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _adjoint_apply(G, xi) -> np.ndarray:
