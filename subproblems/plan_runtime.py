@@ -38,13 +38,14 @@ import math
 
 import numpy as np
 
+from subproblems import newton as _newton
 from subproblems._class2 import independent_paths
 from subproblems.angles import wrap_joints
 from subproblems.core import solve_batch
 from subproblems.fast import angle_distance, represent
 from subproblems.screw import cross as _cross
 from subproblems.screw import fk_batch, inverse_transform, twist_exp_batch
-from subproblems.tolerances import DUPLICATE_ROWS, NEWTON_DAMPING, TINY
+from subproblems.tolerances import DUPLICATE_ROWS
 
 __all__ = ["run_plan", "finish", "fk_batch", "InvalidTargetError", "InvalidFreeValueError"]
 
@@ -417,24 +418,6 @@ def finish(
     return Q, valid, LS, RES, CONT
 
 
-def _tool_jacobian(twists, TH, home, A):
-    """Space Jacobian of the tool (position of the tool origin, then rotation) w.r.t. independent joints.
-
-    Returns (G, J) with G the tool poses (M, 4, 4) and J (M, 6, dof).
-    """
-    M, n = TH.shape
-    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-    cols = np.zeros((M, 6, n))
-    for i in range(n):
-        cols[:, :, i] = _adjoint_apply(G, twists[i])
-        G = G @ twist_exp_batch(twists[i], TH[:, i])
-    G = G @ np.asarray(home, dtype=float)
-    p = G[:, :3, 3]
-    v, w = cols[:, :3, :], cols[:, 3:, :]
-    J = np.concatenate([v + np.cross(w, p[:, :, None], axis=1), w], axis=1)
-    return G, J @ A
-
-
 def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4, hold=()):
     """Damped Gauss-Newton on the independent joints of every row toward its target (M, 4, 4).
 
@@ -443,29 +426,11 @@ def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters
     ``independent`` of joints that keep their values (free joints: the caller chose them).
     """
     Q = TH[:, list(independent)].copy()
-    hold = list(hold)
-    for _ in range(iters):
-        full = Q @ A.T + b
-        G, J = _tool_jacobian(twists, full, home, A)
-        if hold:
-            J[:, :, hold] = 0.0  # a zero column gets a zero step (the damping keeps the system regular)
-        e_pos = targets[:, :3, 3] - G[:, :3, 3]
-        if target == "position":
-            e, J = e_pos, J[:, :3, :]
-        else:
-            R, Rd = G[:, :3, :3], targets[:, :3, :3]
-            e_rot = 0.5 * _cross(np.swapaxes(R, 1, 2), np.swapaxes(Rd, 1, 2)).sum(axis=1)
-            if target == "orientation":
-                e, J = e_rot, J[:, 3:, :]
-            else:
-                e = np.concatenate([e_pos, e_rot], axis=1)
-        # Columns scaled to unit norm (lengths and angles mix), then a whisper of damping so that a
-        # singular direction neither blows the step up nor stalls the others.
-        col = np.maximum(np.linalg.norm(J, axis=1), TINY)
-        Js = J / col[:, None, :]
-        JtJ = np.einsum("mki,mkj->mij", Js, Js) + NEWTON_DAMPING * np.eye(Js.shape[2])
-        dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
-        Q = Q + dq
+    twists = np.asarray(twists, dtype=float)
+    for _ in range(iters):  # the step: subproblems/newton.py
+        G, J = _newton.tool_jacobian(twists, Q @ A.T + b, home, A)
+        e, rows = _newton.residual(G, targets, target)
+        Q = Q + _newton.gauss_newton_step(J[:, rows, :], e, hold)
     return Q @ A.T + b
 
 
