@@ -47,7 +47,7 @@ from subproblems.screw import cross as _cross
 from subproblems.screw import fk_batch, inverse_transform, twist_exp_batch
 from subproblems.tolerances import DUPLICATE_ROWS
 
-__all__ = ["run_plan", "finish", "fk_batch", "InvalidTargetError", "InvalidFreeValueError"]
+__all__ = ["run_plan", "finish", "fk_batch", "target_error", "InvalidTargetError", "InvalidFreeValueError"]
 
 
 class InvalidTargetError(ValueError):
@@ -318,6 +318,27 @@ def pose_error(G, T, scale: float) -> np.ndarray:
     dp = np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
     dR = np.linalg.norm(G[:, :3, :3] - T[:, :3, :3], axis=(1, 2))
     return np.maximum(dp, scale * dR)
+
+
+def target_error(G, T, target: str, scale: float) -> np.ndarray:
+    """Per-row error of tool poses G (M, 4, 4) against targets T (M or 1, 4, 4) in what the ``target``
+    kind constrains, in lengths (rotations scaled by the robot's size): the position error, the
+    rotation error (Frobenius norm), for ``position+direction`` the tool origin and its z axis (the roll
+    is free), else :func:`pose_error`.  The one error measure of the targets: the runtime's check,
+    ``verify`` (over the size) and the motion paths use it; ``error <= tol * scale`` is the contract.
+
+    >>> G = np.eye(4)[None]; T = np.eye(4)[None].copy(); T[0, 0, 3] = 1e-3
+    >>> target_error(G, T, "orientation", 2.0).tolist(), target_error(G, T, "pose", 2.0).tolist()
+    ([0.0], [0.001])
+    """
+    if target == "position":
+        return np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
+    if target == "orientation":
+        return scale * np.linalg.norm(G[:, :3, :3] - T[:, :3, :3], axis=(1, 2))
+    if target == "position+direction":
+        dp = np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
+        return np.maximum(dp, scale * np.linalg.norm(G[:, :3, 2] - T[:, :3, 2], axis=1))
+    return pose_error(G, T, scale)
 
 
 def within_limits(Q, kinds, lower, upper, eps=None) -> np.ndarray:

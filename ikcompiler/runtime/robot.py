@@ -86,14 +86,7 @@ class Robot:
 
     def error(self, G, goals) -> np.ndarray:
         """How far tool poses G miss their goals, in lengths (rotation scaled by the robot's size)."""
-        if self.target == "position":
-            return np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-        if self.target == "orientation":  # Frobenius norm, scaled to lengths like the pose error
-            return self.scale * np.linalg.norm(G[:, :3, :3] - goals[:, :3, :3], axis=(1, 2))
-        if self.target == "position+direction":  # the tool origin and its z axis; the roll is free
-            dp = np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-            return np.maximum(dp, self.scale * np.linalg.norm(G[:, :3, 2] - goals[:, :3, 2], axis=1))
-        return _rt.pose_error(G, goals, self.scale)
+        return _rt.target_error(G, goals, self.target, self.scale)
 
     def fk(self, q) -> np.ndarray:
         """Tool pose (4x4) for joint values q in joint_names order (exactly that many)."""
