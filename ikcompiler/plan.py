@@ -121,18 +121,18 @@ class Plan:
             value = data[name]
             if name in ("steps", "alternative"):
                 if not isinstance(value, list):
-                    raise PlanFormatError(f"plan field {name!r} must be a list of steps")
+                    raise PlanFormatError(f"plan: field {name!r} must be a list of steps")
                 value = tuple(step_from_dict(s) for s in value)
             elif name == "cost":
                 if value is not None and not _is_number(value):
-                    raise PlanFormatError(f"plan field 'cost' must be a number or null, got {value!r}")
+                    raise PlanFormatError(f"plan: field 'cost' must be a number or null, got {value!r}")
                 value = math.inf if value is None else float(value)
             elif name == "plan_twists":
                 if not all(
                     isinstance(row, (list, tuple)) and len(row) == 6 and all(map(_is_number, row))
                     for row in value
                 ):
-                    raise PlanFormatError("plan field 'plan_twists' must hold 6-lists (v, w), one per joint")
+                    raise PlanFormatError("plan: field 'plan_twists' must hold 6-lists (v, w), one per joint")
                 value = tuple(tuple(float(x) for x in row) for row in value)
             elif isinstance(value, list):
                 value = tuple(value)
