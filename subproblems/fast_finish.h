@@ -701,6 +701,10 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
             if (!(E[k] <= exact)) return IKC_PYTHON;
             if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return IKC_PYTHON;
             if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return IKC_PYTHON;
+        } else if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) {
+            /* a least-squares leaf ending near a singular configuration (a fold: the true robot may
+             * have a pair of solutions there): the continuation seeds it, as it seeds every such row */
+            return IKC_PYTHON;
         }
     }
     for (int a = 0; a < n; a++)

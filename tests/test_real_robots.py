@@ -207,3 +207,23 @@ def test_a_gimbal_lock_of_a_calibrated_five_joint_arm_takes_the_alternative_chai
     assert module._POLISH and module._ALT_STEPS, module.PLAN
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def test_a_least_squares_leaf_ending_near_a_fold_goes_to_the_continuation(catalogue):
+    """px150 perturbed by 1e-3 (seed 7): at q = (-2.239193, -0.220347, 1.292438, 1.335484, 1.628779) the
+    snapped robot's leaves all miss the target by ~1e-2 (more than near_singular times the size, so the
+    C finish kept the target) and plain Newton on the true robot ends them as least-squares rows near a
+    singular configuration, where the true robot has the sampled solution: the C path returned no exact
+    row (1 of 50 random poses of seed 11 missed), the Python continuation's rescue seeds find it.  The C
+    finish now hands such a target over (fast_finish.h ikc_polished; docs/calibrated.md)."""
+    import numpy as np
+
+    chain = configs.perturbed(_entry(catalogue, "rtb-data", "px150.urdf.xacro", "/ee_arm_link").load(), 1e-3,
+                              seed=7)
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and module.NATIVE, module.PLAN
+    q = np.array([-2.239193, -0.220347, 1.292438, 1.335484, 1.628779])
+    rows = module.solve(chain.fk(q))
+    assert len(rows) and np.abs(rows - q).max(axis=1).min() < 1e-6, rows
+    rep = verify(chain, module, samples=50, seed=11, special=0.0, scalar_checks=3)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
