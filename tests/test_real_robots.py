@@ -227,3 +227,22 @@ def test_a_least_squares_leaf_ending_near_a_fold_goes_to_the_continuation(catalo
     assert len(rows) and np.abs(rows - q).max(axis=1).min() < 1e-6, rows
     rep = verify(chain, module, samples=50, seed=11, special=0.0, scalar_checks=3)
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def test_a_reduced_chain_snaps_a_run_of_concurrent_axes_beyond_the_pair_tolerance(catalogue):
+    """example-robot-data's human torso (middle_pelvis -> middle_thorax, 5 joints, pose target) perturbed
+    by 1e-3 (seed 7): the thoracic triple misses one point by 1.44e-3 of the size, above the snap
+    tolerance, so only pairs were snapped and the plan was an S2-RRR on a near-spherical triple: the
+    target unreachable on the snapped robot, its one least-squares row another branch, no row at all
+    on 20 of 230 poses.  A reduced chain now snaps such a run up to snap.REDUCED_RUN_FACTOR times the
+    tolerance (its leaves are carried over by plain Newton; it has no general solver)."""
+    from ikcompiler.geometry import snap
+
+    chain = configs.perturbed(_entry(catalogue, "example-robot-data", "human.urdf", "middle_thorax").load(), 1e-3,
+                              seed=7)
+    assert not any("thoracic_Y snapped to meet at one point" in n for n in snap.snap_chain(chain)[1])
+    module = configs.compile_chain(chain).module
+    assert any("middle_thoracic_Y snapped to meet at one point" in n for n in module.PLAN.splitlines()), module.PLAN
+    for samples, seed, special in ((30, 1, 1.0), (50, 10, 0.0)):
+        rep = verify(chain, module, samples=samples, seed=seed, special=special, scalar_checks=3)
+        assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
