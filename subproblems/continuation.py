@@ -48,6 +48,13 @@ NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS  # rescue rows kept for the
 # example-robot-data, wrist_2 off parallel by 3.6e-9 rad: 7 of 30 special poses got 5-8 such rows at
 # sigma 1e-18..1e-17, 29 pairs closer than 1e-6; docs/calibrated.md).
 RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/design.md section 10)
+# A row of the snapped robot is an exact solution of it (a path starts there at s = 0) when it meets the
+# target to the structural tolerance: closed-form leaves carry ~1e-10 of roundoff before any Newton
+# step.  Judged against the 1e-12 precision instead, no leaf of a snapped puma560 / ur5 file was tracked:
+# every row took plain Newton, rescue seeds and the general 6R solver (30-80 ms a pose, and the C
+# finish handed every target to Python; docs/calibrated.md).
+SNAPPED_LEAF = tolerances.EXACT
+STOP = tolerances.FINISH_MARGIN  # plain Newton steps stop at this fraction of the precision
 
 
 def _lines(twists):
@@ -302,16 +309,17 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
 
 
 def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
-            hold=(), scale=1.0, tol=1e-9, plain=10, report=None):
+            hold=(), scale=1.0, tol=tolerances.PRECISION, plain=10, report=None):
     """Snapped robot's candidate rows TH (M, n: every joint) -> the true robot's, for goals (M, 4, 4);
     ``owner`` (M,): which target each row solves (rows of one target are checked for collisions).
 
     ``twists0``: the snapped robot's twists (the chain the rows solve), ``twists1``: the true robot's;
     all joint values are ``A @ q + b`` with q the ``independent`` columns of TH; ``kinds``: their joint
-    types; ``hold``: positions in ``independent`` that keep their values (free joints).  Rows that are
-    no exact solution of the snapped robot (least-squares leaves), and rows whose tracking fails (a
-    turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
-    their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
+    types; ``hold``: positions in ``independent`` that keep their values (free joints); ``tol``: the
+    precision a corrected row reaches (times ``scale``; the module's TOLERANCE).  Rows that are no
+    exact solution of the snapped robot (to :data:`SNAPPED_LEAF`: least-squares leaves), and rows whose
+    tracking fails (a turning point: the branch has no continuation to the true robot), get ``plain``
+    Newton steps from their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
     when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
     colliding after the re-tracking; the caller's dedupe merges them), ``rescued`` and ``uncertain``:
     the owners of the rows that got rescue seeds (targets where the count may differ between the
@@ -346,13 +354,13 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     owner = np.arange(len(TH)) if owner is None else np.asarray(owner)
     Q = Q0.copy()
     ok = np.zeros(len(TH), dtype=bool)
-    etol = 1e-3 * tol * scale
+    etol = tol * scale
     usable = np.all(np.isfinite(Q0), axis=1)
     err0_all = np.full(len(Q0), np.inf)
     if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
         tw0 = np.asarray(twists0, dtype=float)
         _, _, err0_all[usable] = _newton_step(tw0, Q0[usable], goals[usable], robot)
-        usable &= err0_all <= tol * scale
+        usable &= err0_all <= SNAPPED_LEAF * scale
     idx = np.nonzero(usable)[0]
     if len(idx):
         Q[idx], ok[idx] = _track(Q0[idx], goals[idx], twists0, twists1, robot, etol, 1.0, MAX_MOVE)
@@ -365,7 +373,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     finite = np.all(np.isfinite(Q0), axis=1)
     rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
-        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, 1e-3 * etol)
+        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, STOP * etol)
     # Rows whose count may differ between the snapped and the true robot: failed or colliding
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
@@ -378,7 +386,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     own = owner
     if len(extra):
         X, own_x = _rescue(np.where(ok[extra, None], Q[extra], Q0[extra]), goals[extra], owner[extra],
-                           twists1, robot, 1e-3 * etol)
+                           twists1, robot, STOP * etol)
         X, own_x = _new_solutions(X, own_x, np.repeat(goals[extra], len(RESCUE_SEEDS), axis=0), Q, owner,
                                   twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
         Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
@@ -389,4 +397,4 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
 
 
 __all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
-           "SEPARATE"]
+           "SEPARATE", "SNAPPED_LEAF"]

@@ -637,6 +637,7 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 
 #define IKC_MAX_MOVE 0.25      /* subproblems.continuation.MAX_MOVE */
 #define IKC_SEPARATE 1e-6      /* subproblems.continuation.SEPARATE */
+#define IKC_SNAPPED_LEAF 1e-9  /* subproblems.continuation.SNAPPED_LEAF: an exact leaf of the snapped robot */
 
 /* A snapped plan (the module's _POLISH branch): leaves of the snapped robot's chain, each corrected by
  * Newton steps on the true robot, then the finish.  The correction is kept only where it is
@@ -648,7 +649,7 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
-    const double exact = rb->tol * rb->scale;
+    const double exact = rb->tol * rb->scale, leaf_exact = IKC_SNAPPED_LEAF * rb->scale;
     double Q[L * dof], E[L], Q0[L * dof];
     int F[L], good[L];
     int n = rb->chain(g, fr, 0.0, Q, E, F);
@@ -656,7 +657,7 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
         good[k] = 0;
         if (F[k] & IKC_DEFER) return IKC_PYTHON;
         if (F[k] & IKC_EMPTY) continue;
-        if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
+        if (!(E[k] <= leaf_exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
             if (E[k] <= rb->near_singular * rb->scale) return IKC_PYTHON;
         } else {
             good[k] = 1;
