@@ -238,6 +238,17 @@ def _weakest(Q, tw, robot):
     return sv[:, -1], n / np.abs(n / unit).max(axis=1, keepdims=True)
 
 
+def weakest(Q, twists, *, A, b, home, kinds, target="pose", hold=(), scale=1.0):
+    """Smallest singular value of the Jacobian at rows Q (M, dof: the independent joints, all joint
+    values ``A @ q + b``) of the robot ``twists`` and its joint direction (lengths relative to
+    ``scale``, free joints ``hold`` left out; largest entry 1 in joint units): the direction of a
+    self-motion where the value is ~0."""
+    unit = np.where(np.array([k == "R" for k in kinds]), 1.0, scale)
+    robot = (np.asarray(A, dtype=float), np.asarray(b, dtype=float), np.asarray(home, dtype=float), target,
+             list(hold), scale, unit)
+    return _weakest(np.asarray(Q, dtype=float), np.asarray(twists, dtype=float), robot)
+
+
 def near_singular(twists0, twists1, scale) -> float:
     """Weakest singular value below which a corrected row gets rescue seeds: ``SINGULAR_FACTOR``
     times the change in geometry, at most ``NEAR_SINGULAR`` (a calibrated robot's solutions move by
@@ -309,7 +320,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
 
 
 def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
-            hold=(), scale=1.0, tol=tolerances.PRECISION, plain=10, report=None):
+            hold=(), scale=1.0, tol=tolerances.PRECISION, plain=10, family=None, report=None):
     """Snapped robot's candidate rows TH (M, n: every joint) -> the true robot's, for goals (M, 4, 4);
     ``owner`` (M,): which target each row solves (rows of one target are checked for collisions).
 
@@ -319,11 +330,22 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     precision a corrected row reaches (times ``scale``; the module's TOLERANCE).  Rows that are no
     exact solution of the snapped robot (to :data:`SNAPPED_LEAF`: least-squares leaves), and rows whose
     tracking fails (a turning point: the branch has no continuation to the true robot), get ``plain``
-    Newton steps from their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
-    when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
-    colliding after the re-tracking; the caller's dedupe merges them), ``rescued`` and ``uncertain``:
-    the owners of the rows that got rescue seeds (targets where the count may differ between the
-    snapped and the true robot; a complete solver of the true robot may be asked about them).
+    Newton steps from their snapped values instead; the caller's check flags them when they miss.
+
+    ``family`` (M,): rows that are representatives of a self-motion of the snapped robot (a gimbal lock
+    of its closed form).  Where the corrected row is still unresolved on the true robot (weakest
+    singular value below :data:`RESOLVED`: the relation the snap made exact is missed by ~1e-9, and the
+    true robot's solutions along the family are one numerical self-motion at the contract's precision)
+    it stays a representative: no rescue seeds (every point they find is another point of the same
+    family) and no doubt about the target's count.  A family row the true robot resolves is an ordinary
+    isolated row.
+
+    ``report``, a dict when given, receives counts: ``tracked``, ``failed``, ``retracked``,
+    ``collided`` (rows still colliding after the re-tracking; the caller's dedupe merges them),
+    ``rescued`` and ``uncertain``: the owners of the rows that got rescue seeds (targets where the
+    count may differ between the snapped and the true robot; a complete solver of the true robot may be
+    asked about them); and ``continuum``: a mask over the returned rows, the representatives of a
+    self-motion (the family rows kept as such).
 
     Returns ``(TH', owner')``: the corrected rows, in order, then extra candidate rows (rescue seeds
     around near-singular rows, see :func:`_rescue`) with their owners.
@@ -378,10 +400,14 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
     seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
-    look = np.nonzero(finite & ~seed)[0]
+    family = np.zeros(len(TH), dtype=bool) if family is None else np.asarray(family, dtype=bool) & finite
+    look = np.nonzero(finite & (~seed | family))[0]
+    representative = np.zeros(len(TH), dtype=bool)
     if len(look):
         sv, _ = _weakest(Q[look], np.asarray(twists1, dtype=float), robot)
         seed[look[~(sv >= threshold)]] = True
+        representative[look[family[look] & ~(sv >= RESOLVED)]] = True
+    seed &= ~representative
     extra = np.nonzero(seed)[0]
     own = owner
     if len(extra):
@@ -392,9 +418,10 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
     if report is not None:
         report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
-                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]))
+                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]),
+                      continuum=np.concatenate([representative, np.zeros(len(Q) - len(TH), dtype=bool)]))
     return Q @ A.T + b, own
 
 
-__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
+__all__ = ["correct", "homotopy_twists", "near_singular", "weakest", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
            "SEPARATE", "SNAPPED_LEAF"]

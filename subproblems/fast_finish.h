@@ -644,8 +644,8 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
  * certainly the leaf's own solution (subproblems.continuation, docs/calibrated.md): every exact leaf
  * converged, moved less than IKC_MAX_MOVE, no two distinct leaves ended on one solution, no corrected
  * leaf near a singular configuration, no least-squares leaf that nearly reaches the target (a pair of
- * solutions may be born there).  Otherwise IKC_PYTHON: the Python continuation takes the target.
- * Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
+ * solutions may be born there), no self-motion leaf.  Otherwise IKC_PYTHON: the Python continuation
+ * takes the target.  Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
@@ -657,6 +657,9 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
         good[k] = 0;
         if (F[k] & IKC_DEFER) return IKC_PYTHON;
         if (F[k] & IKC_EMPTY) continue;
+        /* a self-motion of the snapped robot: whether the corrected row stays a representative (the
+         * true robot leaves it unresolved) is the Python continuation's call (its `family` rows) */
+        if (F[k] & IKC_FAMILY) return IKC_PYTHON;
         if (!(E[k] <= leaf_exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
             if (E[k] <= rb->near_singular * rb->scale) return IKC_PYTHON;
         } else {
