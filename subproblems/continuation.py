@@ -334,9 +334,9 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
 
     ``family`` (M,): rows that are representatives of a self-motion of the snapped robot (a gimbal lock
     of its closed form).  Where the corrected row is still unresolved on the true robot (weakest
-    singular value below :data:`RESOLVED`: the relation the snap made exact is missed by ~1e-9, and the
-    true robot's solutions along the family are one numerical self-motion at the contract's precision)
-    it stays a representative: no rescue seeds (every point they find is another point of the same
+    singular value below :data:`RESOLVED`) and meets the target to :data:`SNAPPED_LEAF` (the relation
+    the snap made exact is missed by ~1e-9: the true robot's solutions along the family are one
+    numerical self-motion at the contract's precision) it stays a representative: no rescue seeds (every point they find is another point of the same
     family) and no doubt about the target's count.  A family row the true robot resolves is an ordinary
     isolated row.
 
@@ -406,7 +406,10 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     if len(look):
         sv, _ = _weakest(Q[look], np.asarray(twists1, dtype=float), robot)
         seed[look[~(sv >= threshold)]] = True
-        representative[look[family[look] & ~(sv >= RESOLVED)]] = True
+        cand = look[family[look] & ~(sv >= RESOLVED)]
+        if len(cand):  # ... and that meets the target to the structural tolerance: the same family
+            _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[cand], goals[cand], robot)
+            representative[cand[err <= SNAPPED_LEAF * scale]] = True
     seed &= ~representative
     extra = np.nonzero(seed)[0]
     own = owner
