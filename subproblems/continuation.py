@@ -336,9 +336,10 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     of its closed form).  Where the corrected row is still unresolved on the true robot (weakest
     singular value below :data:`RESOLVED`) and meets the target to :data:`SNAPPED_LEAF` (the relation
     the snap made exact is missed by ~1e-9: the true robot's solutions along the family are one
-    numerical self-motion at the contract's precision) it stays a representative: no rescue seeds (every point they find is another point of the same
-    family) and no doubt about the target's count.  A family row the true robot resolves is an ordinary
-    isolated row.
+    numerical self-motion at the contract's precision) it stays a representative and, where it is
+    exact, takes no rescue seeds (every point they find is another point of the same family) and leaves
+    no doubt about the target's count.  A family row the true robot resolves is an ordinary isolated
+    row.
 
     ``report``, a dict when given, receives counts: ``tracked``, ``failed``, ``retracked``,
     ``collided`` (rows still colliding after the re-tracking; the caller's dedupe merges them),
@@ -410,7 +411,9 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         if len(cand):  # ... and that meets the target to the structural tolerance: the same family
             _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[cand], goals[cand], robot)
             representative[cand[err <= SNAPPED_LEAF * scale]] = True
-    seed &= ~representative
+            # an exact one leaves no doubt; one that misses the precision keeps its seeds (the general
+            # 6R solver may find the exact arc that the caller's pull along the family cannot reach)
+            seed[cand[err <= etol]] = False
     extra = np.nonzero(seed)[0]
     own = owner
     if len(extra):
