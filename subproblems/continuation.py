@@ -55,6 +55,8 @@ RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/desig
 # finish handed every target to Python; docs/calibrated.md).
 SNAPPED_LEAF = tolerances.EXACT
 STOP = tolerances.FINISH_MARGIN  # plain Newton steps stop at this fraction of the precision
+DOUBLE_ROOT_NEWTON = 30  # undamped steps at a double root (each halves the distance; see _double_root)
+PSEUDO_INVERSE = 1e-13  # singular values below this times the largest are left out of those steps
 
 
 def _lines(twists):
@@ -221,6 +223,43 @@ def _plain(Q, goals, twists1, robot, iters, tol=0.0, damping=1e-12):
         if not len(live):
             break
     return Q
+
+
+def _double_root(Q, goals, twists1, robot, tol, iters=DOUBLE_ROOT_NEWTON):
+    """Undamped Gauss-Newton steps (pseudo-inverse; singular values below ``PSEUDO_INVERSE`` of the
+    largest left out) for rows that the damped steps left above the precision; a row is replaced only
+    where the steps bring it within ``tol`` and it moved at most ``MAX_MOVE``.
+
+    At a double root (a fold: an elbow stretched) the Jacobian's weakest singular value falls with the
+    distance to the root; the damped steps (1e-12 on unit columns) stop moving along it once it is below
+    1e-6, ~1e-4 from the root and 1e-11 above the precision.  Undamped steps halve that distance each
+    (measured: hextilt_flying_arm_5 of example-robot-data at q2 = 0, from 3e-4 to 4e-10 of the sampled
+    double root in 30 steps)."""
+    A, b, home, target, hold, scale, unit = robot
+    tw = np.asarray(twists1, dtype=float)
+    X = Q.copy()
+    live = np.arange(len(X))  # every 5 steps: rows within a thousandth of tol, or not improving, stop
+    last = np.full(len(X), np.inf)
+    for it in range(iters):
+        G, J = _fk_jacobian(tw, X[live] @ A.T + b, home, A)
+        e, rows = _residual(G, goals[live], target, scale)
+        if it % 5 == 0:
+            now = np.abs(e).max(axis=1)
+            more = (now > STOP * tol) & (now < 0.5 * last[live])
+            last[live] = now
+            live, e, J = live[more], e[more], J[more]
+            if not len(live):
+                break
+        J = J[:, rows, :]
+        if hold:
+            J[:, :, hold] = 0.0
+        col = np.maximum(np.linalg.norm(J, axis=1), tolerances.TINY)
+        U, S, Vt = np.linalg.svd(J / col[:, None, :], full_matrices=False)
+        inv = np.where(S > PSEUDO_INVERSE * S[:, :1], 1.0 / np.maximum(S, tolerances.TINY), 0.0)
+        X[live] += np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
+    _, _, err = _newton_step(tw, X, goals, robot)
+    take = np.isfinite(err) & (err <= tol) & (_apart(X, Q, unit == 1.0, scale) <= MAX_MOVE)
+    return np.where(take[:, None], X, Q)
 
 
 def _weakest(Q, tw, robot):
@@ -397,6 +436,10 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
         Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, STOP * etol)
+        _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[rest], goals[rest], robot)
+        stuck = rest[(err > etol) & (err < NEAR_MISS_NEWTON * scale)]
+        if len(stuck):  # just above the precision: a double root, where the damped steps stall
+            Q[stuck] = _double_root(Q[stuck], goals[stuck], twists1, robot, etol)
     # Rows whose count may differ between the snapped and the true robot: failed or colliding
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
