@@ -472,5 +472,5 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     return Q @ A.T + b, own
 
 
-__all__ = ["correct", "homotopy_twists", "near_singular", "weakest", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
-           "SEPARATE", "SNAPPED_LEAF"]
+__all__ = ["correct", "homotopy_twists", "near_singular", "weakest", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP",
+           "RESOLVED", "SEPARATE", "SNAPPED_LEAF"]

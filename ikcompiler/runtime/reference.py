@@ -137,7 +137,8 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
 def onto_self_motion(robot, TH, owner, cont, err, goals, limits):
     """Representatives of a self-motion (rows ``cont``) that miss the precision or lie outside the
     limits, moved along their family: Newton steps from points at SELF_MOTION_OFFSETS along the
-    Jacobian's weakest direction; the exact point (inside the limits) of least error replaces the row.  A step's representative (its last angle 0) may lie outside the limits, and on a numerical
+    Jacobian's weakest direction; the exact point (inside the limits) of least error replaces the row.
+    A step's representative (its last angle 0) may lie outside the limits, and on a numerical
     self-motion far from the arc that is exact, while the family has exact points inside them."""
     ind = list(robot.independent)
     ok = ~np.isnan(TH).any(axis=1)
