@@ -433,18 +433,21 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
                                      0.1 * MAX_MOVE)
     left = _collisions(Q0, Q, owner, ok, revolute, scale)
     finite = np.all(np.isfinite(Q0), axis=1)
+    family = np.zeros(len(TH), dtype=bool) if family is None else np.asarray(family, dtype=bool) & finite
     rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
         Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, STOP * etol)
         _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[rest], goals[rest], robot)
-        stuck = rest[(err > etol) & (err < NEAR_MISS_NEWTON * scale)]
-        if len(stuck):  # just above the precision: a double root, where the damped steps stall
+        # just above the precision: a double root, where the damped steps stall (not a self-motion
+        # row: whether one that misses is settled decides its doubt below; the caller moves it along
+        # its family)
+        stuck = rest[(err > etol) & (err < NEAR_MISS_NEWTON * scale) & ~family[rest]]
+        if len(stuck):
             Q[stuck] = _double_root(Q[stuck], goals[stuck], twists1, robot, etol)
     # Rows whose count may differ between the snapped and the true robot: failed or colliding
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
     seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
-    family = np.zeros(len(TH), dtype=bool) if family is None else np.asarray(family, dtype=bool) & finite
     look = np.nonzero(finite & (~seed | family))[0]
     representative = np.zeros(len(TH), dtype=bool)
     if len(look):
