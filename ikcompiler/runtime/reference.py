@@ -117,13 +117,8 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # At a double root Newton converges only linearly (the residual falls about 4x a step): rows
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
-        for _ in range(5):
-            if not near.any():
-                break
-            TH[near] = robot.newton(TH[near], goals[owner[near]], 3)
-            err[near] = robot.error(_rt.fk_batch(robot.twists, TH[near], robot.home), goals[owner[near]])
-            near &= err > FINISH_MARGIN * exact
-        TH = onto_self_motion(robot, TH, owner, cont & ~ls, err, goals, limits)
+        TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
+        TH = onto_self_motion(robot, TH, owner, cont & ~ls, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
@@ -134,7 +129,7 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
                       vary=robot.vary, dedupe=dedupe)
 
 
-def onto_self_motion(robot, TH, owner, cont, err, goals, limits):
+def onto_self_motion(robot, TH, owner, cont, goals, limits):
     """Representatives of a self-motion (rows ``cont``) that miss the precision or lie outside the
     limits, moved along their family: Newton steps from points at SELF_MOTION_OFFSETS along the
     Jacobian's weakest direction; the exact point (inside the limits) of least error replaces the row.
@@ -143,7 +138,11 @@ def onto_self_motion(robot, TH, owner, cont, err, goals, limits):
     ind = list(robot.independent)
     ok = ~np.isnan(TH).any(axis=1)
     exact = robot.tol * robot.scale
-    bad = ~(err <= exact)
+    bad = np.zeros(len(TH), dtype=bool)
+    look = np.nonzero(cont & ok)[0]
+    if not len(look):
+        return TH
+    bad[look] = ~(robot.error(_rt.fk_batch(robot.twists, TH[look], robot.home), goals[owner[look]]) <= exact)
     if limits:
         bad |= _fk.represent(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower, robot.upper, True)[2]
     rows = np.nonzero(cont & ok & bad)[0]
