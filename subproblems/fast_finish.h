@@ -994,28 +994,31 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 
 #define IKC_MAX_MOVE 0.25      /* subproblems.continuation.MAX_MOVE */
 #define IKC_SEPARATE 1e-6      /* subproblems.continuation.SEPARATE */
+#define IKC_SNAPPED_LEAF 1e-9  /* subproblems.continuation.SNAPPED_LEAF: an exact leaf of the snapped robot */
 
 /* A snapped plan (the module's _POLISH branch): leaves of the snapped robot's chain, each corrected by
  * Newton steps on the true robot, then the finish.  The correction is kept only where it is
  * certainly the leaf's own solution (subproblems.continuation, docs/calibrated.md): every exact leaf
  * converged, moved less than IKC_MAX_MOVE, no two distinct leaves ended on one solution, no corrected
  * leaf near a singular configuration, no least-squares leaf that nearly reaches the target (a pair of
- * solutions may be born there).  Otherwise IKC_PYTHON: the Python continuation takes the target.
- * Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
+ * solutions may be born there), no self-motion leaf.  Otherwise IKC_PYTHON: the Python continuation
+ * takes the target.  Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
-    const double exact = rb->tol * rb->scale;
+    const double exact = rb->tol * rb->scale, leaf_exact = IKC_SNAPPED_LEAF * rb->scale;
     double Q[L * dof], E[L], Q0[L * dof];
     int F[L], good[L], any_exact = 0, fold = 0;
     int n = rb->chain(g, fr, 0.0, Q, E, F);
-    /* a gimbal lock with an alternative chain: the Python path runs it (reference.with_alternative) */
-    if (rb->chain_alt && ikc_any_flag(n, F, IKC_FAMILY)) return ikc_hand_back(IKC_WHY_SNAPPED);
     for (int k = 0; k < n; k++) {
         good[k] = 0;
         if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
-        if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
+        /* a self-motion of the snapped robot (also a gimbal lock where the plan has an alternative
+         * chain: reference.with_alternative): whether the corrected row stays a representative (the
+         * true robot leaves it unresolved) is the Python continuation's call (its `family` rows) */
+        if (F[k] & IKC_FAMILY) return ikc_hand_back(IKC_WHY_SNAPPED);
+        if (!(E[k] <= leaf_exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
             if (E[k] <= rb->near_singular * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
         } else {
             good[k] = 1;

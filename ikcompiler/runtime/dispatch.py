@@ -62,9 +62,10 @@ class Solver:
             self._general6.append(reference.true_general6(self.robot))
         return self._general6[0]
 
-    def correct(self, TH, owner, goals):
-        """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct)."""
-        return reference.correct(self.robot, TH, owner, goals, self.general6)
+    def correct(self, TH, owner, goals, family):
+        """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct):
+        (TH, owner, continuum)."""
+        return reference.correct(self.robot, TH, owner, goals, self.general6, family)
 
     def reference_chunk(self, goals, Td, init, limits, alternative=None):
         """The reference runtime on targets (chunked so that a search stays within the budget);
@@ -125,14 +126,15 @@ class Solver:
         lock = self.lock_targets(flag)
         defer = (flag & _fk.DEFER).any(axis=1) | lock
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
-        # a leaf on a self-motion of the snapped robot stays a representative of it on the true robot
-        # (the relation missed by ~1e-9: numerically the same family); the continuation keeps the
-        # tracked rows first, in order, and appends its rescue rows (not representatives)
+        # a leaf on a self-motion of the snapped robot stays a representative of it where the true
+        # robot leaves it unresolved (the relation missed by ~1e-9: numerically the same family)
         family = (flag[rows, leaf] & _fk.FAMILY) != 0
-        TH, rows = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals)
+        TH, rows, cont = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals, family)
         none = np.zeros(len(TH), dtype=bool)
-        cont = np.concatenate([family, none[len(family):]])
-        parts = list(reference.complete(r, TH, rows, none, cont, goals, limits))
+        # rows of one target that the continuation left on one solution (a double root tracked from its
+        # two snapped copies) are one row: merged as the Newton route merges split roots
+        parts = list(_fk.merge_split_roots(reference.complete(r, TH, rows, none, cont, goals, limits),
+                                           r.joint_types))
         idx = np.nonzero(defer)[0]
         if len(idx):
             _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx]))

@@ -19,24 +19,35 @@ CONTINUUM_NEWTON = 60  # Newton steps pulling a self-motion's representative ont
 SEARCH_NEWTON = 8  # Newton steps on the search's seeds
 NEAR_MISS = _tol.NEAR_MISS  # rows missing by less (of the size) get more Newton steps in _complete
 FINISH_MARGIN = _tol.FINISH_MARGIN  # as the C finish: on to well inside the precision
+# Offsets (rad, or lengths over the size) along a self-motion at which a representative that misses or
+# lies outside the limits is tried again: the circle in 64 steps.  A numerical self-motion (a relation
+# missed by ~1e-9) is exact to the precision only on an arc around the true solution, ~0.3 rad wide on
+# puma560.urdf (rtb-data) at q5 = 0; Newton's damped steps do not move along it (docs/calibrated.md).
+SELF_MOTION_OFFSETS = np.arange(-31, 33) * (np.pi / 32)
+SELF_MOTION_NEWTON = 5  # Newton steps at each offset (across the family: it converges fast)
 
 
-def correct(robot, TH, owner, goals, general6):
+def correct(robot, TH, owner, goals, general6, family):
     """Snapped plan: carry the snapped robot's candidates to the true robot by continuation in the
     geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md).  Targets
     where the count may differ (rescue seeds were needed) are also given to the general 6R solver of
-    the true robot when there is one: its rows join the candidates."""
+    the true robot when there is one: its rows join the candidates.  ``family``: the rows that are
+    representatives of a self-motion of the snapped robot.  Returns (TH, owner, continuum): the
+    representatives of a self-motion among the rows are those the true robot leaves unresolved."""
     report = {}
     TH, owner = _ct.correct(TH, goals[owner], owner, twists0=robot.plan_twists, twists1=robot.twists,
                             home=robot.home, A=robot.A, b=robot.B, independent=robot.vary,
                             kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free,
-                            scale=robot.scale, tol=robot.tol, plain=robot.polish, report=report)
-    doubt = report.get("uncertain", ())
+                            scale=robot.scale, tol=robot.tol, plain=robot.polish, family=family,
+                            report=report)
+    cont = report["continuum"]
+    doubt = report["uncertain"]
     solver = general6() if len(doubt) else None
     if solver is not None:
         TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
         TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, np.asarray(doubt)[own2]])
-    return TH, owner
+        cont = np.concatenate([cont, np.zeros(len(TH2), dtype=bool)])
+    return TH, owner, cont
 
 
 def true_general6(robot):
@@ -87,9 +98,8 @@ def candidates(robot, goals, Td, init, correct, alternative=None):
         # on every joint pull it onto a nearby exact solution of the continuum.
         TH[cont] = robot.newton_until_exact(TH[cont], goals[owner[cont]], CONTINUUM_NEWTON)
     if robot.polish and len(TH):
-        TH, owner = correct(TH, owner, goals)
-        extra = np.zeros(len(TH) - len(ls), dtype=bool)
-        ls, cont = np.concatenate([ls, extra]), np.concatenate([cont, extra])
+        TH, owner, cont = correct(TH, owner, goals, cont)
+        ls = np.concatenate([ls, np.zeros(len(TH) - len(ls), dtype=bool)])
     return TH, owner, ls, cont
 
 
@@ -132,6 +142,7 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
         TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
+        TH = onto_self_motion(robot, TH, owner, cont & ~ls, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
@@ -140,6 +151,47 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
                       slots=robot.slots, error=robot.error, cont=cont,
                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
                       vary=robot.vary, dedupe=dedupe)
+
+
+def onto_self_motion(robot, TH, owner, cont, goals, limits):
+    """Representatives of a self-motion (rows ``cont``) that miss the precision or lie outside the
+    limits, moved along their family: Newton steps from points at SELF_MOTION_OFFSETS along the
+    Jacobian's weakest direction; the exact point (inside the limits) of least error replaces the row.
+    A step's representative (its last angle 0) may lie outside the limits, and on a numerical
+    self-motion far from the arc that is exact, while the family has exact points inside them."""
+    ind = list(robot.independent)
+    ok = ~np.isnan(TH).any(axis=1)
+    exact = robot.tol * robot.scale
+    bad = np.zeros(len(TH), dtype=bool)
+    look = np.nonzero(cont & ok)[0]
+    if not len(look):
+        return TH
+    bad[look] = ~(robot.error(_rt.fk_batch(robot.twists, TH[look], robot.home), goals[owner[look]]) <= exact)
+    if limits:
+        bad |= _fk.represent(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower, robot.upper, True)[2]
+    rows = np.nonzero(cont & ok & bad)[0]
+    if not len(rows):
+        return TH
+    vary = list(robot.vary)
+    Q = TH[rows][:, vary]
+    _, n = _ct.weakest(Q, robot.twists, A=robot.A, b=robot.B, home=robot.home, kinds=robot.vary_kinds,
+                       target=robot.solve_target, hold=robot.free, scale=robot.scale)
+    k = len(SELF_MOTION_OFFSETS)
+    X = (Q[:, None, :] + SELF_MOTION_OFFSETS[None, :, None] * n[:, None, :]).reshape(-1, len(vary))
+    g = goals[np.repeat(owner[rows], k)]
+    X = robot.newton(X @ robot.A.T + robot.B, g, SELF_MOTION_NEWTON)
+    e = robot.error(_rt.fk_batch(robot.twists, X, robot.home), g)
+    good = e <= exact
+    if limits:
+        good &= ~_fk.represent(X[:, ind], robot.joint_types, robot.lower, robot.upper, True)[2]
+    good = good.reshape(len(rows), k)
+    if not good.any():
+        return TH
+    best = np.argmin(np.where(good, e.reshape(len(rows), k), np.inf), axis=1)  # the deepest point
+    moved = good.any(axis=1)
+    TH = TH.copy()
+    TH[rows[moved]] = X.reshape(len(rows), k, -1)[moved, best[moved]]
+    return TH
 
 
 def clamped_onto_limits(robot, TH, owner, goals):
