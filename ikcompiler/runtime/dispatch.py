@@ -123,7 +123,11 @@ class Solver:
         if not r.polish:
             return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
         # snapped plan: the leaves are candidates on the snapped robot; the continuation corrects them
-        lock = self.lock_targets(flag)
+        # A gimbal lock goes to the reference runtime, which takes the alternative chain, only on a chain
+        # of fewer than 6 independent joints (a 5-joint arm's O-RRR gimbal, whose waist value the
+        # position fixes).  On a 6-joint chain the snapped lock is a self-motion: the family path below
+        # keeps its representatives (puma560_robot.urdf at q5 = 0: sent away, 4 of 30 poses missed).
+        lock = self.lock_targets(flag) & (len(r.vary) < 6)
         defer = (flag & _fk.DEFER).any(axis=1) | lock
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
         # a leaf on a self-motion of the snapped robot stays a representative of it where the true
