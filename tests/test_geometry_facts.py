@@ -23,7 +23,7 @@ def _compare(chain, plan):
     for steps in (plan.steps, plan.alternative):
         theirs = classify_pairs(steps, twists, chain.joint_types, chain.scale)
         for mine, other in zip(steps, theirs):
-            assert mine.get("axes") == other.get("_axes"), (chain.name, mine.get("rule"))
+            assert mine.get("axes") == other.get("axes"), (chain.name, mine.get("rule"))
             if "axes" in mine:
                 seen.append(mine["axes"])
     return seen
