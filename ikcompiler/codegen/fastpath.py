@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ikcompiler.codegen import ir
+from ikcompiler.geometry import facts
 from ikcompiler.steps import Step
-from subproblems import plan_runtime as rt
 
 ZERO = 1e-15  # constants below this (rounding noise of a URDF's rpy) fold to zero
 FAST_TARGETS = ("pose", "position", "orientation")
@@ -336,7 +336,7 @@ class _Emitter:
         """Loop over the slots of ``call`` (the rest of the chain nests inside), its outputs the values
         of ``joints``; coupled joints follow.  ``names``: the outputs' names taken before the call was
         built (else now)."""
-        outs = self._loop(names if names is not None else self.slot_names(len(joints)), call)
+        outs = self.loop(names if names is not None else self.slot_names(len(joints)), call)
         for j, name in zip(joints, outs):
             self.q[j] = name
         self._couple(joints)
@@ -345,7 +345,8 @@ class _Emitter:
     def couple(self, solved=()):
         self._couple(solved)
 
-    def _loop(self, outs, call):
+    def loop(self, outs, call) -> list:
+        """Loop over the slots of ``call`` binding the names ``outs``: the rest of the chain nests inside."""
         flag = f"f{self.c.count}"
         self.c.count += 1
         if call[0] == "kernel":
@@ -376,26 +377,16 @@ class _Emitter:
         c.emit(ir.Leaf(tuple(ir.const(self.q[j]) for j in independent), tuple(parts), tuple(self.flags)))
 
 
-def classify_pairs(steps, twists, kinds, scale, samples: int = 6, seed: int = 5):
-    """Mark each S2-RR step with the relation of its two (transformed) axes: ``meet``, ``parallel``
-    or ``skew``, measured over random configurations (the relation the planner relies on persists)."""
-    rng = np.random.default_rng(seed)
-    n = len(kinds)
-    TH = rng.uniform(-math.pi, math.pi, size=(samples, n))
-    Td = rt.fk_batch(twists, rng.uniform(-math.pi, math.pi, size=(samples, n)), np.eye(4))
+def classify_pairs(steps, twists, kinds, scale):
+    """The steps with each S2-RR step's axis relation (``meet``, ``parallel``, ``skew``: which kernel
+    solves it) as the compiler recorded it (``geometry/facts.py``, docs/design.md section 10).  A step
+    without it (a module written before the relation was recorded in ``_STEPS``) is judged now, by the
+    same function on the same configurations."""
     out = []
     for step in steps:
-        if step.code == "S2-RR" and step.kind == "S2":
-            tw, _ = rt._step_inputs(step, twists, kinds, Td, TH, None)
-            w1, w2 = tw[:, 0, 3:], tw[:, 1, 3:]
-            r1, r2 = np.cross(w1, tw[:, 0, :3]), np.cross(w2, tw[:, 1, :3])
-            n12 = np.cross(w1, w2)
-            nn = np.linalg.norm(n12, axis=1)
-            if np.all(nn <= 1e-9):
-                axes = "parallel"
-            else:
-                gap = np.abs(np.sum((r2 - r1) * n12, axis=1)) / np.maximum(nn, 1e-300)
-                axes = "meet" if np.all((gap <= 1e-9 * scale) & (nn > 1e-6)) else "skew"
+        if step.code == "S2-RR" and step.kind == "S2" and step.axes is None:
+            th = facts.configurations(kinds, scale)
+            axes = facts.step_axes(step, np.asarray(twists, float), kinds, scale, th)
             step = dataclasses.replace(step, axes=axes)
         out.append(step)
     return out

@@ -73,7 +73,7 @@ class OrientationStep(Step):
         ws = [em.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in self.groups]
         names = em.slot_names(len(ws))  # named before the representative's own name
         fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
-        outs = em._loop(names, em.kernel(fn, *ws, Tp[:9], *([em.rep()] if len(ws) == 3 else [])))
+        outs = em.loop(names, em.kernel(fn, *ws, Tp[:9], *([em.rep()] if len(ws) == 3 else [])))
         for col, g in enumerate(self.group_ids):
             group = self.groups[col]
             if len(group) == 1:  # a joint of its own
