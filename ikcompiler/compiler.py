@@ -20,7 +20,7 @@ from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.facts import configurations, record_step_facts
-from ikcompiler.geometry.snap import snap_chain
+from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
@@ -95,7 +95,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             "the equations; every solution is checked against the whole target"
         )
     true_chain = chain
-    chain, snap_notes = snap_chain(chain, tol)
+    # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
+    chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
     notes += [f"near-relation snapped: {n}" for n in snap_notes]
     ctx = Context(
         twists=chain.twists,

@@ -167,3 +167,82 @@ def test_redundant_chains_are_told_apart(catalogue):
     assert (pendulum.dof, configs.generic_rank(pendulum)) == (5, 3)
     arm = _entry(catalogue, "rtb-data", "irb140.urdf", "tool0").load()
     assert configs.generic_rank(arm) == 6
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_gimbal_lock_of_a_five_joint_arm_takes_the_alternative_chain(catalogue, native):
+    """px150 (rtb-data, Trossen/Interbotix, 5 joints): the chain's first step, O-RRR on (waist, the
+    parallel joints' sum, wrist_rotate), meets a gimbal lock at the sum +-pi/2, where only waist +-
+    wrist_rotate is fixed.  For 5 joints that is no self-motion: the position fixes the waist (two
+    values, sigma 0.05 at the sample).  The chain's representative was searched for (C) or pulled onto
+    one of them by Newton (Python), one waist branch only: q = (pi/2, 0, pi/2, 0, -pi/2) came back as
+    the waist = -pi/2 rows, missed.  Now such targets take the alternative chain (H-R in the waist),
+    whose rows are every solution where it meets no lock (ikcompiler/runtime/reference.py
+    with_alternative, fast_finish.h ikc_settle_alternative)."""
+    import numpy as np
+
+    chain = _entry(catalogue, "rtb-data", "px150.urdf.xacro", "/ee_arm_link").load()
+    module = configs.compile_chain(chain).module
+    assert module._ALT_STEPS and module._STEPS[0]["kind"] == "O", module.PLAN
+    module.NATIVE = native
+    for q in ([np.pi / 2, 0, np.pi / 2, 0, -np.pi / 2], [np.pi, np.pi / 2, np.pi / 2, -np.pi / 2, np.pi]):
+        q = np.array(q)
+        rows = module.solve(chain.fk(q), limits=False)
+        assert np.any(np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1) < 1e-9), (q, rows)
+        waists = np.unique(np.round(np.stack([np.cos(rows[:, 0]), np.sin(rows[:, 0])], axis=1), 9), axis=0)
+        assert len(waists) == 2, (q, rows)  # both waist branches
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def test_a_gimbal_lock_of_a_calibrated_five_joint_arm_takes_the_alternative_chain(catalogue):
+    """The same arm perturbed by 1e-6 (seed 7): a snapped plan.  At the lock the snapped robot's
+    representative is no solution of the true one and the continuation had nothing to carry over:
+    q = (pi, 0, 0, pi/2, pi/2) and (pi, 0, pi/2, 0, pi/2) returned no row (2 of 30 special poses
+    missed).  The alternative chain's leaves are the candidates there (the C path hands the target to
+    Python, which runs it)."""
+    chain = configs.perturbed(_entry(catalogue, "rtb-data", "px150.urdf.xacro", "/ee_arm_link").load(), 1e-6,
+                              seed=7)
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and module._ALT_STEPS, module.PLAN
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def test_a_least_squares_leaf_ending_near_a_fold_goes_to_the_continuation(catalogue):
+    """px150 perturbed by 1e-3 (seed 7): at q = (-2.239193, -0.220347, 1.292438, 1.335484, 1.628779) the
+    snapped robot's leaves all miss the target by ~1e-2 (more than near_singular times the size, so the
+    C finish kept the target) and plain Newton on the true robot ends them as least-squares rows near a
+    singular configuration, where the true robot has the sampled solution: the C path returned no exact
+    row (1 of 50 random poses of seed 11 missed), the Python continuation's rescue seeds find it.  The C
+    finish now hands such a target over (fast_finish.h ikc_polished; docs/calibrated.md)."""
+    import numpy as np
+
+    chain = configs.perturbed(_entry(catalogue, "rtb-data", "px150.urdf.xacro", "/ee_arm_link").load(), 1e-3,
+                              seed=7)
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and module.NATIVE, module.PLAN
+    q = np.array([-2.239193, -0.220347, 1.292438, 1.335484, 1.628779])
+    rows = module.solve(chain.fk(q))
+    assert len(rows) and np.abs(rows - q).max(axis=1).min() < 1e-6, rows
+    rep = verify(chain, module, samples=50, seed=11, special=0.0, scalar_checks=3)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def test_a_reduced_chain_snaps_a_run_of_concurrent_axes_beyond_the_pair_tolerance(catalogue):
+    """example-robot-data's human torso (middle_pelvis -> middle_thorax, 5 joints, pose target) perturbed
+    by 1e-3 (seed 7): the thoracic triple misses one point by 1.44e-3 of the size, above the snap
+    tolerance, so only pairs were snapped and the plan was an S2-RRR on a near-spherical triple: the
+    target unreachable on the snapped robot, its one least-squares row another branch, no row at all
+    on 20 of 230 poses.  A reduced chain now snaps such a run up to snap.REDUCED_RUN_FACTOR times the
+    tolerance (its leaves are carried over by plain Newton; it has no general solver)."""
+    from ikcompiler.geometry import snap
+
+    chain = configs.perturbed(_entry(catalogue, "example-robot-data", "human.urdf", "middle_thorax").load(), 1e-3,
+                              seed=7)
+    assert not any("thoracic_Y snapped to meet at one point" in n for n in snap.snap_chain(chain)[1])
+    module = configs.compile_chain(chain).module
+    assert any("middle_thoracic_Y snapped to meet at one point" in n for n in module.PLAN.splitlines()), module.PLAN
+    for samples, seed, special in ((30, 1, 1.0), (50, 10, 0.0)):
+        rep = verify(chain, module, samples=samples, seed=seed, special=special, scalar_checks=3)
+        assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()

@@ -66,23 +66,35 @@ class Solver:
         """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct)."""
         return reference.correct(self.robot, TH, owner, goals, self.general6)
 
-    def reference_chunk(self, goals, Td, init, limits):
-        """The reference runtime on targets (chunked so that a search stays within the budget)."""
+    def reference_chunk(self, goals, Td, init, limits, alternative=None):
+        """The reference runtime on targets (chunked so that a search stays within the budget);
+        ``alternative`` marks the targets that also take the plan's alternative chain."""
         width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
         step = max(1, self.memory_budget // width)
         if len(goals) <= step:
-            return self._reference(goals, Td, init, limits)
-        return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits)
+            return self._reference(goals, Td, init, limits, alternative)
+        return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits,
+                                        None if alternative is None else alternative[i:i + step])
                         for i in range(0, len(goals), step)])
 
-    def _reference(self, goals, Td, init, limits):
+    def _reference(self, goals, Td, init, limits, alternative=None):
         r = self.robot
-        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct), goals, limits)
+        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct, alternative),
+                                  goals, limits)
+
+    def lock_targets(self, flag):
+        """Targets (N,) whose fast-chain leaves met a gimbal lock (FAMILY) where the plan has an
+        alternative chain: the reference runtime settles them with it (reference.with_alternative)."""
+        if not self.robot.alt_steps:
+            return np.zeros(len(flag), dtype=bool)
+        return ((flag & _fk.FAMILY) != 0).any(axis=1)
 
     def settle_leaves(self, goals, Td, init, limits, Q, err, flag):
         """Finish the fast chain's leaves of targets: done here, Newton steps on the near misses, or the
         reference runtime for targets near a degenerate geometry (fast.finish_many's routes)."""
         r = self.robot
+        lock = self.lock_targets(flag)
+        flag = np.where(lock[:, None], flag | _fk.DEFER, flag)  # to the reference runtime
         parts, route = _fk.finish_many(Q, err, flag, **r.finish_kwargs(limits))
         newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
         if len(newton):
@@ -93,7 +105,8 @@ class Solver:
             _scatter(parts, newton, _fk.merge_split_roots(done, r.joint_types))
         defer = np.nonzero(route == _fk.ROUTE_REFERENCE)[0]
         if len(defer):
-            _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits))
+            _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits,
+                                                        lock[defer]))
         return tuple(parts)
 
     def python_chunk(self, goals, Td, init, limits):
@@ -109,7 +122,8 @@ class Solver:
         if not r.polish:
             return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
         # snapped plan: the leaves are candidates on the snapped robot; the continuation corrects them
-        defer = (flag & _fk.DEFER).any(axis=1)
+        lock = self.lock_targets(flag)
+        defer = (flag & _fk.DEFER).any(axis=1) | lock
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
         # a leaf on a self-motion of the snapped robot stays a representative of it on the true robot
         # (the relation missed by ~1e-9: numerically the same family); the continuation keeps the
@@ -121,7 +135,7 @@ class Solver:
         parts = list(reference.complete(r, TH, rows, none, cont, goals, limits))
         idx = np.nonzero(defer)[0]
         if len(idx):
-            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits))
+            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx]))
         return tuple(parts)
 
     def handed_back(self, goals, Td, init, limits):
@@ -147,7 +161,7 @@ class Solver:
             return _unpack(self.handed_back(goals, Td, init, limits), exact_only)
         # the scalar fast chain once; its leaves, if its finish cannot settle them, routed once
         leaves = fastchain.scalar_leaves(r, T, free) if self.fast_path() else None
-        if leaves is not None:
+        if leaves is not None and not (r.alt_steps and any(int(leaf[-1]) & _fk.FAMILY for leaf in leaves)):
             found = _fk.finish_one(leaves, **r.finish_kwargs(limits))
             if found is not None:
                 q, res, ls, cont = fastchain.rows_of_one(found, len(r.joint_names))

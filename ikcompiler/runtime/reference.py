@@ -54,8 +54,11 @@ def true_general6(robot):
         return None
 
 
-def candidates(robot, goals, Td, init, correct):
-    """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum)."""
+def candidates(robot, goals, Td, init, correct, alternative=None):
+    """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum).
+
+    ``alternative`` (N,) marks targets that take the plan's alternative chain whatever the chain
+    gives (the fast chain saw a gimbal lock there that the reference step may not flag)."""
     N = len(goals)
     if robot.method == "numerical":
         step = robot.steps[0]
@@ -77,12 +80,8 @@ def candidates(robot, goals, Td, init, correct):
         return TH, owner, *_no_flags(len(TH))
     TH, owner, ls, _, cont = _rt.run_plan(robot.steps, robot.plan_twists, robot.kinds, Td,
                                           robot.couplings, robot.n_groups, init)
-    if robot.alt_steps and cont.any():
-        redo = np.unique(owner[cont])
-        TH2, own2, ls2, _, cont2 = _rt.run_plan(robot.alt_steps, robot.plan_twists, robot.kinds,
-                                                Td[redo], robot.couplings, robot.n_groups, init[redo])
-        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, redo[own2]])
-        ls, cont = np.concatenate([ls, ls2]), np.concatenate([cont, cont2])
+    if robot.alt_steps:
+        TH, owner, ls, cont = with_alternative(robot, Td, init, TH, owner, ls, cont, alternative)
     if cont.any():
         # A self-motion: the representative a step chose may not complete the pose; Newton steps
         # on every joint pull it onto a nearby exact solution of the continuum.
@@ -92,6 +91,31 @@ def candidates(robot, goals, Td, init, correct):
         extra = np.zeros(len(TH) - len(ls), dtype=bool)
         ls, cont = np.concatenate([ls, extra]), np.concatenate([cont, extra])
     return TH, owner, ls, cont
+
+
+def with_alternative(robot, Td, init, TH, owner, ls, cont, alternative=None):
+    """The chain's candidates (TH, owner, ls, cont) with the alternative chain's on the targets where
+    the chain met a continuum (or ``alternative`` marks them).  A target where the alternative chain
+    meets none is no self-motion: a closed-form chain is complete wherever no step degenerates, so its
+    rows are every solution and replace the chain's representatives (a 5-joint arm's O-RRR gimbal:
+    the family's waist value is fixed by the position equations, which the representative ignores;
+    docs/design.md section 5, "Alternative chain").  Elsewhere both chains' rows are candidates."""
+    redo = np.zeros(len(Td), dtype=bool)
+    redo[owner[cont]] = True
+    if alternative is not None:
+        redo |= alternative
+    redo = np.nonzero(redo)[0]
+    if not len(redo):
+        return TH, owner, ls, cont
+    TH2, own2, ls2, _, cont2 = _rt.run_plan(robot.alt_steps, robot.plan_twists, robot.kinds, Td[redo],
+                                            robot.couplings, robot.n_groups, init[redo])
+    own2 = redo[own2]
+    settled = np.zeros(len(Td), dtype=bool)
+    settled[own2] = True
+    settled[own2[cont2]] = False
+    keep = ~settled[owner]
+    return (np.concatenate([TH[keep], TH2]), np.concatenate([owner[keep], own2]),
+            np.concatenate([ls[keep], ls2]), np.concatenate([cont[keep], cont2]))
 
 
 def _no_flags(n):
