@@ -143,9 +143,10 @@ _MODULE_FIELDS = (  # what the C depends on, besides the code of this package (s
     "_INDEPENDENT", "_VARY", "_VARY_LOWER", "_VARY_UPPER", "_FREE", "_POLISH", "_SEARCH", "_GRID",
     "_STEPS", "_ALT_STEPS",
 )
-# a change to these changes the C: the code generator, and what it reads from subproblems (the pair
-# classification runs plan_runtime; the snapped plan's threshold comes from continuation.near_singular)
-_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py")
+# a change to these changes the C: the code generator, the steps' lowerings (steps/kinds.py), and what
+# it reads from subproblems (the pair classification runs plan_runtime; the snapped plan's threshold
+# comes from continuation.near_singular)
+_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py", "../steps/kinds.py")
 _READ_FROM_SUBPROBLEMS = ("plan_runtime.py", "continuation.py", "tolerances.py")
 _SOURCES: dict[str, str | None] = {}  # data hash -> C text, for this process
 
