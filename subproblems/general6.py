@@ -231,9 +231,10 @@ class _Arrangement:
     E: np.ndarray  # (9, 4, 4) X_b^-1 X_a^-1 on the (a, b) grid
     u: np.ndarray  # unit vector normal to w_f (reads th_f)
     H: tuple  # per axis in arrangement order, its twist matrices (H1, H2, prismatic) (see _hat_list)
-    prism: tuple  # (6,) bool in arrangement order; only positions a, b may be prismatic
+    prism: tuple  # (6,) bool in arrangement order; prismatic joints at a, b, d, e (c and f revolute)
     inv9: np.ndarray  # (9, 9) interpolation of the right side on the (a, b) grid
     grid_ab: np.ndarray  # (9, 2) the (a, b) grid values
+    half9: np.ndarray  # (9, 9) (d, e) basis products -> monomials x_d^i x_e^j (i * 3 + j)
     cols: tuple = tuple(range(8))  # columns of B' (non-constant (a, b) monomials) present in the equations
 
 
@@ -249,19 +250,28 @@ def _arrangement(w, r, sign, conj, prism) -> _Arrangement:
     w = sign * w[list(order)]
     r = r[list(order)]
     prism = tuple(bool(prism[i]) for i in order)
-    assert not any(prism[2:]), "prismatic joints only at positions a, b"
-    th = np.stack(np.meshgrid(_GRID, _GRID, _GRID, indexing="ij"), axis=-1).reshape(27, 3)
-    X = _exp(w[2], r[2], th[:, 0]) @ _exp(w[3], r[3], th[:, 1]) @ _exp(w[4], r[4], th[:, 2])
+    assert not (prism[2] or prism[5]), "the eliminated joint c and the last joint f must be revolute"
+    # a prismatic d or e: its basis (1, cos, sin) becomes (1, d, d^2) on the grid {-1, 0, 1}, as on the
+    # right side; c and f stay revolute (c is the eigenvalue's half-angle, f's axis point must be fixed)
+    gd, ge = (_GRID_T if prism[3] else _GRID), (_GRID_T if prism[4] else _GRID)
+    th = np.stack(np.meshgrid(_GRID, gd, ge, indexing="ij"), axis=-1).reshape(27, 3)
+    X = (_exp(w[2], r[2], th[:, 0]) @ _joint_exp(w[3], r[3], th[:, 1], prism[3])
+         @ _joint_exp(w[4], r[4], th[:, 2], prism[4]))
     p = np.einsum("kij,j->ki", X[:, :3, :3], r[5]) + X[:, :3, 3]
     lv = X[:, :3, :3] @ w[5]
-    A = (_INV27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
+    inv27 = _INV27 if not (prism[3] or prism[4]) else np.linalg.inv(
+        np.kron(np.kron(_PHI, _PHI_T if prism[3] else _PHI), _PHI_T if prism[4] else _PHI))
+    A = (inv27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
     ga, gb = (_GRID_T if prism[0] else _GRID), (_GRID_T if prism[1] else _GRID)
     ab = np.stack(np.meshgrid(ga, gb, indexing="ij"), axis=-1).reshape(9, 2)
     inv9 = np.linalg.inv(np.kron(_PHI_T if prism[0] else _PHI, _PHI_T if prism[1] else _PHI))
     E = _inv(_joint_exp(w[1], r[1], ab[:, 1], prism[1])) @ _inv(_joint_exp(w[0], r[0], ab[:, 0], prism[0]))
     u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
+    # basis of d and e -> monomials: (1, cos, sin) (1 + x^2) in powers of x = tan(th / 2), or for a
+    # prismatic joint (1, d, d^2), already monomials
+    half9 = np.kron(np.eye(3) if prism[3] else _HALF, np.eye(3) if prism[4] else _HALF)
     return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u), _hat_list(w, r, prism),
-                        prism, inv9, ab)
+                        prism, inv9, ab, half9)
 
 
 def _axes(arr: _Arrangement, H):
@@ -314,19 +324,19 @@ class General6:
         self.r = np.where(self.prism[:, None], 0.0, (r - self.center) / self._s)
         self.Mn = self._norm(self.home[None])[0]
         self._H = _hat_list(self.w, self.r, self.prism)
-        # arrangements whose left side (c, d, e, f) is revolute: a prismatic joint only at a or b
+        # arrangements whose eliminated joint c and last joint f are revolute (prismatic at a, b, d, e)
         layouts = [(sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
         self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
-                     if not self.prism[_arrangement_order(sign, conj)[2:]].any() else None
+                     if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any() else None
                      for sign, conj in layouts]
         if self.prism.any():
             self._arr = [self._present_columns(a) if a is not None else None for a in self._arr]
         if all(a is None for a in self._arr):
             k = int(np.nonzero(self.prism)[0][0])
             raise General6Error(
-                f"general6: joint {k + 1} is prismatic and no joint order puts every prismatic joint among "
-                "the first two of the chain or of a rotated or inverted copy (joints 1, 2, 5, 6): use the "
-                "compiler's search fallback"
+                f"general6: joint {k + 1} is prismatic and no joint order of the chain or of a rotated or "
+                "inverted copy has a revolute joint at both the eliminated position (c) and the last (f): "
+                "use the compiler's search fallback"
             )
         if arrangement is None:
             self.usable = [0]
@@ -409,12 +419,13 @@ class General6:
         return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
 
     @staticmethod
-    def _matrices(C, delta):
-        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2)."""
+    def _matrices(C, delta, half9=_HALF9):
+        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2); ``half9`` the arrangement's
+        (d, e) basis-to-monomial map."""
         cd, sd = np.cos(delta)[:, None, None], np.sin(delta)[:, None, None]
         C0, C1, C2 = C[:, :, 0], C[:, :, 1], C[:, :, 2]
         Ct = np.stack([C0, C1 * cd + C2 * sd, C2 * cd - C1 * sd], axis=1)  # (N, 3 trig, 6, 9)
-        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ _HALF9  # (N, 3 powers, 6, 9 monomials)
+        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ half9  # (N, 3 powers, 6, 9 monomials)
         N = len(C)
         M = np.zeros((N, 3, 12, 12))
         for i in range(3):
@@ -428,13 +439,13 @@ class General6:
         N = len(Gn)
         B0, pinv, C, brank = self._pencil(arr, Gn)
         delta = np.full(N, SHIFTS[0])
-        M = self._matrices(C, delta)
+        M = self._matrices(C, delta, arr.half9)
         good = _leading_ok(M[:, 2])
         for d in SHIFTS[1:]:
             if good.all():
                 break
             bad = np.nonzero(~good)[0]
-            M2 = self._matrices(C[bad], np.full(len(bad), d))
+            M2 = self._matrices(C[bad], np.full(len(bad), d), arr.half9)
             ok = _leading_ok(M2[:, 2])
             take = bad[ok]
             M[take], delta[take], good[take] = M2[ok], d, True
@@ -456,11 +467,10 @@ class General6:
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
         v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
-        th_d = _read_ratio(v[:, :3, :], v[:, 1:, :])
-        th_e = _read_ratio(v[:, :, :2], v[:, :, 1:])
+        th_d = _read_ratio(v[:, :3, :], v[:, 1:, :], arr.prism[3])
+        th_e = _read_ratio(v[:, :, :2], v[:, :, 1:], arr.prism[4])
         tc = np.stack([np.ones_like(th_c), np.cos(th_c), np.sin(th_c)], axis=1)
-        ud = np.stack([np.ones_like(th_d), np.cos(th_d), np.sin(th_d)], axis=1)
-        ue = np.stack([np.ones_like(th_e), np.cos(th_e), np.sin(th_e)], axis=1)
+        ud, ue = _basis(th_d, arr.prism[3]), _basis(th_e, arr.prism[4])
         u = (ud[:, :, None] * ue[:, None, :]).reshape(-1, 9)
         rhs = np.einsum("qtj,nt->nqj", arr.A, tc)
         rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
@@ -649,7 +659,7 @@ class General6:
             if arr is None:  # a prismatic joint would sit on the left side
                 continue
             _, _, C, _ = self._pencil(arr, Gn[:count])
-            M = self._matrices(C, np.full(count, SHIFTS[0]))
+            M = self._matrices(C, np.full(count, SHIFTS[0]), arr.half9)
             x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
             sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
             ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(count), where=sv[:, 0] > 0)  # 0 / 0: singular
@@ -715,12 +725,25 @@ def _null_vectors(M, y):
     return np.nan_to_num(z[..., 0])
 
 
-def _read_ratio(den, num):
-    """th = 2 atan2(num, den) from the (den, num) pair of largest magnitude: (M, ...) -> (M,)."""
+def _read_ratio(den, num, prism=False):
+    """th = 2 atan2(num, den) from the (den, num) pair of largest magnitude: (M, ...) -> (M,); for a
+    prismatic joint (monomials in its displacement d, not in a half-angle) d = num / den from the pair
+    of largest den."""
     den, num = den.reshape(len(den), -1), num.reshape(len(num), -1)
-    k = np.argmax(den * den + num * num, axis=1)
     i = np.arange(len(den))
+    if prism:
+        k = np.argmax(np.abs(den), axis=1)
+        with np.errstate(all="ignore"):
+            return num[i, k] / den[i, k]
+    k = np.argmax(den * den + num * num, axis=1)
     return 2 * np.arctan2(num[i, k], den[i, k])
+
+
+def _basis(th, prism=False):
+    """(M, 3): (1, cos th, sin th) of a revolute joint, (1, d, d^2) of a prismatic one."""
+    if prism:
+        return np.stack([np.ones_like(th), th, th * th], axis=1)
+    return np.stack([np.ones_like(th), np.cos(th), np.sin(th)], axis=1)
 
 
 def _wrap(Q, prism=None):

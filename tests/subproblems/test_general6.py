@@ -141,10 +141,20 @@ def test_special_geometry_matches_the_closed_form(name):
             assert _distance(theirs, q) < SAME, (name, n, q)
 
 
-def test_prismatic_joint_is_refused_with_a_reason():
-    twists, home = random_6r_geometry(0)
-    twists[2] = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
-    with pytest.raises(g6.General6Error, match="joint 3 is prismatic"):
+def test_prismatic_joints_no_order_takes_are_refused_with_a_reason():
+    """TTRRRT: every joint order of the chain, rotated or inverted, puts a prismatic joint at the
+    eliminated position c or at the last position f (whose axis point must stay fixed)."""
+    twists, home = _with_prismatic(0, "TTRRRT")
+    with pytest.raises(g6.General6Error, match="joint 1 is prismatic"):
+        g6.prepare(twists, home)
+
+
+def test_prismatic_joints_on_both_sides_are_refused_as_a_singular_pencil():
+    """One prismatic joint on each side of the split (TRRRTR: a and e, or b and d, in every usable
+    order) makes the 12 x 12 pencil singular: refused with the orders and the reason, so that the
+    compiler keeps its search (docs/general6.md, "Prismatic joints")."""
+    twists, home = _with_prismatic(0, "TRRRTR")
+    with pytest.raises(g6.General6Error, match="pencil is singular"):
         g6.prepare(twists, home)
 
 
@@ -157,10 +167,11 @@ def _with_prismatic(seed, kinds):
     return twists, home
 
 
-@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT"])
-def test_prismatic_joints_on_the_right_side_every_sampled_vector_recovered_and_exact(kinds):
-    """A prismatic joint where an arrangement puts it at position a or b (joints 1, 2, 5, 6): its
-    displacement enters the 14 quantities as (1, d, d^2) (docs/general6.md, "Prismatic joints")."""
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT", "RRTRRR", "RRRTRR"])
+def test_prismatic_joints_every_sampled_vector_recovered_and_exact(kinds):
+    """A prismatic joint where an arrangement puts it at position a or b (joints 1, 2, 5, 6), or a
+    single one at position d (joint 3 or 4): its displacement enters the 14 quantities as (1, d, d^2)
+    (docs/general6.md, "Prismatic joints")."""
     prism = np.array([k == "T" for k in kinds])
     for seed in (0, 1):
         twists, home = _with_prismatic(seed, kinds)
