@@ -235,7 +235,9 @@ class _Arrangement:
     inv9: np.ndarray  # (9, 9) interpolation of the right side on the (a, b) grid
     grid_ab: np.ndarray  # (9, 2) the (a, b) grid values
     half9: np.ndarray  # (9, 9) (d, e) basis products -> monomials x_d^i x_e^j (i * 3 + j)
-    cols: tuple = tuple(range(8))  # columns of B' (non-constant (a, b) monomials) present in the equations
+    cols: tuple = tuple(range(8))
+    swap: bool = False  # the equations are multiplied by x_e instead of x_d (monomials x_e^i x_d^j)
+    deflate: int | None = None  # rank of the multiplier's squared block: the 9 x 9 deflated pencil is used  # columns of B' (non-constant (a, b) monomials) present in the equations
 
 
 def _arrangement_order(sign, conj) -> list[int]:
@@ -331,6 +333,7 @@ class General6:
                      for sign, conj in layouts]
         if self.prism.any():
             self._arr = [self._present_columns(a) if a is not None else None for a in self._arr]
+            self._arr = [self._regular_variant(a) if a is not None else None for a in self._arr]
         if all(a is None for a in self._arr):
             k = int(np.nonzero(self.prism)[0][0])
             raise General6Error(
@@ -344,6 +347,41 @@ class General6:
         else:
             self.usable = [int(k) for k in np.atleast_1d(arrangement)]
         self.arrangement = self.usable[0]
+
+    def _singular(self, arr: _Arrangement, Gn) -> bool:
+        """Whether the arrangement's pencil is singular for every x (median over the targets Gn)."""
+        _, _, C, _ = self._pencil(arr, Gn)
+        M = self._matrices(C, np.full(len(Gn), SHIFTS[0]), arr)
+        x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
+        sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
+        ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(len(Gn)), where=sv[:, 0] > 0)  # 0 / 0: singular
+        return bool(np.median(ratio) < 1e-10)
+
+    def _regular_variant(self, arr: _Arrangement, count: int = 8, seed: int = 22) -> _Arrangement:
+        """The arrangement, or where a prismatic d or e makes its 12 x 12 pencil singular, the deflated
+        9 x 9 pencil multiplied by that joint (:func:`_deflated`) when that one is regular (measured on
+        random targets, so the choice is the same for every instance of the robot)."""
+        if not (arr.prism[3] or arr.prism[4]):
+            return arr
+        rng = np.random.default_rng(seed)
+        Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
+        Q[:, self.prism] /= math.pi
+        Gn = self._fk_norm(Q) @ _inv(self.Mn)
+        if not self._singular(arr, Gn):
+            return arr
+        for swap in (False, True):
+            if not arr.prism[4 if swap else 3]:
+                continue
+            _, _, C, _ = self._pencil(arr, Gn)
+            P = self._powers(C, np.full(count, SHIFTS[0]), dataclasses.replace(arr, swap=swap))
+            sv = np.linalg.svd(_squared_block(P), compute_uv=False)
+            rank = int(np.max((sv > 1e-9 * sv[:, :1]).sum(axis=1)))
+            if rank >= 3:
+                continue
+            variant = dataclasses.replace(arr, swap=swap, deflate=rank)
+            if not self._singular(variant, Gn):
+                return variant
+        return arr
 
     def _present_columns(self, arr: _Arrangement, count: int = 8, seed: int = 21):
         """The arrangement with B's structurally zero columns dropped (measured on random targets), or
@@ -419,13 +457,24 @@ class General6:
         return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
 
     @staticmethod
-    def _matrices(C, delta, half9=_HALF9):
-        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2); ``half9`` the arrangement's
-        (d, e) basis-to-monomial map."""
+    def _powers(C, delta, arr: _Arrangement):
+        """The 6 equations (N, 3 powers of y, 6, 9 monomials) in y = tan((th_c - delta) / 2), monomials
+        x_d^i x_e^j at i * 3 + j (x_e^i x_d^j when the arrangement multiplies by x_e)."""
         cd, sd = np.cos(delta)[:, None, None], np.sin(delta)[:, None, None]
         C0, C1, C2 = C[:, :, 0], C[:, :, 1], C[:, :, 2]
         Ct = np.stack([C0, C1 * cd + C2 * sd, C2 * cd - C1 * sd], axis=1)  # (N, 3 trig, 6, 9)
-        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ half9  # (N, 3 powers, 6, 9 monomials)
+        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ arr.half9  # (N, 3 powers, 6, 9 monomials)
+        if arr.swap:  # the multiplier's power first
+            P = P.reshape(P.shape[:3] + (3, 3)).swapaxes(3, 4).reshape(P.shape)
+        return P
+
+    @staticmethod
+    def _matrices(C, delta, arr: _Arrangement):
+        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2), or the arrangement's
+        deflated 9 x 9 one (:func:`_deflated`)."""
+        P = General6._powers(C, delta, arr)
+        if arr.deflate is not None:
+            return _deflated(P, arr.deflate)
         N = len(C)
         M = np.zeros((N, 3, 12, 12))
         for i in range(3):
@@ -439,22 +488,23 @@ class General6:
         N = len(Gn)
         B0, pinv, C, brank = self._pencil(arr, Gn)
         delta = np.full(N, SHIFTS[0])
-        M = self._matrices(C, delta, arr.half9)
+        M = self._matrices(C, delta, arr)
         good = _leading_ok(M[:, 2])
         for d in SHIFTS[1:]:
             if good.all():
                 break
             bad = np.nonzero(~good)[0]
-            M2 = self._matrices(C[bad], np.full(len(bad), d), arr.half9)
+            M2 = self._matrices(C[bad], np.full(len(bad), d), arr)
             ok = _leading_ok(M2[:, 2])
             take = bad[ok]
             M[take], delta[take], good[take] = M2[ok], d, True
         L = M[:, 2]
-        K = np.zeros((N, 24, 24))
-        K[:, :12, 12:] = np.eye(12)
-        rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, 12, 24)
+        n = M.shape[-1]  # 12, or 9 for a deflated pencil
+        K = np.zeros((N, 2 * n, 2 * n))
+        K[:, :n, n:] = np.eye(n)
+        rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, n, 2 n)
         with np.errstate(all="ignore"):
-            K[:, 12:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(12), rhs)
+            K[:, n:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(n), rhs)
             lam = np.linalg.eigvals(np.nan_to_num(K))
             th_c = delta[:, None] + 2 * np.arctan(lam)
         keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
@@ -466,9 +516,12 @@ class General6:
         doubt = ~good | (brank < 1e-9) | split
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
-        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
-        th_d = _read_ratio(v[:, :3, :], v[:, 1:, :], arr.prism[3])
-        th_e = _read_ratio(v[:, :, :2], v[:, :, 1:], arr.prism[4])
+        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, n // 3, 3)
+        # v[i, j] = x_d^i x_e^j (x_e^i x_d^j when swapped): the first joint from rows, the other from columns
+        first, second = (4, 3) if arr.swap else (3, 4)
+        th_1 = _read_ratio(v[:, :-1, :], v[:, 1:, :], arr.prism[first])
+        th_2 = _read_ratio(v[:, :, :2], v[:, :, 1:], arr.prism[second])
+        th_d, th_e = (th_2, th_1) if arr.swap else (th_1, th_2)
         tc = np.stack([np.ones_like(th_c), np.cos(th_c), np.sin(th_c)], axis=1)
         ud, ue = _basis(th_d, arr.prism[3]), _basis(th_e, arr.prism[4])
         u = (ud[:, :, None] * ue[:, None, :]).reshape(-1, 9)
@@ -656,15 +709,10 @@ class General6:
         Gn = Tn @ _inv(self.Mn)
         why, found = [], []
         for k, arr in enumerate(self._arr):
-            if arr is None:  # a prismatic joint would sit on the left side
+            if arr is None:  # a prismatic joint would sit at c or f
                 continue
-            _, _, C, _ = self._pencil(arr, Gn[:count])
-            M = self._matrices(C, np.full(count, SHIFTS[0]), arr.half9)
-            x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
-            sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
-            ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(count), where=sv[:, 0] > 0)  # 0 / 0: singular
-            if np.median(ratio) < 1e-10:
-                why.append(f"order {arr.order} ({arr.conj} moved ahead): the 12 x 12 pencil is singular")
+            if self._singular(arr, Gn[:count]):
+                why.append(f"order {arr.order} ({arr.conj} moved ahead): the {'9 x 9 deflated' if arr.deflate is not None else '12 x 12'} pencil is singular")
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
             Qc, err = self._newton(Qc, Tn[own])
@@ -699,12 +747,43 @@ def _leading_ok(L):
 
 
 _PROBE = np.random.default_rng(12).normal(size=12)
+_MIX = np.random.default_rng(14).normal(size=(9, 12))  # deflated pencil: 9 fixed combinations of its rows
+
+
+def _squared_block(P):
+    """(N, 6 equations, 9): the terms of the 6 equations P (N, 3, 6, 9) in the multiplier's square
+    d^2 x^j, over every power of the elimination variable."""
+    return P[:, :, :, 6:9].transpose(0, 2, 1, 3).reshape(len(P), 6, 9)
+
+
+def _deflated(P, rank):
+    """The 9 x 9 pencil (N, 3, 9, 9) of a prismatic multiplier joint whose squared block is
+    rank-deficient (docs/general6.md, "Prismatic joints").
+
+    With a prismatic joint on each side of the split, the 6 equations' terms in the multiplier's d^2
+    span only ``rank`` < 3 dimensions (the displacements enter only p.p and (p.p) l - 2 (p.l) p), so
+    multiplying all 6 by d gives d^3 columns that only ``rank`` rows touch: the 12 x 12 pencil is
+    singular for every x_c.  Instead: the 6 equations, and d times the 6 - rank combinations of them
+    free of d^2 (the left null space of the d^2 block over all powers of x_c), all in the 9 monomials
+    d^i x^j (i, j <= 2): 12 - rank equations.  Any true solution satisfies every one, so the
+    determinant of 9 fixed combinations of them vanishes at every true x_c (completeness); the extra
+    roots it may have are removed by Newton and the final check like any spurious candidate."""
+    N = len(P)
+    U = np.linalg.svd(_squared_block(P))[0]
+    low = np.einsum("nek,npej->npkj", U[:, :, rank:], P)  # (N, 3, 6 - rank, 9): no d^2 terms
+    low[..., 6:9] = 0.0
+    rows = np.zeros((N, 3, 12 - rank, 9))
+    rows[:, :, :6] = P
+    rows[:, :, 6:, 3:9] = low[..., 0:6]  # d * (d^i x^j) = d^(i+1) x^j
+    M = np.einsum("re,npej->nprj", _MIX[:, :12 - rank], rows)
+    scale = np.linalg.norm(M, axis=(1, 3), keepdims=True)
+    return M / np.where(scale > 0, scale, 1.0)
 _PERTURB = np.random.default_rng(13).normal(size=(2, 3))
 _PERTURB /= np.linalg.norm(_PERTURB, axis=1, keepdims=True)
 
 
 def _null_vectors(M, y):
-    """Null vectors (K, 12) of the pencils M (K, 3, 12, 12) at real roots y (K,): two steps of inverse
+    """Null vectors (K, n) of the pencils M (K, 3, n, n) at real roots y (K,): two steps of inverse
     iteration; y is moved by ~1e-11 so that an exact root cannot make the factorisation singular."""
     big = np.abs(y) > 1
     yi = np.where(big, 1 / np.where(big, y, 1), y)
@@ -713,7 +792,8 @@ def _null_vectors(M, y):
     c0 = np.where(big, yi * yi, 1.0)[:, None, None]
     c2 = np.where(big, 1.0, yi * yi)[:, None, None]
     P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
-    z = np.broadcast_to(_PROBE, (len(y), 12))[..., None]
+    n = M.shape[-1]
+    z = np.broadcast_to(_PROBE[:n], (len(y), n))[..., None]
     with np.errstate(all="ignore"):
         for _ in range(2):
             try:
