@@ -54,7 +54,11 @@ displacement d (over the robot size) in ``p`` linearly and in ``p.p``, ``(p.p) l
 quadratically, so its basis (1, cos, sin) becomes (1, d, d^2), interpolated on d in {-1, 0, 1}, and
 steps 3-6 stand.  Products of the (a, b) basis that never occur are structurally zero columns of B';
 they are dropped (found once per arrangement), and a, b are read from the products of each alone
-(``d = a_1 / a_0``).  A prismatic joint 3 or 4 cannot be put at a or b: refused (docs/general6.md).
+(``d = a_1 / a_0``).  On the left side a prismatic joint may sit at d or e (c is the eigenvalue's
+half-angle; f's axis point must stay fixed): the same (1, d, d^2) basis on its grid, the identity as its
+basis-to-monomial map, d read as a ratio of monomials.  With a prismatic joint on each side of the split
+the 12 x 12 pencil is singular for every x_c (the 6 equations' d^2 terms span one dimension): the
+deflated 9 x 9 pencil of :func:`_deflated` replaces it.  Adjacent prismatic d and e: refused.
 
 **Special geometry.**  Parallel or intersecting axes can make B lose rank or the pencil M singular
 (``det M(x) == 0`` for every x).  :func:`prepare` tries the arrangements (the joint order forward, and
