@@ -99,6 +99,7 @@ EXACT = _tol.PRECISION  # accepted pose error: position / size and rotation (Fro
 NEWTON_ITERS = 6
 SAME = _tol.VERIFY_SAME_ANGLE  # polished rows closer than this (rad, max over joints) are one solution
 SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
+TWIN = 1e-6  # roots of one target closer than this (rad): read as a double eigenvalue's two solutions
 LEADING_OK = 1e-9  # |det L| / prod(row norms of L) above which the leading matrix is used as is
 
 _GRID = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3])
@@ -520,7 +521,15 @@ class General6:
         doubt = ~good | (brank < 1e-9) | split
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
-        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, n // 3, 3)
+        y = np.tan(0.5 * (th_c - delta[own]))
+        v = _null_vectors(M[own], y)
+        twin = _twins(own, th_c)
+        if twin.any():  # two solutions sharing th_c: both read from the 2-dimensional null space
+            idx = np.nonzero(twin)[0]
+            v2, pick = _two_monomial_vectors(M[own[idx]], y[idx])
+            v, own, th_c = np.concatenate([v, v2]), np.concatenate([own, own[idx[pick]]]), \
+                np.concatenate([th_c, th_c[idx[pick]]])
+        v = v.reshape(-1, n // 3, 3)
         # v[i, j] = x_d^i x_e^j (x_e^i x_d^j when swapped): the first joint from rows, the other from columns
         first, second = (4, 3) if arr.swap else (3, 4)
         th_1 = _read_ratio(v[:, :-1, :], v[:, 1:, :], arr.prism[first])
@@ -802,11 +811,89 @@ def _null_vectors(M, y):
         for _ in range(2):
             try:
                 z = np.linalg.solve(P, z)
-            except np.linalg.LinAlgError:  # an exactly singular P in the stack: the SVD's null vectors
-                z = np.linalg.svd(P)[2][:, -1, :, None]
-                break
+            except np.linalg.LinAlgError:  # an exactly singular P in the stack: that one's SVD null vector
+                z = _solve_each(P, z)
             z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), 1e-300)
     return np.nan_to_num(z[..., 0])
+
+
+def _twins(own, th_c):
+    """Candidates (K,) with another root of the same target within TWIN of theirs: an eigenvalue of
+    geometric multiplicity two, two solutions that share th_c (a modular arm's special poses: RRRRTT
+    at q2 = pi has two solutions differing only in q1, q3, q6)."""
+    order = np.lexsort((th_c, own))
+    o, t = own[order], th_c[order]
+    close = (o[1:] == o[:-1]) & (np.abs(t[1:] - t[:-1]) < TWIN)
+    out = np.zeros(len(own), dtype=bool)
+    out[order[1:][close]] = out[order[:-1][close]] = True
+    return out
+
+
+_IDENTITIES: dict = {}
+
+
+def _identities(rows: int) -> np.ndarray:
+    """(K, 4) index quadruples (p, q, r, s) of a monomial vector laid out (rows, 3) at i * 3 + j with
+    u_p u_q = u_r u_s (the exponents of p and q add up to those of r and s)."""
+    if rows not in _IDENTITIES:
+        cells = [(i, j) for i in range(rows) for j in range(3)]
+        pairs: dict = {}
+        for a in range(len(cells)):
+            for b in range(a, len(cells)):
+                key = (cells[a][0] + cells[b][0], cells[a][1] + cells[b][1])
+                pairs.setdefault(key, []).append((a, b))
+        quads = [(p, q, r, s) for group in pairs.values() for k, (p, q) in enumerate(group)
+                 for (r, s) in group[k + 1:]]
+        _IDENTITIES[rows] = np.array(quads, dtype=int)
+    return _IDENTITIES[rows]
+
+
+def _two_monomial_vectors(M, y):
+    """At twin roots y (K,) of the pencils M (K, 3, n, n): the two monomial vectors in the pencil's
+    2-dimensional null space.  With V1, V2 its basis (the SVD's last two right singular vectors), u =
+    b V1 + a V2 is a monomial vector exactly when every identity u_p u_q = u_r u_s holds: each is a
+    homogeneous quadratic in (b, a), all of them multiples of the one whose roots are the two
+    solutions; it is read from the identities' stacked coefficients (their top singular vector).
+    Returns (vectors (2 K, n), index into the K twins of each)."""
+    n = M.shape[-1]
+    big = np.abs(y) > 1
+    yi = np.where(big, 1 / np.where(big, y, 1), y)
+    c0 = np.where(big, yi * yi, 1.0)[:, None, None]
+    c2 = np.where(big, 1.0, yi * yi)[:, None, None]
+    P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
+    Vh = np.linalg.svd(P)[2]
+    V1, V2 = Vh[:, -1, :], Vh[:, -2, :]
+    p, q, r, s = _identities(n // 3).T
+    quad = np.stack([V1[:, p] * V1[:, q] - V1[:, r] * V1[:, s],  # b^2
+                     V1[:, p] * V2[:, q] + V2[:, p] * V1[:, q] - V1[:, r] * V2[:, s] - V2[:, r] * V1[:, s],
+                     V2[:, p] * V2[:, q] - V2[:, r] * V2[:, s]], axis=2)  # a^2; (K, identities, 3)
+    h = np.linalg.svd(quad)[2][:, 0, :]  # (K, 3): h0 b^2 + h1 a b + h2 a^2 = 0
+    disc = np.sqrt(np.maximum(h[:, 1] ** 2 - 4 * h[:, 0] * h[:, 2], 0.0))
+    out = []
+    for sign in (1.0, -1.0):
+        # the root of the larger coefficient's variable: a / b when |h2| >= |h0|, else b / a
+        with np.errstate(all="ignore"):
+            ratio_ab = (-h[:, 1] + sign * disc) / (2 * h[:, 2])
+            ratio_ba = (-h[:, 1] + sign * disc) / (2 * h[:, 0])
+        use_ab = np.abs(h[:, 2]) >= np.abs(h[:, 0])
+        b = np.where(use_ab, 1.0, np.nan_to_num(ratio_ba))
+        a = np.where(use_ab, np.nan_to_num(ratio_ab), 1.0)
+        out.append(b[:, None] * V1 + a[:, None] * V2)
+    K = len(y)
+    return np.concatenate(out), np.concatenate([np.arange(K), np.arange(K)])
+
+
+def _solve_each(P, z):
+    """P^-1 z per matrix of the stack, the SVD's null vector for an exactly singular one: each root
+    gets what it gets when solved alone (before, one singular P switched the whole stack to SVD null
+    vectors, so at a self-motion a target's rows depended on the other targets of its batch)."""
+    out = np.empty_like(z)
+    for k in range(len(P)):
+        try:
+            out[k] = np.linalg.solve(P[k], z[k])
+        except np.linalg.LinAlgError:
+            out[k] = np.linalg.svd(P[k])[2][-1, :, None]
+    return out
 
 
 def _read_ratio(den, num, prism=False):
