@@ -70,7 +70,8 @@ def measure(kind: str, batch: int) -> dict:
 
 
 def _run(kind: str, batch: int) -> dict:
-    res = subprocess.run([sys.executable, __file__, "--one", kind, str(batch)], capture_output=True, text=True)
+    cmd = [sys.executable, __file__, "--one", kind, str(batch)]
+    res = subprocess.run(cmd, capture_output=True, text=True)
     if res.returncode != 0:
         return {"batch": batch, "error": (res.stderr.strip().splitlines() or ["failed"])[-1]}
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -111,8 +112,9 @@ def main(argv=None) -> int:
             print(name, r, file=sys.stderr, flush=True)
             rows.append((name, r))
     worst = max((r["rss_peak_mb"] for _, r in rows if "rss_peak_mb" in r), default=float("nan"))
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     head = (f"Command: `nice python benchmarks/search_memory.py --batches {args.batches} --search2-batches "
-            f"{args.search2_batches}`; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, commit {_commit()}, "
+            f"{args.search2_batches}`; {when}, commit {_commit()}, "
             f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh "
             f"process (compile, then solve_batch); goal {GOAL_MB:.0f} MB for 100,000 poses; worst peak "
             f"measured {worst:.0f} MB.")

@@ -240,9 +240,9 @@ class _Arrangement:
     inv9: np.ndarray  # (9, 9) interpolation of the right side on the (a, b) grid
     grid_ab: np.ndarray  # (9, 2) the (a, b) grid values
     half9: np.ndarray  # (9, 9) (d, e) basis products -> monomials x_d^i x_e^j (i * 3 + j)
-    cols: tuple = tuple(range(8))
+    cols: tuple = tuple(range(8))  # columns of B' (non-constant (a, b) monomials) present in the equations
     swap: bool = False  # the equations are multiplied by x_e instead of x_d (monomials x_e^i x_d^j)
-    deflate: int | None = None  # rank of the multiplier's squared block: the 9 x 9 deflated pencil is used  # columns of B' (non-constant (a, b) monomials) present in the equations
+    deflate: int | None = None  # rank of the multiplier's squared block: the 9 x 9 deflated pencil is used
 
 
 def _arrangement_order(sign, conj) -> list[int]:
@@ -725,7 +725,8 @@ class General6:
             if arr is None:  # a prismatic joint would sit at c or f
                 continue
             if self._singular(arr, Gn[:count]):
-                why.append(f"order {arr.order} ({arr.conj} moved ahead): the {'9 x 9 deflated' if arr.deflate is not None else '12 x 12'} pencil is singular")
+                kind = "9 x 9 deflated" if arr.deflate is not None else "12 x 12"
+                why.append(f"order {arr.order} ({arr.conj} moved ahead): the {kind} pencil is singular")
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
             Qc, err = self._newton(Qc, Tn[own])

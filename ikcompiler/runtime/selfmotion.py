@@ -53,7 +53,8 @@ def flags(robot, TH, goals) -> np.ndarray:
     start = TH[cand] + n @ robot.A.T
     for held in np.unique(k):
         rows = np.nonzero(k == held)[0]
-        Q = robot.newton(start[rows], goals[cand[rows]], NEWTON_STEPS, hold=sorted(set(robot.free) | {int(held)}))
+        hold = sorted(set(robot.free) | {int(held)})
+        Q = robot.newton(start[rows], goals[cand[rows]], NEWTON_STEPS, hold=hold)
         err = robot.error(_rt.fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
         out[cand[rows]] = np.isfinite(err) & (err <= robot.tol * robot.scale)
     return out
