@@ -115,7 +115,8 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     head = (f"Command: `nice python benchmarks/search_memory.py --batches {args.batches} --search2-batches "
             f"{args.search2_batches}`; {when}, commit {_commit()}, "
-            f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh "
+            f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh"
+            " "
             f"process (compile, then solve_batch); goal {GOAL_MB:.0f} MB for 100,000 poses; worst peak "
             f"measured {worst:.0f} MB.")
     body = table(rows)
