@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from subproblems import plan_runtime as _rt
+from subproblems import newton as _newton
 from subproblems import tolerances as _tol
+from subproblems.screw import fk_batch
 
 RANK_DEFICIENT = _tol.VERIFY_SINGULAR  # smallest singular value (linear rows over the size): singular
 STEP = 1e-3  # rad (revolute) or of the size (prismatic) along the null direction
@@ -28,7 +29,7 @@ def flags(robot, TH, goals) -> np.ndarray:
     out = np.zeros(len(TH), dtype=bool)
     if not len(TH):
         return out
-    _, J = _rt._tool_jacobian(robot.twists, TH, robot.home, robot.A)
+    _, J = _newton.tool_jacobian(robot.twists, TH, robot.home, robot.A)
     J = J.copy()
     J[:, :3] /= robot.scale
     # |det J| = prod(sigma) <= sigma_min |J|_F^5: rows whose determinant rules out a small sigma_min
@@ -55,6 +56,6 @@ def flags(robot, TH, goals) -> np.ndarray:
         rows = np.nonzero(k == held)[0]
         hold = sorted(set(robot.free) | {int(held)})
         Q = robot.newton(start[rows], goals[cand[rows]], NEWTON_STEPS, hold=hold)
-        err = robot.error(_rt.fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
+        err = robot.error(fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
         out[cand[rows]] = np.isfinite(err) & (err <= robot.tol * robot.scale)
     return out
