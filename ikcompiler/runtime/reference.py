@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ikcompiler.runtime import selfmotion
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
@@ -81,7 +82,8 @@ def candidates(robot, goals, Td, init, correct, alternative=None):
         return TH, owner, *_no_flags(len(TH))
     if robot.method == "general-6r":
         TH, owner = robot.general6.rows(goals)
-        return TH, owner, *_no_flags(len(TH))
+        # isolated points of the elimination; those on a self-motion are flagged as its representatives
+        return TH, owner, np.zeros(len(TH), dtype=bool), selfmotion.flags(robot, TH, goals[owner])
     if robot.search:
         step = {"search": list(robot.search), "grid": robot.grid, "steps": robot.steps, "home": robot.home,
                 "scale": robot.scale, "target": robot.solve_target}
