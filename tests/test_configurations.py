@@ -30,7 +30,7 @@ SAMPLE = [
     ("TRRRTR", "general", 0),  # 1-D search 48/50 -> general-6r (deflated pencil, prismatic 1 and 5)
     ("TRRRRT", "modular", 0),  # general-6r 44/50: self-motions at special angles, rows now flagged
     ("RRRRTT", "modular", 0),  # general-6r 43/50: self-motions, and two solutions sharing th_c
-    ("RRRT", "modular", 0),  # closed form 48/50 (known gap below)
+    ("RRRT", "modular", 0),  # closed form 48/50: O-RRR gimbal lock at q2 = pi, now the alternative chain
     ("RRTRR", "modular", 0),  # closed form 46/48 (known gap below)
     ("RRRRT", "modular", 0),  # 1-D search 48/50 (known gap below)
 ]
@@ -39,9 +39,6 @@ SAMPLE = [
 # 2026-12-02: with the former rounding wrap in _class2 alone it misses that pose again; the 1-D search's
 # completeness there hangs on the last bit of a class II row).
 KNOWN_GAPS: dict = {
-    ("RRRT", "modular", 0): "closed form O-RRR then S1-T: at q2 = pi axes 1 and 3 line up (gimbal lock), "
-    "the orientation triple's continuum representative misses the position and the isolated solution of "
-    "the whole chain is lost (2 of 10 special poses, Jacobian regular there)",
     ("RRTRR", "modular", 0): "closed form at special angles on a self-motion of the whole chain: no exact "
     "representative returned (0 or 1 inexact rows; 2 of 8 scored special poses)",
     ("RRRRT", "modular", 0): "1-D search: two roots closer than a grid cell near a singular configuration "
