@@ -144,12 +144,15 @@ def test_a_snapped_self_motion_is_returned_as_one(catalogue, package, name, tip)
     until a representative missing the precision or outside the limits (j4 in +-pi/2) was moved along
     its family (runtime/reference.onto_self_motion), the C finish left self-motion leaves to the Python
     continuation and split double roots were merged (ur5_gripper: 18 duplicate pairs).  Now every pose
-    is recovered or a self-motion that verify shows rank-deficient, with no duplicate rows."""
+    is recovered or a self-motion that verify shows rank-deficient, with no duplicate rows.  Since the
+    general 6R elimination reads both null vectors of a double eigenvalue (session 7), its rows for the
+    doubtful puma560 targets include points of the family (flagged, runtime/selfmotion.py), among them
+    the sampled vector: those poses count as recovered, not as self-motions."""
     chain = _entry(catalogue, package, name, tip).load()
     module = configs.compile_chain(chain).module
     assert module._POLISH, "the file's rounded angles no longer give a snapped plan: pick another chain"
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
-    assert rep.wrong == 0 and rep.missed == 0 and rep.self_motion > 0, rep.text()
+    assert rep.wrong == 0 and rep.missed == 0, rep.text()
     assert rep.recovered == rep.poses - rep.self_motion and rep.duplicates == 0, rep.text()
 
 

@@ -46,8 +46,10 @@ def correct(robot, TH, owner, goals, general6, family):
     solver = general6() if len(doubt) else None
     if solver is not None:
         TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
-        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, np.asarray(doubt)[own2]])
-        cont = np.concatenate([cont, np.zeros(len(TH2), dtype=bool)])
+        own2 = np.asarray(doubt)[own2]
+        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, own2])
+        # the elimination's rows on a self-motion are its representatives, as on a general-6r plan
+        cont = np.concatenate([cont, selfmotion.flags(robot, TH2, goals[own2])])
     return TH, owner, cont
 
 
