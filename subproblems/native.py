@@ -40,7 +40,7 @@ last_error: str | None = None  # why the last load returned None (for `ikc compi
 _loaded: dict[str, ctypes.CDLL] = {}
 
 
-HEADERS = ("fast_kernels.h", "fast_finish.h")  # beside this file, put in front of every chain
+HEADERS = ("fast_kernels.h", "fast_finish.h", "general6.h")  # beside this file, put in front of every chain
 
 
 def kernels_source() -> str:
@@ -134,7 +134,7 @@ def _key(*parts: str) -> str:
 # declarations in front, and its entry points' calls renamed to the shared ones.  `__typeof__` takes
 # each signature from the header itself, so the two sides cannot disagree.  The finish calls the
 # chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
-FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many")  # what a chain's entry points call
+FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_g6_leaves")  # what a chain's entry points call
 SHARED_PREFIX = "ikc_shared_"
 
 
