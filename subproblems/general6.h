@@ -20,19 +20,25 @@
  *   6. null vector of M(root) by inverse iteration (LU), back-substitution as general6.py.
  *
  * A doubtful target (B' near rank loss, the coefficient check failing, a near-double root, two roots
- * closer than G6_CLOSE, a candidate that Newton cannot bring to exact) is handed to the Python
+ * closer than G6_CLOSE, a clean candidate that Newton cannot bring to exact, two candidates that meet
+ * after Newton) is handed to the Python
  * general6 (IKC_DEFER): the reference and fallback.  No LAPACK: every factorisation is written here. */
 
 #define G6_K 20            /* samples of D on the circle: degree 8 needs 17; 9 and 10 are the check */
 #define G6_GRID 48         /* first isolation cells on [0, 2 pi) */
 #define G6_COEF_CHECK 1e-7 /* |coefficient 9 or 10| / max |coefficient| above this: doubtful */
-#define G6_NEAR_DOUBLE 1e-5 /* estimated |imaginary part| of a near-real root pair below this: doubtful */
-#define G6_CLOSE 1e-5      /* two real roots (rad) closer than this: doubtful */
+#define G6_NEAR_DOUBLE 1e-3 /* estimated |imaginary part| of a near-real root pair below this: doubtful
+                             * (a double root split by rounding can reach ~1e-5 on a flat tangency) */
+#define G6_TOUCH 1e-10     /* |D| at a minimum of |D| below this times max |coefficient|: doubtful */
+#define G6_NOISE 1e-14     /* |D| at a cell's middle below this times max |coefficient|: doubtful */
+#define G6_CLOSE 1e-5      /* two real roots (rad) closer than this: doubtful (a near-double root) */
+#define G6_COLLIDE 1e-4    /* two candidates closer than this after Newton (rad; prismatic / size): doubtful */
 #define G6_HMIN 1e-9       /* isolation cells narrower than this that settle nothing: doubtful */
 #define G6_STACK 256       /* isolation cells pending at once */
 #define G6_RANK 1e-9       /* |R_last / R_first| of B' below this: doubtful (general6 brank) */
 #define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
-#define G6_STALLED 1e-3    /* a candidate missing by less (of the size) after Newton: doubtful */
+#define G6_STALLED 1e-3    /* a clean candidate missing by less (of the size) after Newton: doubtful */
+#define G6_CLEAN 1e-6      /* a candidate missing by less (of the size) before Newton is a clean root */
 
 typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
@@ -313,8 +319,9 @@ static void g6_trig3(const double *a, const double *b, double c1, double s1, dou
  * and D'' can move from their middle values: the cell is root-free when D cannot reach zero, D is
  * monotone there when D' cannot (one root at a sign change), and D' is monotone when D'' cannot (at
  * most two roots, split at the extremum of D).  A cell narrower than G6_HMIN that none of these
- * settles, two roots closer than G6_CLOSE, or an extremum that nearly touches zero (a complex pair
- * within G6_NEAR_DOUBLE of the real axis) make the target doubtful. */
+ * settles, two roots closer than G6_CLOSE, an extremum that nearly touches zero (a complex pair
+ * within G6_NEAR_DOUBLE of the real axis, or |D| below G6_TOUCH there) or D at the rounding level at a
+ * cell's middle (G6_NOISE) make the target doubtful. */
 static int g6_roots(const double *a, const double *b, double *roots) {
     double L4 = 0.0, big = fabs(a[0]);
     for (int k = 1; k <= 8; k++) {
@@ -346,6 +353,9 @@ static int g6_roots(const double *a, const double *b, double *roots) {
         const double move1 = r * (m2 + r * (m3 / 2.0 + r * L4 / 6.0));
         const double move2 = r * (m3 + r * L4 / 2.0);
         const double fm = d[0];
+        /* D at the rounding level at a cell's middle: the bounds below mean nothing there (a cluster
+         * of roots, a degenerate pose), and a simple root that close to a middle is a 1e-12 chance */
+        if (fabs(fm) < G6_NOISE * big) return -1;
         if (fabs(fm) > move0) continue;  /* root-free */
         const int change = y0 == 0.0 || (y1 != 0.0 && (y0 < 0.0) != (y1 < 0.0));
         if (fabs(d[1]) > move1) {  /* monotone: one root where the sign changes */
@@ -373,7 +383,8 @@ static int g6_roots(const double *a, const double *b, double *roots) {
             const int right = y1 != 0.0 && fe != 0.0 && (fe < 0.0) != (y1 < 0.0);
             if (!left && !right) {  /* no root; at a minimum of |D|, a complex pair xe +- i y with
                                       * D ~ fe + dde (x - xe)^2 / 2, y = sqrt(2 fe / dde) */
-                if (dde == 0.0 || (fe / dde > 0.0 && 2.0 * fe / dde < G6_NEAR_DOUBLE * G6_NEAR_DOUBLE))
+                if (dde == 0.0 || (fe / dde > 0.0 && (2.0 * fe / dde < G6_NEAR_DOUBLE * G6_NEAR_DOUBLE ||
+                                                      fabs(fe) < G6_TOUCH * big)))
                     return -1;
                 continue;
             }
@@ -638,16 +649,29 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
         return 1;
     }
     const double exact = rb->tol * rb->scale;
+    int clean[16];
     for (int k = 0; k < n; k++) {
+        const double start = ikc_measure(rb, g, Q + 6 * k);
+        clean[k] = start <= G6_CLEAN * rb->scale;
         double e = ikc_newton(rb, g, Q + 6 * k, G6_NEWTON);
         E[k] = e;
         F[k] = 0;
         if (e <= exact) continue;
-        if (e < G6_STALLED * rb->scale || e != e) {
+        /* a clean root (it started close) that Newton cannot finish: a double root in disguise */
+        if (e != e || (clean[k] && e < G6_STALLED * rb->scale)) {
             F[0] = IKC_DEFER;
             return 1;
         }
-        F[k] = IKC_EMPTY;
+        F[k] = IKC_EMPTY;  /* a spurious root of the pencil (started far, went nowhere) */
     }
+    /* two clean roots whose candidates met: a near-double root (Newton took both to one solution, or
+     * the pencil's rounding split one double root); the Python path's re-solve decides */
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++)
+            if (clean[i] && clean[j] && !(F[i] & IKC_EMPTY) && !(F[j] & IKC_EMPTY) &&
+                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE) {
+                F[0] = IKC_DEFER;
+                return 1;
+            }
     return n;
 }
