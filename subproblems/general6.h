@@ -22,7 +22,9 @@
  * A doubtful target (B' near rank loss, the coefficient check failing, a near-double root, two roots
  * closer than G6_CLOSE, a clean candidate that Newton cannot bring to exact, two candidates that meet
  * after Newton) is handed to the Python
- * general6 (IKC_DEFER): the reference and fallback.  No LAPACK: every factorisation is written here. */
+ * general6 (IKC_DEFER): the reference and fallback.  No LAPACK: every factorisation is written here.
+ * The G6_* thresholds below mirror subproblems/tolerances.py (same names, same values: a test reads
+ * both); iteration counts and grid sizes stay here. */
 
 #define G6_K 20            /* samples of D on the circle: degree 8 needs 17; 9 and 10 are the check */
 #define G6_GRID 48         /* first isolation cells on [0, 2 pi) */
@@ -30,7 +32,7 @@
 #define G6_NEAR_DOUBLE 1e-3 /* estimated |imaginary part| of a near-real root pair below this: doubtful
                              * (a double root split by rounding can reach ~1e-5 on a flat tangency) */
 #define G6_TOUCH 1e-10     /* |D| at a minimum of |D| below this times max |coefficient|: doubtful */
-#define G6_NOISE 1e-14     /* |D| at a cell's middle below this times max |coefficient|: doubtful */
+#define G6_NOISE 32.0      /* D's error bound: this times max |coefficient 9, 10| (which must vanish) */
 #define G6_CLOSE 1e-5      /* two real roots (rad) closer than this: doubtful (a near-double root) */
 #define G6_COLLIDE 1e-4    /* two candidates closer than this after Newton (rad; prismatic / size): doubtful */
 #define G6_HMIN 1e-9       /* isolation cells narrower than this that settle nothing: doubtful */
@@ -38,7 +40,8 @@
 #define G6_RANK 1e-9       /* |R_last / R_first| of B' below this: doubtful (general6 brank) */
 #define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
 #define G6_STALLED 1e-3    /* a clean candidate missing by less (of the size) after Newton: doubtful */
-#define G6_CLEAN 1e-6      /* a candidate missing by less (of the size) before Newton is a clean root */
+#define G6_CLEAN 1e-6      /* prismatic pencils: a candidate missing by less (of the size) before Newton
+                            * is a clean root, a farther one may be spurious */
 
 typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
@@ -320,9 +323,10 @@ static void g6_trig3(const double *a, const double *b, double c1, double s1, dou
  * monotone there when D' cannot (one root at a sign change), and D' is monotone when D'' cannot (at
  * most two roots, split at the extremum of D).  A cell narrower than G6_HMIN that none of these
  * settles, two roots closer than G6_CLOSE, an extremum that nearly touches zero (a complex pair
- * within G6_NEAR_DOUBLE of the real axis, or |D| below G6_TOUCH there) or D at the rounding level at a
- * cell's middle (G6_NOISE) make the target doubtful. */
-static int g6_roots(const double *a, const double *b, double *roots) {
+ * within G6_NEAR_DOUBLE of the real axis, or |D| below G6_TOUCH there) or D within its error bound
+ * `noise` at a cell's middle make the target doubtful.  The bounds carry that error too (8^j noise
+ * for the j-th derivative: the error is itself a trigonometric polynomial of degree 8). */
+static int g6_roots(const double *a, const double *b, double noise, double *roots) {
     double L4 = 0.0, big = fabs(a[0]);
     for (int k = 1; k <= 8; k++) {
         double c = hypot(a[k], b[k]);
@@ -353,19 +357,20 @@ static int g6_roots(const double *a, const double *b, double *roots) {
         const double move1 = r * (m2 + r * (m3 / 2.0 + r * L4 / 6.0));
         const double move2 = r * (m3 + r * L4 / 2.0);
         const double fm = d[0];
-        /* D at the rounding level at a cell's middle: the bounds below mean nothing there (a cluster
-         * of roots, a degenerate pose), and a simple root that close to a middle is a 1e-12 chance */
-        if (fabs(fm) < G6_NOISE * big) return -1;
-        if (fabs(fm) > move0) continue;  /* root-free */
+        /* D within its interpolation error (noise, from the coefficients that must vanish) at a
+         * cell's middle: the sign means nothing there (a cluster of roots, a degenerate pose); a
+         * simple root that close to a middle is a chance of order noise / |D'| */
+        if (fabs(fm) < noise) return -1;
+        if (fabs(fm) > move0 + noise) continue;  /* root-free, the error included */
         const int change = y0 == 0.0 || (y1 != 0.0 && (y0 < 0.0) != (y1 < 0.0));
-        if (fabs(d[1]) > move1) {  /* monotone: one root where the sign changes */
+        if (fabs(d[1]) > move1 + 8.0 * noise) {  /* monotone: one root where the sign changes */
             if (change) {
                 if (n >= 16) return -1;
                 roots[n++] = y0 == 0.0 ? x0 : g6_refine(a, b, x0, x1, y0);
             }
             continue;
         }
-        if (fabs(d[2]) > move2) {  /* D' monotone: one extremum of D at most */
+        if (fabs(d[2]) > move2 + 64.0 * noise) {  /* D' monotone: one extremum of D at most */
             double f, d0, d1;
             g6_trig(a, b, x0, &f, &d0, NULL);
             g6_trig(a, b, x1, &f, &d1, NULL);
@@ -384,7 +389,7 @@ static int g6_roots(const double *a, const double *b, double *roots) {
             if (!left && !right) {  /* no root; at a minimum of |D|, a complex pair xe +- i y with
                                       * D ~ fe + dde (x - xe)^2 / 2, y = sqrt(2 fe / dde) */
                 if (dde == 0.0 || (fe / dde > 0.0 && (2.0 * fe / dde < G6_NEAR_DOUBLE * G6_NEAR_DOUBLE ||
-                                                      fabs(fe) < G6_TOUCH * big)))
+                                                      fabs(fe) < G6_TOUCH * big || fabs(fe) < 4.0 * noise)))
                     return -1;
                 continue;
             }
@@ -551,7 +556,8 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
     for (int f = 9; f <= 10; f++) tail = fmax(tail, fmax(fabs(a[f]), fabs(b[f])));
     if (!(tail <= G6_COEF_CHECK * big)) return -1;
     double roots[16];
-    const int n = g6_roots(a, b, roots);
+    /* D's interpolation error: the vanishing coefficients measure it (each of the 17 is as noisy) */
+    const int n = g6_roots(a, b, G6_NOISE * (tail > 1e-16 * big ? tail : 1e-16 * big), roots);
     if (n < 0) return -1;
     /* each root: null vector, then the other joints */
     for (int k = 0; k < n; k++) {
@@ -652,7 +658,10 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
     int clean[16];
     for (int k = 0; k < n; k++) {
         const double start = ikc_measure(rb, g, Q + 6 * k);
-        clean[k] = start <= G6_CLEAN * rb->scale;
+        /* with all 8 columns of B' the pencil's real roots are all solutions (its 8 spurious roots
+         * are at +-i); with fewer (a prismatic joint's absent products) its null space is larger than
+         * the 6 vectors taken and real spurious roots appear: a far candidate may be one of them */
+        clean[k] = G->ncols == 8 || start <= G6_CLEAN * rb->scale;
         double e = ikc_newton(rb, g, Q + 6 * k, G6_NEWTON);
         E[k] = e;
         F[k] = 0;
@@ -662,7 +671,7 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
             F[0] = IKC_DEFER;
             return 1;
         }
-        F[k] = IKC_EMPTY;  /* a spurious root of the pencil (started far, went nowhere) */
+        F[k] = IKC_EMPTY;  /* a spurious root of a prismatic pencil (started far, went nowhere) */
     }
     /* two clean roots whose candidates met: a near-double root (Newton took both to one solution, or
      * the pencil's rounding split one double root); the Python path's re-solve decides */

@@ -178,3 +178,18 @@ def test_eliminated_joint_at_pi():
     T = np.array([module.fk(q) for q in Q])
     back = _compare(module, nc, Q, T)
     assert back <= 2, back
+
+
+def test_header_thresholds_are_the_tolerances():
+    """general6.h's G6_* thresholds are subproblems/tolerances.py's (the C mirrors the Python names)."""
+    import re
+    from pathlib import Path
+
+    from subproblems import tolerances
+
+    text = (Path(native.__file__).with_name("general6.h")).read_text()
+    found = dict(re.findall(r"#define (G6_[A-Z_]+) ([0-9.e+-]+)", text))
+    mirrored = {k: v for k, v in found.items() if hasattr(tolerances, k)}
+    assert {"G6_RANK", "G6_STALLED", "G6_CLOSE", "G6_NEAR_DOUBLE", "G6_NOISE", "G6_CLEAN"} <= set(mirrored)
+    for name, value in mirrored.items():
+        assert float(value) == getattr(tolerances, name), name
