@@ -145,7 +145,8 @@ def native_jaco_section(log, poses):
              "per pose (wall, median / 90th percentile); batch: one module `solve_batch` (process CPU per "
              "pose). Python: the same module with `NATIVE = False`.", "",
              "| poses | recovered | handed back | native single us (median / p90) | native batch CPU us "
-             "| Python single us (median) | Python batch CPU us | compile s |", "|---|---|---|---|---|---|---|---|"]
+             "| Python single us (median) | Python batch CPU us | compile s |",
+             "|---|---|---|---|---|---|---|---|"]
     for special in (0.0, 0.3):
         Q = sample_configurations(chain, poses, seed=21, special=special)
         T = chain.fk_batch(Q)
@@ -167,7 +168,8 @@ def native_jaco_section(log, poses):
         label = "generic" if special == 0 else "special (1/3)"
         log(f"jaco {label}: native single {nat['single'] * 1e6:.0f} us, handed back {nat['back']}")
         lines.append(f"| {label} | {hits}/{poses} | {nat['back']}/{poses} | {nat['single'] * 1e6:.0f} / "
-                     f"{nat['p90'] * 1e6:.0f} | {nat['batch_cpu'] * 1e6:.0f} | {np.median(py_single) * 1e6:.0f} "
+                     f"{nat['p90'] * 1e6:.0f} | {nat['batch_cpu'] * 1e6:.0f} "
+                     f"| {np.median(py_single) * 1e6:.0f} "
                      f"| {py_batch * 1e6:.0f} | {t_compile:.2f} |")
     return lines
 

@@ -532,9 +532,10 @@ class General6:
                 size = np.abs(e).max(axis=1)
                 wild = ~np.isfinite(dq).all(axis=1) | (np.abs(dq).max(axis=1) > 1e3 * size + 1e-3)
                 if wild.any():
-                    dq[wild] = np.einsum("nij,nj->ni", np.linalg.pinv(J[wild], rcond=_tol.G6_PINV_RCOND), e[wild])
+                    pinv = np.linalg.pinv(J[wild], rcond=_tol.G6_PINV_RCOND)
+                    dq[wild] = np.einsum("nij,nj->ni", pinv, e[wild])
             step = np.abs(dq).max(axis=1)
-            dq *= np.minimum(1.0, 0.5 / np.maximum(step, _tol.TINY))[:, None]  # a far candidate: bounded steps
+            dq *= np.minimum(1.0, 0.5 / np.maximum(step, _tol.TINY))[:, None]  # a far candidate: bounded
             Q[idx] += np.nan_to_num(dq)
         return best, best_err
 

@@ -24,7 +24,7 @@ from tests.test_fastpath import FREE, _set_distance
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
-GENERAL6_NATIVE = {"jaco"}  # general-6r: the C elimination (subproblems/general6.h, tests/test_general6_native.py)
+GENERAL6_NATIVE = {"jaco"}  # general-6r: the C elimination (general6.h; tests/test_general6_native.py)
 NATIVE_ROBOTS = {  # zoo robots whose modules carry their fast chain in C
     "arm4dof", "cylindrical", "gantry", "grasp4dof", "kr6_r700", "panda", "prob", "puma560", "rhino", "scara",
     "shadow_index", "shadow_thumb", "stanford", "ur5",

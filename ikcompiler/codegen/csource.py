@@ -151,14 +151,17 @@ def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: f
     ints = lambda x: _array(list(x), str)  # noqa: E731
     data = [
         f"static const ikc_g6 ikc_g6_this = {{{int(arr.sign)}, {arr.conj}, {ints(arr.order)},",
-        f"    {ints(int(p) for p in arr.prism)}, {len(arr.cols)}, {ints(list(arr.cols) + [0] * (8 - len(arr.cols)))},",
+        f"    {ints(int(p) for p in arr.prism)}, {len(arr.cols)},",
+        f"    {ints(list(arr.cols) + [0] * (8 - len(arr.cols)))},",
         f"    {flat(arr.w)}, {flat(arr.r)},",
         f"    {flat(arr.A)},",
         f"    {flat(arr.inv9)}, {flat(arr.grid_ab)}, {flat(arr.u)},",
-        f"    {flat(list(Mi[:3, :3].ravel()) + list(Mi[:3, 3]))}, {flat(solver.center)}, {_number(solver._s)}}};",
+        f"    {flat(list(Mi[:3, :3].ravel()) + list(Mi[:3, 3]))},",
+        f"    {flat(solver.center)}, {_number(solver._s)}}};",
         "static const ikc_robot ikc_this;",
         "",
-        "static int ikc_chain(const double *goal, const double *fr, double rep, double *Q, double *E, int *F) {",
+        "static int ikc_chain(const double *goal, const double *fr, double rep, double *Q, double *E,",
+        "                     int *F) {",
         "    (void)fr;",
         "    (void)rep;",
         "    return ikc_g6_leaves(&ikc_this, &ikc_g6_this, goal, Q, E, F);",
@@ -171,8 +174,8 @@ def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: f
     ]
     lines = head + [w for line in data for w in wrap(line)]
     return _with_entries(lines, leaves=16, alt=None, kinds=kinds, lower=lower, upper=upper, free=[],
-                         target=target, scale=scale, tol=tol, slots=slots, twists=twists, home=home, A=A.tolist(),
-                         b=b.tolist())
+                         target=target, scale=scale, tol=tol, slots=slots, twists=twists, home=home,
+                         A=A.tolist(), b=b.tolist())
 
 
 def translatable(program: ir.Program | None, *, target: str, dof: int) -> bool:
@@ -281,7 +284,8 @@ def module_c_source(ns) -> str | None:
 
     if ns["METHOD"] == "general-6r":
         return general6_c_source(
-            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"], target=ns["TARGET"],
+            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+            target=ns["TARGET"],
             scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
             home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
     program = build_program(ChainData.from_module(ns))
