@@ -43,7 +43,6 @@ import importlib.util
 import json
 import os
 import platform
-import signal
 import subprocess
 import sys
 import tempfile
@@ -221,11 +220,10 @@ def worker_ikcompiler(job: dict, z) -> dict:
 
 
 def worker_eaik(job: dict, z) -> dict:
-    import eaik.pybindings.EAIK as EAIK
-
-    H, P, R6T = z["H"], z["P"], z["R6T"]
+    bc = _bench_compiler()  # EAIK's robot, single call and batch timing as benchmarks/compiler.py's
+    H = z["H"]
     t0 = time.perf_counter()
-    robot = EAIK.Robot(H.T.copy(), P.T.copy(), R6T.copy(), [], True)
+    robot = bc.eaik_robot(H, z["P"], z["R6T"])
     meta = {"build_ms": (time.perf_counter() - t0) * 1e3, "family": str(robot.get_kinematic_family())}
     if not robot.has_known_decomposition():
         meta["error"] = f"no known decomposition ({meta['family']})"
@@ -233,22 +231,16 @@ def worker_eaik(job: dict, z) -> dict:
     n = H.shape[0]
 
     def one(T):
-        s = robot.calculate_IK(T)
-        q = np.asarray(s.Q, dtype=float).reshape(-1, n)
-        return q[~np.asarray(s.is_LS, dtype=bool).reshape(-1)]
+        q, ls = bc.eaik_solve(robot, T, n)
+        return q[~ls]
 
     Ts, Tb = z["Ts"], z["Tb"]
     for T in Ts[:20]:
         one(T)
     rows, times = _time_each(one, Ts)
     meta["single_us"] = _median_us(times)
-    poses = [np.ascontiguousarray(T) for T in Tb]
-    runs = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        robot.calculate_IK_batched(poses, int(job["threads"]))
-        runs.append(time.perf_counter() - t0)
-    meta["batch_pps"] = len(poses) / min(runs)
+    best, _ = bc.eaik_batch(robot, Tb, int(job["threads"]))
+    meta["batch_pps"] = len(Tb) / best
     return meta, {"Q": _pack(rows, n)}
 
 
@@ -417,30 +409,16 @@ def _worker_main(tool: str, inp: str, out: str) -> None:
     np.savez(out, meta=np.array(json.dumps(meta)), **outputs)
 
 
-def run_worker(tool: str, job: dict, arrays: dict, tmp: Path, env: dict) -> tuple[dict, dict]:
+def run_worker(tool: str, job: dict, arrays: dict, tmp: Path, env: dict, bc) -> tuple[dict, dict]:
     """Run one tool in a subprocess: (meta, arrays); meta["error"] says why there is nothing."""
     module = TOOL_MODULE.get(tool)
     if module and importlib.util.find_spec(module) is None:
         return {"error": "not installed"}, {}
-    inp, out = tmp / f"{tool}_in.npz", tmp / f"{tool}_out.npz"
-    np.savez(inp, job=np.array(json.dumps(job)), **arrays)
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", tool, str(inp), str(out)]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=WORKER_TIMEOUT, env=env)
-    except subprocess.TimeoutExpired:
-        return {"error": f"timed out after {WORKER_TIMEOUT} s"}, {}
-    if proc.returncode != 0:
-        if proc.returncode < 0:
-            try:
-                sig = signal.Signals(-proc.returncode).name
-            except ValueError:
-                sig = f"signal {-proc.returncode}"
-            return {"error": f"the process was killed ({sig})"}, {}
-        tail = [ln for ln in (proc.stderr or "").strip().splitlines() if ln.strip()][-1:] or [""]
-        return {"error": f"exit {proc.returncode}: {tail[0][:160]}"}, {}
-    with np.load(out, allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files}
-    return json.loads(str(arrays.pop("meta"))), arrays
+    meta, out, err = bc.run_npz_worker([Path(__file__).resolve(), "--worker", tool],
+                                       {"job": np.array(json.dumps(job)), **arrays}, tmp / f"{tool}_in.npz",
+                                       tmp / f"{tool}_out.npz", what="the worker", timeout=WORKER_TIMEOUT,
+                                       env=env)
+    return ({"error": err}, {}) if err else (meta, out)
 
 
 # ---- the comparison ----------------------------------------------------------------------------------
@@ -478,7 +456,7 @@ def compare_robot(entry: dict, opts, bc, env: dict) -> dict:
                 row["tools"][tool] = {"error": "not a 6R chain"}
                 continue
             log(f"{entry['label']}: {tool}")
-            meta, out = run_worker(tool, job, arrays, Path(tmpdir), env)
+            meta, out = run_worker(tool, job, arrays, Path(tmpdir), env, bc)
             if "Q" in out:
                 rows = unpack(out["Q"])
                 n = len(rows)

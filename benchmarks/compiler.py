@@ -203,40 +203,71 @@ def eaik_geometry(chain, free_cols, free_values):
     return w.copy(), P, np.array(chain.home[:3, :3]), fixed
 
 
-def _run_worker(stage: str, payload: dict, tmp: Path) -> tuple[dict | None, str | None, dict]:
-    inp, out = tmp / f"{stage}_in.npz", tmp / f"{stage}_out.npz"
+def run_npz_worker(argv, payload: dict, inp: Path, out: Path, *, what: str, timeout: float, env=None):
+    """Run a worker process (``python argv...``) that reads the arrays ``payload`` from ``inp`` and
+    writes a JSON ``meta`` and its arrays to ``out`` (numpy .npz files); shared with
+    benchmarks/compare.py.  Returns ``(meta, arrays, None)``, or ``(None, {}, why)`` naming ``what`` ran:
+    it timed out, a signal ended it (EAIK aborts on chains it cannot solve) or it exited non-zero."""
     np.savez(inp, **payload)
-    cmd = [sys.executable, str(Path(__file__).resolve()), "--eaik-worker", stage, str(inp), str(out)]
+    cmd = [sys.executable, *map(str, argv), str(inp), str(out)]
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=WORKER_TIMEOUT)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
-        return None, f"{stage}: timed out after {WORKER_TIMEOUT} s", {}
+        return None, {}, f"{what} timed out after {timeout} s"
     if proc.returncode != 0:
         if proc.returncode < 0:
             try:
                 sig = signal.Signals(-proc.returncode).name
             except ValueError:
                 sig = f"signal {-proc.returncode}"
-            return None, f"its {stage} call aborted the process ({sig})", {}
-        tail = (proc.stderr or "").strip().splitlines()[-1:] or [""]
-        return None, f"{stage}: exit {proc.returncode} {tail[0][:160]}".strip(), {}
+            return None, {}, f"{what} aborted the process ({sig})"
+        tail = [ln for ln in (proc.stderr or "").strip().splitlines() if ln.strip()][-1:] or [""]
+        return None, {}, f"{what} exited {proc.returncode}: {tail[0][:160]}"
     with np.load(out, allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
-    meta = json.loads(str(arrays.pop("meta")))
-    return meta, None, arrays
+    return json.loads(str(arrays.pop("meta"))), arrays, None
+
+
+def _run_worker(stage: str, payload: dict, tmp: Path) -> tuple[dict | None, str | None, dict]:
+    meta, arrays, err = run_npz_worker([Path(__file__).resolve(), "--eaik-worker", stage], payload,
+                                       tmp / f"{stage}_in.npz", tmp / f"{stage}_out.npz",
+                                       what=f"its {stage} call", timeout=WORKER_TIMEOUT)
+    return meta, err, arrays
+
+
+def eaik_robot(H, P, R6T, fixed=()):
+    """EAIK's robot of the geometry :func:`eaik_geometry` gives (inside a worker process)."""
+    import eaik.pybindings.EAIK as EAIK
+
+    return EAIK.Robot(H.T.copy(), P.T.copy(), R6T.copy(), list(fixed), True)
+
+
+def eaik_solve(robot, T, n: int):
+    """EAIK's rows for one pose: joint values (k, n) and their least-squares flags (k,)."""
+    s = robot.calculate_IK(T)
+    return np.asarray(s.Q, dtype=float).reshape(-1, n), np.asarray(s.is_LS, dtype=bool).reshape(-1)
+
+
+def eaik_batch(robot, Ts, threads: int, runs: int = 3):
+    """EAIK's batched IK on poses Ts: the best wall time of ``runs`` calls, and the last call's results."""
+    poses = [np.ascontiguousarray(T) for T in Ts]
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        res = robot.calculate_IK_batched(poses, threads)
+        times.append(time.perf_counter() - t0)
+    return min(times), res
 
 
 def _eaik_worker(stage: str, inp: str, out: str) -> None:
     """Runs in a subprocess: build EAIK's robot, time IK, save solutions (single) or timing (batch)."""
-    import eaik.pybindings.EAIK as EAIK
-
     z = np.load(inp)
     H, P, R6T, Ts = z["H"], z["P"], z["R6T"], z["Ts"]
     fixed = [(int(i), float(q)) for i, q in z["fixed"]]
     threads = int(z["threads"])
 
     def build():
-        return EAIK.Robot(H.T.copy(), P.T.copy(), R6T.copy(), fixed, True)
+        return eaik_robot(H, P, R6T, fixed)
 
     meta: dict = {}
     arrays: dict = {}
@@ -261,11 +292,10 @@ def _eaik_worker(stage: str, inp: str, out: str) -> None:
             times, sols, ls = [], [], []
             for T in Ts:
                 t0 = time.perf_counter()
-                s = robot.calculate_IK(T)
+                q, f = eaik_solve(robot, T, n)
                 times.append(time.perf_counter() - t0)
-                q = np.asarray(s.Q, dtype=float).reshape(-1, n)
                 sols.append(q)
-                ls.append(np.asarray(s.is_LS, dtype=bool).reshape(-1))
+                ls.append(f)
             meta["single_us"] = _median(times) * 1e6
             k = max([len(q) for q in sols] + [1])
             Qp = np.full((len(Ts), k, n), np.nan)
@@ -275,16 +305,10 @@ def _eaik_worker(stage: str, inp: str, out: str) -> None:
                 LSp[i, : len(f)] = f
             arrays = {"Q": Qp, "LS": LSp, "count": np.array([len(q) for q in sols])}
     else:
-        robot = build()
-        poses = [np.ascontiguousarray(T) for T in Ts]
-        runs = []
-        for _ in range(3):
-            t0 = time.perf_counter()
-            res = robot.calculate_IK_batched(poses, threads)
-            runs.append(time.perf_counter() - t0)
-        meta["batch_s"] = min(runs)
-        meta["batch_n"] = len(poses)
-        meta["batch_pps"] = len(poses) / min(runs)
+        best, res = eaik_batch(build(), Ts, threads)
+        meta["batch_s"] = best
+        meta["batch_n"] = len(Ts)
+        meta["batch_pps"] = len(Ts) / best
         meta["batch_solutions_mean"] = float(np.mean([r.num_solutions() for r in res]))
         meta["threads"] = threads
     np.savez(out, meta=np.array(json.dumps(meta)), **arrays)

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from ikcompiler.errors import PlanFormatError
 from ikcompiler.steps import Step, step_from_dict
-from ikcompiler.steps.base import fits_annotation
+from ikcompiler.steps.base import check_fields
 
 PLAN_FORMAT = "ikcompiler-plan"
 PLAN_VERSION = 1
@@ -112,36 +112,27 @@ class Plan:
                 f"not a plan of format {PLAN_FORMAT!r} version {PLAN_VERSION}: "
                 f"format {data.get('format')!r}, version {data.get('version')!r}"
             )
-        fields = {f.name: f for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - set(fields) - {"format", "version"})
-        if unknown:
-            raise PlanFormatError(f"plan: unknown field(s) {', '.join(unknown)}")
-        missing = [n for n, f in fields.items() if n not in data and f.default is dataclasses.MISSING]
-        if missing:
-            raise PlanFormatError(f"plan: missing field(s) {', '.join(missing)}")
+        fields = check_fields(cls, data, "plan", header=("format", "version"),
+                              by_caller=("steps", "alternative", "cost"))
         kw = {}
         for name in fields:
             if name not in data:
                 continue
             value = data[name]
-            annotation = str(fields[name].type)
-            shaped = name in ("steps", "alternative", "cost") or fits_annotation(annotation, value)
-            if not shaped:
-                raise PlanFormatError(f"plan field {name!r} must be {fields[name].type}, got {value!r}")
             if name in ("steps", "alternative"):
                 if not isinstance(value, list):
-                    raise PlanFormatError(f"plan field {name!r} must be a list of steps")
+                    raise PlanFormatError(f"plan: field {name!r} must be a list of steps")
                 value = tuple(step_from_dict(s) for s in value)
             elif name == "cost":
                 if value is not None and not _is_number(value):
-                    raise PlanFormatError(f"plan field 'cost' must be a number or null, got {value!r}")
+                    raise PlanFormatError(f"plan: field 'cost' must be a number or null, got {value!r}")
                 value = math.inf if value is None else float(value)
             elif name == "plan_twists":
                 if not all(
                     isinstance(row, (list, tuple)) and len(row) == 6 and all(map(_is_number, row))
                     for row in value
                 ):
-                    raise PlanFormatError("plan field 'plan_twists' must hold 6-lists (v, w), one per joint")
+                    raise PlanFormatError("plan: field 'plan_twists' must hold 6-lists (v, w), one per joint")
                 value = tuple(tuple(float(x) for x in row) for row in value)
             elif isinstance(value, list):
                 value = tuple(value)

@@ -36,6 +36,7 @@ import numpy as np
 from subproblems import tolerances as tol
 from subproblems.angles import wrap_array
 from subproblems.fast import PI_SNAP
+from subproblems.plan_runtime import target_error
 
 SPECIAL = np.array([0.0, math.pi / 2, -math.pi / 2, math.pi])
 SAME_ANGLE = tol.VERIFY_SAME_ANGLE  # rad: a revolute value of a recovered sample (subproblems/tolerances.py)
@@ -166,15 +167,9 @@ def _singular(chain, q, free_cols, target: str = "pose") -> bool:
 
 
 def _errors(chain, target: str, Gs, G) -> np.ndarray:
-    """Relative errors of poses Gs against the sampled pose G: max(|dp| / size, |dR|_F) for the target."""
-    dp = np.linalg.norm(Gs[:, :3, 3] - G[:3, 3], axis=1) / chain.scale
-    if target == "position":
-        return dp
-    if target == "orientation":
-        return np.linalg.norm(Gs[:, :3, :3] - G[:3, :3], axis=(1, 2))
-    if target == "position+direction":
-        return np.maximum(dp, np.linalg.norm(Gs[:, :3, 2] - G[:3, 2], axis=1))
-    return np.maximum(dp, np.linalg.norm(Gs[:, :3, :3] - G[:3, :3], axis=(1, 2)))
+    """Relative errors of poses Gs against the sampled pose G: max(|dp| / size, |dR|_F) for the target
+    (the runtime's measure, ``plan_runtime.target_error``, over the size)."""
+    return target_error(Gs, np.asarray(G)[None], target, chain.scale) / chain.scale
 
 
 def _limit_checks(rows, kinds, lower, upper):

@@ -34,6 +34,7 @@ import numpy as np
 from subproblems import tolerances as tol
 from subproblems.angles import wrap, wrap_array, wrap_joints
 from subproblems.core import BatchResult, Solution
+from subproblems.screw import cross as _cross
 from subproblems.screw import twist_exp
 
 # Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
@@ -575,13 +576,6 @@ def _mv(R, v):
 
 def problem_scale_batch(tw, p, q) -> np.ndarray:
     return np.maximum(1.0, _largest_length_batch(tw, p, q))
-
-
-def _cross(a, b):
-    """``a x b`` over the last axis, written out (numpy's cross is slow on many small vectors)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _dot(a, b):

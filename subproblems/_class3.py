@@ -28,6 +28,7 @@ import numpy as np
 from subproblems import tolerances as tol
 from subproblems.angles import wrap, wrap_array
 from subproblems.core import SubproblemInputError
+from subproblems.screw import cross_tuple as cross
 
 # Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
 EXACT_TOL = tol.EXACT
@@ -41,10 +42,6 @@ TINY = tol.TINY
 
 def dot(a, b) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def cross(a, b) -> tuple[float, float, float]:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def sub(a, b) -> tuple[float, float, float]:

@@ -26,10 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from subproblems import newton as _newton
 from subproblems import tolerances
 from subproblems.angles import wrap_array
-from subproblems.plan_runtime import _cross
-from subproblems.screw import twist_exp_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
@@ -78,55 +77,17 @@ def homotopy_twists(twists0, twists1, s):
                     np.concatenate([v, d], axis=2))
 
 
-def _fk_jacobian(tw, full, home, A):
-    """Tool poses G (M, 4, 4) and space Jacobian (M, 6, dof) with per-row twists tw (M, n, 6) or one
-    set of twists (n, 6) for every row."""
-    M, n = full.shape
-    shared = tw.ndim == 2
-    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-    cols = np.zeros((M, 6, n))
-    for i in range(n):
-        R, t = G[:, :3, :3], G[:, :3, 3]
-        xi = tw[i] if shared else tw[:, i]
-        w = R @ xi[3:] if shared else np.einsum("mij,mj->mi", R, xi[:, 3:])
-        v = (R @ xi[:3] if shared else np.einsum("mij,mj->mi", R, xi[:, :3])) + _cross(t, w)
-        cols[:, :3, i], cols[:, 3:, i] = v, w
-        G = G @ twist_exp_batch(xi, full[:, i])
-    G = G @ home
-    p = G[:, :3, 3]
-    v, w = cols[:, :3, :], cols[:, 3:, :]
-    J = np.concatenate([v + _cross(np.swapaxes(w, 1, 2), p[:, None, :]).swapaxes(1, 2), w], axis=1)
-    return G, J @ A
-
-
-def _residual(G, goals, target, scale):
-    """Error vector (position, then rotation times the scale) of the rows' poses G toward goals."""
-    e_pos = goals[:, :3, 3] - G[:, :3, 3]
-    Rt, Rdt = np.swapaxes(G[:, :3, :3], 1, 2), np.swapaxes(goals[:, :3, :3], 1, 2)
-    e_rot = 0.5 * _cross(Rt, Rdt).sum(axis=1)
-    if target == "position":
-        return e_pos, slice(0, 3)
-    if target == "orientation":
-        return e_rot, slice(3, 6)
-    return np.concatenate([e_pos, e_rot], axis=1), slice(0, 6)
-
-
 def _newton_step(tw, Q, goals, robot, damping=1e-12):
-    """One damped Gauss-Newton step for every row: (new Q, step size, error before the step)."""
+    """One damped Gauss-Newton step for every row (subproblems/newton.py): (new Q, step size, error
+    before the step)."""
     A, b, home, target, hold, scale, unit = robot
-    G, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
-    e, rows = _residual(G, goals, target, scale)
-    J = J[:, rows, :]
-    if hold:
-        J[:, :, hold] = 0.0
+    G, J = _newton.tool_jacobian(tw, Q @ A.T + b, home, A)
+    e, rows = _newton.residual(G, goals, target)
     err = np.abs(e).max(axis=1)
     if target != "position":
         err = np.maximum(np.abs(e[:, :3]).max(axis=1) if target == "pose" else 0.0,
                          scale * np.abs(e[:, -3:]).max(axis=1))
-    col = np.maximum(np.linalg.norm(J, axis=1), 1e-300)
-    Js = J / col[:, None, :]
-    JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
-    dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
+    dq = _newton.gauss_newton_step(J[:, rows, :], e, hold, damping)
     return Q + dq, np.abs(dq / unit).max(axis=1), err
 
 
@@ -220,10 +181,10 @@ def _weakest(Q, tw, robot):
     """Smallest singular value of the Jacobian (rows of the target; lengths relative to the size,
     free joints' columns left out) and its joint direction (in joint units, largest entry 1)."""
     A, b, home, target, hold, scale, unit = robot
-    _, J = _fk_jacobian(tw, Q @ A.T + b, home, A)
+    _, J = _newton.tool_jacobian(tw, Q @ A.T + b, home, A)
     J = J.copy()
     J[:, :3, :] /= scale  # lengths relative to the size, angles as they are
-    J = J[:, {"position": slice(0, 3), "orientation": slice(3, 6)}.get(target, slice(0, 6)), :]
+    J = J[:, _newton.TARGET_ROWS.get(target, _newton.ALL_ROWS), :]
     keep = [c for c in range(J.shape[2]) if c not in hold]
     _, sv, Vt = np.linalg.svd(J[:, :, keep] * unit[keep])
     n = np.zeros((len(Q), J.shape[2]))

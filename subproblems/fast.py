@@ -47,6 +47,7 @@ import numpy as np
 
 from subproblems import tolerances
 from subproblems.angles import wrap, wrap_array
+from subproblems.screw import cross_tuple as cross  # on 3-tuples, as the helpers below
 
 TANGENT_ROOT, FAMILY, DEFER, EMPTY = 1, 2, 4, 8
 NEAR = tolerances.FAST_DEGENERATE  # tolerances in subproblems/tolerances.py (docs/design.md section 10)
@@ -94,10 +95,6 @@ ARRAY = SimpleNamespace(
 
 def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 def sub(a, b):

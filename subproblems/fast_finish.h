@@ -68,7 +68,7 @@ typedef struct {
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
- * angular) of the true robot at returned joint values q: the C port of plan_runtime._tool_jacobian. */
+ * angular) of the true robot at returned joint values q: the C port of subproblems/newton.py tool_jacobian. */
 static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, double *J) {
     const int dof = rb->dof;
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};

@@ -84,6 +84,7 @@ import numpy as np
 
 from subproblems import tolerances as _tol
 from subproblems.core import SubproblemError, SubproblemInputError
+from subproblems.screw import cross as _cross
 from subproblems.screw import inverse_transform as _inv
 
 __all__ = ["General6", "General6Error", "Batch", "prepare", "solve", "solve_batch", "MAX_SOLUTIONS"]
@@ -130,13 +131,6 @@ class Batch:
 
 
 # ----------------------------------------------------------------------------------------------- rigid
-def _cross(a, b):
-    """a x b over the last axis (broadcast); cheaper than numpy.cross on small stacks."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
 def _rodrigues(w, th):
     """Rotations (..., 3, 3) about unit axes w (..., 3) by th (...): c I + s [w] + (1 - c) w w^T."""
     w = np.asarray(w, dtype=float)

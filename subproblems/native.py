@@ -91,6 +91,15 @@ def _cache_directory() -> Path:
     return directory
 
 
+def replace_atomically(target: Path, fill) -> None:
+    """Write ``target`` through a partial file beside it (``fill(partial)`` writes that), then rename:
+    atomic on one file system, so another process writing the same cache file at the same time leaves
+    one whole file and nobody reads a half-written one.  OSError passes to the caller."""
+    partial = target.with_name(f".{target.name}.{os.getpid()}")
+    fill(partial)
+    os.replace(partial, target)
+
+
 def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
     """Compile ``text`` into the shared library ``target`` (kept when it exists); False with
     :data:`last_error` set when the compiler fails."""
@@ -110,12 +119,9 @@ def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
         if done.returncode != 0:
             last_error = f"{cc} failed: {done.stderr.strip()[:2000]}"
             return False
-        # Another process may build the same library at the same time: copy next to the target, then
-        # rename (atomic on one file system), so nobody loads a half-written file.
-        partial = target.with_name(f".{target.name}.{os.getpid()}")
+        # another process may build the same library at the same time
         try:
-            shutil.copyfile(lib, partial)
-            os.replace(partial, target)
+            replace_atomically(target, lambda partial: shutil.copyfile(lib, partial))
         except OSError as exc:
             last_error = (f"cannot write the C build to {target.parent} ({exc}); "
                           "set IKC_CACHE to a writable one")

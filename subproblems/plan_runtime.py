@@ -38,14 +38,16 @@ import math
 
 import numpy as np
 
+from subproblems import newton as _newton
 from subproblems._class2 import independent_paths
 from subproblems.angles import wrap_joints
 from subproblems.core import solve_batch
 from subproblems.fast import angle_distance, represent
+from subproblems.screw import cross as _cross
 from subproblems.screw import fk_batch, inverse_transform, twist_exp_batch
-from subproblems.tolerances import DUPLICATE_ROWS, NEWTON_DAMPING, TINY
+from subproblems.tolerances import DUPLICATE_ROWS
 
-__all__ = ["run_plan", "finish", "fk_batch", "InvalidTargetError", "InvalidFreeValueError"]
+__all__ = ["run_plan", "finish", "fk_batch", "target_error", "InvalidTargetError", "InvalidFreeValueError"]
 
 
 class InvalidTargetError(ValueError):
@@ -58,13 +60,6 @@ class InvalidTargetError(ValueError):
 
 class InvalidFreeValueError(ValueError):
     """Free joint values that are NaN or infinite, or not one per free joint."""
-
-
-def _cross(a, b) -> np.ndarray:
-    """Row-wise cross product of (..., 3) arrays (numpy's cross is slow on small arrays)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _adjoint_apply(G, xi) -> np.ndarray:
@@ -325,6 +320,27 @@ def pose_error(G, T, scale: float) -> np.ndarray:
     return np.maximum(dp, scale * dR)
 
 
+def target_error(G, T, target: str, scale: float) -> np.ndarray:
+    """Per-row error of tool poses G (M, 4, 4) against targets T (M or 1, 4, 4) in what the ``target``
+    kind constrains, in lengths (rotations scaled by the robot's size): the position error, the
+    rotation error (Frobenius norm), for ``position+direction`` the tool origin and its z axis (the roll
+    is free), else :func:`pose_error`.  The one error measure of the targets: the runtime's check,
+    ``verify`` (over the size) and the motion paths use it; ``error <= tol * scale`` is the contract.
+
+    >>> G = np.eye(4)[None]; T = np.eye(4)[None].copy(); T[0, 0, 3] = 1e-3
+    >>> target_error(G, T, "orientation", 2.0).tolist(), target_error(G, T, "pose", 2.0).tolist()
+    ([0.0], [0.001])
+    """
+    if target == "position":
+        return np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
+    if target == "orientation":
+        return scale * np.linalg.norm(G[:, :3, :3] - T[:, :3, :3], axis=(1, 2))
+    if target == "position+direction":
+        dp = np.linalg.norm(G[:, :3, 3] - T[:, :3, 3], axis=1)
+        return np.maximum(dp, scale * np.linalg.norm(G[:, :3, 2] - T[:, :3, 2], axis=1))
+    return pose_error(G, T, scale)
+
+
 def within_limits(Q, kinds, lower, upper, eps=None) -> np.ndarray:
     """Rows of Q (M, dof) that have a representative inside the limits (:func:`subproblems.fast.represent`:
     a revolute value or its 2 pi alias, or a value within ``fast.LIMIT_EPS`` of a limit, which the finish
@@ -423,24 +439,6 @@ def finish(
     return Q, valid, LS, RES, CONT
 
 
-def _tool_jacobian(twists, TH, home, A):
-    """Space Jacobian of the tool (position of the tool origin, then rotation) w.r.t. independent joints.
-
-    Returns (G, J) with G the tool poses (M, 4, 4) and J (M, 6, dof).
-    """
-    M, n = TH.shape
-    G = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-    cols = np.zeros((M, 6, n))
-    for i in range(n):
-        cols[:, :, i] = _adjoint_apply(G, twists[i])
-        G = G @ twist_exp_batch(twists[i], TH[:, i])
-    G = G @ np.asarray(home, dtype=float)
-    p = G[:, :3, 3]
-    v, w = cols[:, :3, :], cols[:, 3:, :]
-    J = np.concatenate([v + np.cross(w, p[:, :, None], axis=1), w], axis=1)
-    return G, J @ A
-
-
 def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4, hold=()):
     """Damped Gauss-Newton on the independent joints of every row toward its target (M, 4, 4).
 
@@ -449,29 +447,11 @@ def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters
     ``independent`` of joints that keep their values (free joints: the caller chose them).
     """
     Q = TH[:, list(independent)].copy()
-    hold = list(hold)
-    for _ in range(iters):
-        full = Q @ A.T + b
-        G, J = _tool_jacobian(twists, full, home, A)
-        if hold:
-            J[:, :, hold] = 0.0  # a zero column gets a zero step (the damping keeps the system regular)
-        e_pos = targets[:, :3, 3] - G[:, :3, 3]
-        if target == "position":
-            e, J = e_pos, J[:, :3, :]
-        else:
-            R, Rd = G[:, :3, :3], targets[:, :3, :3]
-            e_rot = 0.5 * _cross(np.swapaxes(R, 1, 2), np.swapaxes(Rd, 1, 2)).sum(axis=1)
-            if target == "orientation":
-                e, J = e_rot, J[:, 3:, :]
-            else:
-                e = np.concatenate([e_pos, e_rot], axis=1)
-        # Columns scaled to unit norm (lengths and angles mix), then a whisper of damping so that a
-        # singular direction neither blows the step up nor stalls the others.
-        col = np.maximum(np.linalg.norm(J, axis=1), TINY)
-        Js = J / col[:, None, :]
-        JtJ = np.einsum("mki,mkj->mij", Js, Js) + NEWTON_DAMPING * np.eye(Js.shape[2])
-        dq = np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col
-        Q = Q + dq
+    twists = np.asarray(twists, dtype=float)
+    for _ in range(iters):  # the step: subproblems/newton.py
+        G, J = _newton.tool_jacobian(twists, Q @ A.T + b, home, A)
+        e, rows = _newton.residual(G, targets, target)
+        Q = Q + _newton.gauss_newton_step(J[:, rows, :], e, hold)
     return Q @ A.T + b
 
 

@@ -39,6 +39,8 @@ __all__ = [
     "inverse_transform",
     "apply",
     "rigid_residual",
+    "cross",
+    "cross_tuple",
 ]
 
 
@@ -232,6 +234,26 @@ def transform_twist(g, xi) -> np.ndarray:
     array([1., 2., 3., 0., 0., 0.])
     """
     return adjoint(g) @ np.asarray(xi, dtype=float)
+
+
+def cross_tuple(a, b) -> tuple:
+    """``a x b`` of two 3-sequences, component by component: floats, arrays of components or sympy
+    expressions alike (the fast kernels' 3-tuples).  The one cross product formula of the package.
+
+    >>> cross_tuple((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    (0.0, 0.0, 1.0)
+    """
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def cross(a, b) -> np.ndarray:
+    """``a x b`` over the last axis of (..., 3) arrays, broadcast (numpy's cross is slow on small stacks).
+
+    >>> cross(np.array([[1.0, 0, 0]]), np.array([0.0, 1, 0])).tolist()
+    [[0.0, 0.0, 1.0]]
+    """
+    columns = cross_tuple((a[..., 0], a[..., 1], a[..., 2]), (b[..., 0], b[..., 1], b[..., 2]))
+    return np.stack(columns, axis=-1)
 
 
 def apply(g, p) -> np.ndarray:

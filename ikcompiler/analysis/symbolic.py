@@ -33,6 +33,7 @@ import sympy as sp
 from sympy import QQ
 
 from ikcompiler.errors import IkcError
+from subproblems.screw import cross_tuple
 
 _IRRATIONALS = (sp.sqrt(2), sp.sqrt(3), sp.sqrt(6))
 
@@ -144,7 +145,7 @@ class SymbolicChain:
 
 
 def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    return list(cross_tuple(a, b))
 
 
 def joint_symbols(chain) -> tuple[sp.Symbol, ...]:

@@ -266,14 +266,12 @@ def native_source(namespace) -> str | None:
 
 
 def _store(path, text: str) -> None:
-    """Write the cache file next to its place, then rename (another process may write it too)."""
-    import os
+    """Write the cache file (another process may write it too: ``native.replace_atomically``)."""
+    from subproblems import native
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.name}.{os.getpid()}")
-        partial.write_text(text)
-        os.replace(partial, path)
+        native.replace_atomically(path, lambda partial: partial.write_text(text))
     except OSError:
         pass  # an unwritable cache costs a reprint next time, nothing else
 

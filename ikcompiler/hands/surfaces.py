@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ikcompiler.errors import IkcError
+from subproblems.screw import cross_tuple
 
 
 class ContactError(IkcError, ValueError):
@@ -244,7 +245,7 @@ class Line(Surface):
 
 def _cross(a, b) -> np.ndarray:
     """3-vector cross product (np.cross costs ~30 us a call: it dominated a run)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    return np.array(cross_tuple(a, b))
 
 
 def _inv2(M: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ikcompiler.errors import MotionError
 from ikcompiler.motion.poses import interpolate, rotation_log
+from subproblems import plan_runtime as _rt
 from subproblems import select
 
 __all__ = ["Event", "Path", "follow", "continue_branch", "module_target"]
@@ -94,16 +95,10 @@ def module_target(module, T) -> np.ndarray:
 
 
 def target_error(module, G, T) -> float:
-    """How far pose G misses waypoint T, in what the module's TARGET constrains (length units)."""
-    dp = float(np.linalg.norm(G[:3, 3] - T[:3, 3]))
-    dR = module.SCALE * float(np.linalg.norm(G[:3, :3] - T[:3, :3]))
-    if module.TARGET == "position":
-        return dp
-    if module.TARGET == "orientation":
-        return dR
-    if module.TARGET == "position+direction":
-        return max(dp, module.SCALE * float(np.linalg.norm(G[:3, 2] - T[:3, 2])))
-    return max(dp, dR)
+    """How far pose G misses waypoint T, in what the module's TARGET constrains (length units): the
+    runtime's measure (``plan_runtime.target_error``)."""
+    G, T = np.asarray(G, dtype=float)[None], np.asarray(T, dtype=float)[None]
+    return float(_rt.target_error(G, T, module.TARGET, module.SCALE)[0])
 
 
 def _jump_limits(module, max_jump) -> np.ndarray:

@@ -113,12 +113,7 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # At a double root Newton converges only linearly (the residual falls about 4x a step): rows
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
-        for _ in range(5):
-            if not near.any():
-                break
-            TH[near] = robot.newton(TH[near], goals[owner[near]], 3)
-            err[near] = robot.error(_rt.fk_batch(robot.twists, TH[near], robot.home), goals[owner[near]])
-            near &= err > FINISH_MARGIN * exact
+        TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None

@@ -86,14 +86,7 @@ class Robot:
 
     def error(self, G, goals) -> np.ndarray:
         """How far tool poses G miss their goals, in lengths (rotation scaled by the robot's size)."""
-        if self.target == "position":
-            return np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-        if self.target == "orientation":  # Frobenius norm, scaled to lengths like the pose error
-            return self.scale * np.linalg.norm(G[:, :3, :3] - goals[:, :3, :3], axis=(1, 2))
-        if self.target == "position+direction":  # the tool origin and its z axis; the roll is free
-            dp = np.linalg.norm(G[:, :3, 3] - goals[:, :3, 3], axis=1)
-            return np.maximum(dp, self.scale * np.linalg.norm(G[:, :3, 2] - goals[:, :3, 2], axis=1))
-        return _rt.pose_error(G, goals, self.scale)
+        return _rt.target_error(G, goals, self.target, self.scale)
 
     def fk(self, q) -> np.ndarray:
         """Tool pose (4x4) for joint values q in joint_names order (exactly that many)."""
@@ -104,20 +97,24 @@ class Robot:
         q = np.concatenate([q, np.zeros(len(self.vary) - n)]).reshape(1, -1)  # virtual joints at 0
         return _rt.fk_batch(self.twists, q @ self.A.T + self.B, self.home)[0]
 
-    def newton_until_exact(self, TH, goals, iters: int, margin: float = _tol.CONTINUUM_MARGIN) -> np.ndarray:
-        """Newton steps as :meth:`newton`, up to ``iters``, in rounds of 4 on the rows still missing by
-        more than ``margin`` of the precision: a row already exact takes none (a self-motion's
-        representative usually is: then 60 steps on it only cost time, about 5 ms a pose)."""
+    def newton_until_exact(self, TH, goals, iters: int, margin: float = _tol.CONTINUUM_MARGIN, *,
+                           rows=None, per_round: int = 4) -> np.ndarray:
+        """Newton steps as :meth:`newton`, up to ``iters``, in rounds of ``per_round`` on the rows still
+        missing by more than ``margin`` of the precision: a row already exact takes none (a self-motion's
+        representative usually is: then 60 steps on it only cost time, about 5 ms a pose).  ``rows``
+        (a mask): the rows to work on, instead of all those missing by more than the margin."""
         TH = np.array(TH, dtype=float)
         stop = margin * self.tol * self.scale
-        active = self.error(_rt.fk_batch(self.twists, np.nan_to_num(TH), self.home), goals) > stop
+        if rows is None:
+            rows = self.error(_rt.fk_batch(self.twists, np.nan_to_num(TH), self.home), goals) > stop
+        active = np.array(rows, dtype=bool)
         done = 0
         while active.any() and done < iters:
-            k = min(4, iters - done)
+            k = min(per_round, iters - done)
             TH[active] = self.newton(TH[active], goals[active], k)
             done += k
             err = self.error(_rt.fk_batch(self.twists, TH[active], self.home), goals[active])
-            active[np.nonzero(active)[0][err <= stop]] = False
+            active[np.nonzero(active)[0][~(err > stop)]] = False  # on, or given up (NaN)
         return TH
 
     def newton(self, TH, goals, iters: int, hold=None) -> np.ndarray:

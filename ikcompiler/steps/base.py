@@ -57,6 +57,33 @@ def fits_annotation(annotation: str, value: Any) -> bool:
     return True
 
 
+def check_fields(cls: type, data: Mapping, what: str, *, header=(), by_caller=(), null_unset=False) -> dict:
+    """Check the plain-dict form ``data`` of the dataclass ``cls`` (a step or a plan) field by field and
+    return ``cls``'s fields by name.  No field beyond those and the ``header`` keys, none missing that
+    has no default, each value of the outer shape its annotation asks for (the fields ``by_caller`` are
+    checked by the caller); with ``null_unset`` a null value is refused as such (the dict form leaves an
+    unset field out).  ``what`` names the object in the typed errors ("plan", "step 'O'")."""
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - set(fields) - set(header))
+    if unknown:
+        raise PlanFormatError(f"{what}: unknown field(s) {', '.join(unknown)}")
+    missing = [
+        n
+        for n, f in fields.items()
+        if n not in data and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    ]
+    if missing:
+        raise PlanFormatError(f"{what}: missing field(s) {', '.join(missing)}")
+    for name, value in data.items():
+        if name not in fields or name in by_caller:
+            continue
+        if null_unset and value is None:
+            raise PlanFormatError(f"{what}: field {name!r} is null (an unset field is left out)")
+        if not fits_annotation(str(fields[name].type), value):
+            raise PlanFormatError(f"{what}: field {name!r} must be {fields[name].type}, got {value!r}")
+    return fields
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class Step(Mapping):
     """One step of a plan: a canonical subproblem (``code``) and the derivation in words (``rule``).
@@ -120,26 +147,8 @@ class Step(Mapping):
         target = step_class(kind) if cls is Step else cls
         if kind != target.kind:
             raise PlanFormatError(f"step kind {kind!r} given to the {target.kind!r} step class")
-        fields = {f.name: f for f in dataclasses.fields(target)}
-        unknown = sorted(set(data) - set(fields) - {"kind"})
-        if unknown:
-            raise PlanFormatError(f"step {kind!r}: unknown field(s) {', '.join(unknown)}")
-        missing = [
-            n
-            for n, f in fields.items()
-            if n not in data and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-        ]
-        if missing:
-            raise PlanFormatError(f"step {kind!r}: missing field(s) {', '.join(missing)}")
-        values = {k: v for k, v in data.items() if k != "kind"}
-        for name, value in values.items():
-            if value is None:  # the dict form leaves an unset field out; null is no value of any field
-                raise PlanFormatError(f"step {kind!r}: field {name!r} is null (an unset field is left out)")
-            if not fits_annotation(str(fields[name].type), value):
-                raise PlanFormatError(
-                    f"step {kind!r}: field {name!r} must be {fields[name].type}, got {value!r}"
-                )
-        return target(**values)
+        check_fields(target, data, f"step {kind!r}", header=("kind",), null_unset=True)
+        return target(**{k: v for k, v in data.items() if k != "kind"})
 
     # -- read-only Mapping view (transition; see the module docstring) ---------------------------------
     def _present(self) -> list[str]:
