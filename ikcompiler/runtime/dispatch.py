@@ -58,10 +58,11 @@ class Solver:
         return self._native[0]
 
     def general6_native(self) -> bool:
-        """A general-6r module whose C elimination is its fast path (subproblems/general6.h): the
-        Python general6 stays the reference for the targets the C hands back."""
+        """A general-6r module: no Python fast chain, but a native one, the C elimination
+        (subproblems/general6.h, switched by NATIVE); the Python general6 stays the reference for the
+        targets the C hands back."""
         r = self.robot
-        return bool(self._ns.get("FAST_PATH")) and r.method == "general-6r" and r.general6 is not None
+        return r.method == "general-6r" and r.general6 is not None
 
     def general6(self):
         if not self._general6:
