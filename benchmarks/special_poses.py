@@ -11,7 +11,8 @@ Memory: ``solve_batch`` of 100,000 random poses in a fresh subprocess per robot;
 set (``resource.getrusage`` ``ru_maxrss``) before and after the batch (goal: within 2 GB).
 
 ``python benchmarks/special_poses.py`` writes ``benchmarks/results/special_poses.md``;
-``--robots NAME ...`` a subset, ``--batch N`` another batch size, ``--no-memory`` timing only.
+``--robots NAME ...`` a subset, ``--batch N`` another batch size, ``--no-memory`` timing only;
+``--causes`` counts instead why the C finish hands each special pose back (``special_causes.md``).
 """
 
 from __future__ import annotations
@@ -109,6 +110,52 @@ def time_robot(name: str) -> dict:
     return row
 
 
+REASONS = {0: "settled", 1: "defer", 2: "nan", 3: "clamped", 4: "reps", 5: "family", 6: "rotation",
+           7: "search", 8: "snapped"}  # subproblems/fast_finish.h IKC_WHY_*
+
+
+def causes_robot(name: str) -> dict:
+    """Why the C finish hands each special (and taught) pose back: {cause: count} per pose set, the
+    cause of the main chain and, after '+', of the alternative chain (fast_finish.h IKC_WHY_*)."""
+    _, module, free_cols = _setup(name)
+    native = module._native_chain()
+    special, random = _joint_sets(module, np.random.default_rng(7), POSES)
+    taught = _taught(module, np.random.default_rng(8), POSES, random)
+    out = {"robot": name}
+    for label, Q in (("special", special), ("taught", taught)):
+        counts: dict[str, int] = {}
+        T = _targets(module, Q)
+        for i in range(len(T)):
+            if native is None:
+                cause = "no C"
+            elif native.one(T[i], tuple(Q[i, free_cols]), True) is not None:
+                cause = "settled"
+            else:
+                why = native.last_reason()
+                cause = "unknown" if why is None else REASONS.get(why % 16, str(why % 16))
+                if why is not None and why >= 16:
+                    cause += "+" + REASONS.get(why // 16, str(why // 16))
+            counts[cause] = counts.get(cause, 0) + 1
+        out[label] = counts
+    return out
+
+
+def _causes_table(rows) -> str:
+    lines = ["# Why the C finish hands special poses back", "",
+             "Written by `python benchmarks/special_poses.py --causes`: for the 300 special and 300 taught "
+             "poses of each robot (the same poses as `special_poses.md`), the C finish's cause "
+             "(`subproblems/fast_finish.h` `IKC_WHY_*`) for each pose it hands back to Python; "
+             "`a+b`: main chain a, alternative chain b.", "",
+             "| robot | set | settled in C | handed back, by cause |", "|---|---|---:|---|"]
+    for r in rows:
+        for label in ("special", "taught"):
+            c = dict(r.get(label, {}))
+            settled = c.pop("settled", 0)
+            rest = ", ".join(f"{k} {v}" for k, v in sorted(c.items(), key=lambda kv: -kv[1])) or "none"
+            lines.append(f"| {r['robot']} | {label} | {settled} | {rest} |")
+    return "\n".join(lines) + "\n"
+
+
 def memory_robot(name: str, batch: int) -> dict:
     """Peak RSS (MB) before and after solve_batch of ``batch`` random poses (run in its own process)."""
     import resource
@@ -184,6 +231,8 @@ def main(argv=None) -> int:
     ap.add_argument("--robots", nargs="*")
     ap.add_argument("--batch", type=int, default=100_000)
     ap.add_argument("--no-memory", action="store_true")
+    ap.add_argument("--causes", action="store_true", help="count why poses are handed back instead")
+    ap.add_argument("--causes-one", help=argparse.SUPPRESS)
     ap.add_argument("--time-one", help=argparse.SUPPRESS)
     ap.add_argument("--memory-one", help=argparse.SUPPRESS)
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "special_poses.md"))
@@ -191,11 +240,25 @@ def main(argv=None) -> int:
     if args.time_one:
         print(json.dumps(time_robot(args.time_one)))
         return 0
+    if args.causes_one:
+        print(json.dumps(causes_robot(args.causes_one)))
+        return 0
     if args.memory_one:
         print(json.dumps(memory_robot(args.memory_one, args.batch)))
         return 0
     from ikcompiler.inputs.zoo import zoo_names
 
+    if args.causes:
+        rows = []
+        for name in args.robots or zoo_names():
+            rows.append(_subprocess(["--causes-one", name]) | {"robot": name})
+            print(json.dumps(rows[-1]), flush=True)
+        out = Path(args.out)
+        if args.out == ap.get_default("out"):
+            out = out.with_name("special_causes.md")
+        out.write_text(_causes_table(rows))
+        print(f"wrote {out}")
+        return 0
     rows, mem = [], {}
     for name in args.robots or zoo_names():
         row = _subprocess(["--time-one", name])

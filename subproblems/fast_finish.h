@@ -6,7 +6,10 @@
  * its loop nest (joint values, pose error, flag bits), and an `ikc_robot` with the module's settings;
  * the entry points it exports call the functions below.  A target this code cannot settle alone (a
  * leaf flagged DEFER, NaN, a self-motion none of whose representatives can be completed inside the
- * limits) returns IKC_PYTHON: the Python module then runs its own path for that target. */
+ * limits and that is no straight line alone in joint space) returns IKC_PYTHON: the Python module then
+ * runs its own path for that target.  The specification of this finish is subproblems/settle.py (the
+ * same statements in Python; tests/test_finish_spec.py holds the two to the same rows bit for bit):
+ * a change here is made there too (docs/design.md section 6). */
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -38,6 +41,27 @@ typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double rep, do
 #define IKC_INVALID (-2)      /* not a finite rigid transform: the Python path raises the error */
 #define IKC_FAMILY_MISS (-3)  /* a self-motion whose representatives all miss: try others */
 #define IKC_REPS 16           /* representatives tried: rep = k pi / 8, k = 1 .. 8 and -1 .. -7 */
+
+/* Why the last target this thread handed back (IKC_PYTHON) was handed back: one of IKC_WHY_*, of the
+ * main chain and (times IKC_WHY_ALT) of the alternative chain; 0 when it was settled.  Read by
+ * benchmarks/special_poses.py through ikc_last_reason (docs/design.md section 6). */
+#define IKC_WHY_DEFER 1       /* a leaf near a degenerate geometry (DEFER) */
+#define IKC_WHY_NAN 2         /* a leaf's values or error NaN, or NaN after Newton steps */
+#define IKC_WHY_CLAMPED 3     /* a value clamped onto a limit */
+#define IKC_WHY_REPS 4        /* the chain's leaf count changed with the representative */
+#define IKC_WHY_FAMILY 5      /* a self-motion with no exact representative inside the limits */
+#define IKC_WHY_ROTATION 6    /* a target rotation orthonormal only to 1e-6 */
+#define IKC_WHY_SEARCH 7      /* the search fallback could not run or finish */
+#define IKC_WHY_SNAPPED 8     /* a snapped plan's correction is not certain */
+#define IKC_WHY_ALT 16
+static __thread int ikc_why;
+
+static int ikc_last_reason(void) { return ikc_why; }
+
+static int ikc_hand_back(int why) {
+    ikc_why = why;
+    return IKC_PYTHON;
+}
 
 typedef struct {
     int dof, nfree, leaves, slots;
@@ -184,7 +208,8 @@ static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
  * `guarded`: at a doubly singular configuration the plain step runs off along the null directions.
  * Unguarded, every step is taken (far seeds of the search may need to climb before they descend).  At most `iters`
  * steps, fewer once the error is far inside the exact tolerance.  Returns the new pose error. */
-static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded) {
+static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
+                               const int *held) {
     const int dof = rb->dof;
     const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
     double G[12], J[6 * dof], trial[dof], G2[12], J2[6 * dof];
@@ -209,7 +234,8 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
             double s = 0.0;
             for (int r = r0; r < r1; r++) s += J[r * dof + j] * J[r * dof + j];
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
-            for (int r = r0; r < r1; r++) Js[r * dof + j] = rb->is_free[j] ? 0.0 : J[r * dof + j] / col[j];
+            const int hold = rb->is_free[j] || (held && held[j]);
+            for (int r = r0; r < r1; r++) Js[r * dof + j] = hold ? 0.0 : J[r * dof + j] / col[j];
         }
         for (int a = 0; a < dof; a++) {
             for (int c = 0; c < dof; c++) {
@@ -229,7 +255,8 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
                 M[a][dof] = Jte[a];
             }
             if (!ikc_solve_linear(dof, M, dq)) return now;
-            for (int j = 0; j < dof; j++) trial[j] = q[j] + (rb->is_free[j] ? 0.0 : dq[j] / col[j]);
+            for (int j = 0; j < dof; j++)
+                trial[j] = q[j] + ((rb->is_free[j] || (held && held[j])) ? 0.0 : dq[j] / col[j]);
             ikc_fk_jacobian(rb, trial, G2, J2);
             double next = ikc_pose_error(rb, G2, g);
             if (next < now || !guarded) {  /* accept; trust the linear model more next time */
@@ -250,7 +277,7 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
 
 /* Newton steps that never raise the error (near misses, self-motion representatives). */
 static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
-    return ikc_newton_steps(rb, g, q, iters, 1);
+    return ikc_newton_steps(rb, g, q, iters, 1, NULL);
 }
 
 /* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
@@ -269,12 +296,14 @@ static double ikc_wrap(double x) {
 #define IKC_ADJUSTED 1      /* a value snapped or clamped: the row's error must be measured again */
 #define IKC_OUTSIDE 2
 #define IKC_CLAMPED 3       /* a value clamped onto a limit: the other joints need Newton steps */
+#define IKC_CLAMPED_NEWTON 3  /* Newton steps with a clamped joint held (reference.clamped_onto_limits) */
 
 /* fast.represent_one: joint values q (in place) as returned -- a revolute value as its representative in
  * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status. */
-static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
+static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
     int status = IKC_INSIDE;
     for (int j = 0; j < rb->dof; j++) {
+        if (clamped) clamped[j] = 0;
         double x = q[j];
         const int rev = rb->revolute[j];
         if (rev) {
@@ -296,6 +325,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
                     x = c[k] < lo ? lo : (c[k] > hi ? hi : c[k]);
                     found = 1;
                     status = IKC_CLAMPED;
+                    if (clamped) clamped[j] = 1;
                 }
             if (!found) return IKC_OUTSIDE;
         }
@@ -308,7 +338,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits) {
 static int ikc_row_inside(const ikc_robot *rb, const double *q) {
     double w[rb->dof];
     for (int j = 0; j < rb->dof; j++) w[j] = q[j];
-    return ikc_represent(rb, w, 1) != IKC_OUTSIDE;
+    return ikc_represent(rb, w, 1, NULL) != IKC_OUTSIDE;
 }
 
 /* The pose error of returned joint values q against goal g, measured on the true robot. */
@@ -336,20 +366,31 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         int flag = F[k];
         if (flag & IKC_EMPTY) continue;
         err[k] = E[k];
-        if ((flag & IKC_DEFER) || err[k] != err[k]) return IKC_PYTHON;
+        if (flag & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
+        if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
             /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
             err[k] = ikc_newton(rb, g, w, 15);
-            if (err[k] != err[k]) return IKC_PYTHON;
+            if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
         for (int j = 0; j < dof; j++)
-            if (w[j] != w[j]) return IKC_PYTHON;
-        const int status = ikc_represent(rb, w, limits), ok = status != IKC_OUTSIDE;
-        if (status == IKC_CLAMPED) return IKC_PYTHON;  /* Newton with the clamped joint held: Python */
+            if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
+        int held[dof], status = ikc_represent(rb, w, limits, held);
+        if (status == IKC_CLAMPED) {
+            /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
+             * the other joints with it held, as reference.clamped_onto_limits; then the row as returned */
+            ikc_newton_steps(rb, g, w, IKC_CLAMPED_NEWTON, 1, held);
+            for (int j = 0; j < dof; j++)
+                if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
+            status = ikc_represent(rb, w, limits, held);
+            if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* again: Python */
+            if (status != IKC_OUTSIDE) status = IKC_ADJUSTED;
+        }
+        const int ok = status != IKC_OUTSIDE;
         if (status == IKC_ADJUSTED) err[k] = ikc_measure(rb, g, w);  /* the values as returned */
         inexact[k] = !(err[k] <= exact_tol);
         if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
@@ -438,13 +479,242 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
     return 1;
 }
 
+
+/* ---- self-motions that are straight lines (docs/design.md section 6, "Self-motions in C") ----
+ * A family leaf whose joint values, over the chain's representatives rep, are q(rep) = q(0) + s rep
+ * (modulo 2 pi) with integer slopes s on the revolute joints and none on the prismatic ones is a closed
+ * line in joint space covered once by rep in (-pi, pi].  Where the Jacobian's null space is exactly one
+ * direction along it (the second smallest singular value clear of 0), the solution set near each of
+ * its points is that line alone, so the line is the whole component: where it misses the limit box,
+ * no in-limit representative of this self-motion exists (the leaf is dropped); where it meets the
+ * box, the middle of the widest in-limit stretch of rep is a representative inside the limits. */
+#define IKC_LINE_FIT 1e-9       /* a representative's values off the line by more: not a line */
+#define IKC_LINE_RANK 1e-5      /* second smallest singular value (size-free) below this: not alone */
+#define IKC_LINE_POINTS 3       /* points of the line where the rank is checked: t = 0, +-2 pi / 3 */
+
+/* The size-free J^T J at q (rows of the target, lengths over the size, prismatic columns times the size)
+ * over the m returned joints that are not free (their positions in col), diagonalised by cyclic
+ * Jacobi rotations: its eigenvalues ascending in lam[0..m), and with V (m x m, row-major) their unit
+ * eigenvectors as columns.  Returns m, or 0 when there are fewer than 2 such joints or they outnumber
+ * the target's rows (no isolated direction to show). */
+static int ikc_jtj_eigen(const ikc_robot *rb, const double *q, int *col, double *lam, double *V) {
+    const int dof = rb->dof;
+    double G[12], J[6 * dof];
+    ikc_fk_jacobian(rb, q, G, J);
+    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0;
+    for (int j = 0; j < dof; j++)
+        if (!rb->is_free[j]) col[m++] = j;
+    if (m < 2 || m > r1 - r0) return 0;
+    double S[m][m], U[m][m];
+    for (int a = 0; a < m; a++)
+        for (int c = 0; c < m; c++) {
+            double t = 0.0;
+            for (int r = r0; r < r1; r++) {
+                double f = r < 3 ? 1.0 / (rb->scale * rb->scale) : 1.0;
+                t += f * J[r * dof + col[a]] * J[r * dof + col[c]];
+            }
+            double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
+            S[a][c] = t * ua * uc;
+            U[a][c] = a == c ? 1.0 : 0.0;
+        }
+    for (int sweep = 0; sweep < 30; sweep++) {  /* cyclic Jacobi: S -> diagonal, U -> eigenvectors */
+        double off = 0.0, diag = 0.0;
+        for (int a = 0; a < m; a++) {
+            diag += S[a][a] * S[a][a];
+            for (int c = a + 1; c < m; c++) off += S[a][c] * S[a][c];
+        }
+        if (off <= 1e-34 * diag) break;
+        for (int a = 0; a < m; a++)
+            for (int c = a + 1; c < m; c++) {
+                if (S[a][c] == 0.0) continue;
+                double theta = (S[c][c] - S[a][a]) / (2.0 * S[a][c]);
+                double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1.0));
+                double cs = 1.0 / sqrt(t * t + 1.0), sn = t * cs;
+                for (int k = 0; k < m; k++) {  /* S <- S R, U <- U R (columns a, c) */
+                    double x = S[k][a], y = S[k][c];
+                    S[k][a] = cs * x - sn * y;
+                    S[k][c] = sn * x + cs * y;
+                    x = U[k][a], y = U[k][c];
+                    U[k][a] = cs * x - sn * y;
+                    U[k][c] = sn * x + cs * y;
+                }
+                for (int k = 0; k < m; k++) {  /* S <- R^T S (rows a, c) */
+                    double x = S[a][k], y = S[c][k];
+                    S[a][k] = cs * x - sn * y;
+                    S[c][k] = sn * x + cs * y;
+                }
+            }
+    }
+    int order[m];
+    for (int a = 0; a < m; a++) order[a] = a;
+    for (int a = 1; a < m; a++)  /* ascending eigenvalues (insertion sort, stable) */
+        for (int b = a; b > 0 && S[order[b - 1]][order[b - 1]] > S[order[b]][order[b]]; b--) {
+            int tmp = order[b];
+            order[b] = order[b - 1];
+            order[b - 1] = tmp;
+        }
+    for (int a = 0; a < m; a++) {
+        lam[a] = S[order[a]][order[a]];
+        if (V)
+            for (int k = 0; k < m; k++) V[k * m + a] = U[k][order[a]];
+    }
+    return m;
+}
+
+/* The two smallest singular values of the size-free Jacobian at q (free joints left out); both 0 where
+ * ikc_jtj_eigen shows nothing. */
+static void ikc_two_weakest(const ikc_robot *rb, const double *q, double sig[2]) {
+    int col[rb->dof];
+    double lam[rb->dof];
+    sig[0] = sig[1] = 0.0;
+    if (!ikc_jtj_eigen(rb, q, col, lam, NULL)) return;
+    sig[0] = sqrt(lam[0] > 0.0 ? lam[0] : 0.0);
+    sig[1] = sqrt(lam[1] > 0.0 ? lam[1] : 0.0);
+}
+
+/* The difference a - b of two joint values: modulo 2 pi into (-pi, pi] for a revolute joint. */
+static double ikc_joint_step(const ikc_robot *rb, int j, double a, double b) {
+    return rb->revolute[j] ? ikc_wrap(a - b) : a - b;
+}
+
+/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above). */
+static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s) {
+    const int dof = rb->dof;
+    int moves = 0;
+    for (int j = 0; j < dof; j++) moves |= s[j] != 0.0;
+    if (!moves) return 0;  /* rep moves no joint: the family is not this line */
+    for (int p = 0; p < IKC_LINE_POINTS; p++) {
+        double t = (p == 0 ? 0.0 : (p == 1 ? 1.0 : -1.0)) * IKC_TWO_PI / 3.0, q[dof], sig[2];
+        for (int j = 0; j < dof; j++) q[j] = q0[j] + s[j] * t;
+        ikc_two_weakest(rb, q, sig);
+        if (!(sig[1] >= IKC_LINE_RANK)) return 0;
+    }
+    return 1;
+}
+
+/* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`,
+ * `slide_slack` for a prismatic joint). */
+static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack,
+                           double slide_slack) {
+    for (int j = 0; j < rb->dof; j++) {
+        const double sl = rb->revolute[j] ? slack : slide_slack;
+        double x = q0[j] + s[j] * t, lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
+        if (rb->revolute[j]) {
+            if (hi - lo >= IKC_TWO_PI) continue;
+            x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
+        }
+        if (!(lo <= x && x <= hi)) return 0;
+    }
+    return 1;
+}
+
+/* The in-limit stretch of the line q0 + s t, t in [-pi, pi]: 0 when none (even with the limits
+ * widened by `slack`, `slide_slack` for a prismatic joint: IKC_LIMIT_EPS, as ikc_represent clamps, or
+ * IKC_TANGENT_MARGIN radians and times the size, for a line known only to that), else 1 and *t_mid the middle of the
+ * widest stretch inside the limits; -1 when undecided.  The stretches end where some joint's value
+ * (or an alias) crosses a limit. */
+static int ikc_line_in_limits(const ikc_robot *rb, const double *q0, const double *s, double slack,
+                              double slide_slack, double *t_mid) {
+    enum { MAXCUTS = 256 };
+    double cut[MAXCUTS];
+    int nc = 0;
+    cut[nc++] = -IKC_PI_F;
+    cut[nc++] = IKC_PI_F;
+    for (int j = 0; j < rb->dof; j++) {
+        if (s[j] == 0.0) continue;
+        const double bound[2] = {rb->lower[j], rb->upper[j]};
+        if (rb->revolute[j] && bound[1] - bound[0] >= IKC_TWO_PI) continue;
+        const int wraps = rb->revolute[j] ? (int)ceil(fabs(s[j])) + 1 : 0;
+        for (int b = 0; b < 2; b++)
+            for (int k = -wraps; k <= wraps; k++) {
+                double t = (bound[b] + IKC_TWO_PI * k - q0[j]) / s[j];
+                if (-IKC_PI_F < t && t < IKC_PI_F) {
+                    if (nc == MAXCUTS) return -1;
+                    cut[nc++] = t;
+                }
+            }
+    }
+    for (int a = 1; a < nc; a++)  /* insertion sort */
+        for (int b = a; b > 0 && cut[b - 1] > cut[b]; b--) {
+            double tmp = cut[b];
+            cut[b] = cut[b - 1];
+            cut[b - 1] = tmp;
+        }
+    double widest = -1.0;
+    int any = 0;
+    for (int a = 0; a + 1 < nc; a++) {
+        double mid = 0.5 * (cut[a] + cut[a + 1]), width = cut[a + 1] - cut[a];
+        if (ikc_line_inside(rb, q0, s, mid, slack, slide_slack)) any = 1;
+        if (width > widest && ikc_line_inside(rb, q0, s, mid, 0.0, 0.0)) widest = width, *t_mid = mid;
+    }
+    for (int a = 0; a < nc && !any; a++) any = ikc_line_inside(rb, q0, s, cut[a], slack, slide_slack);
+    return !any ? 0 : (widest > 0.0 ? 1 : -1);
+}
+
+static double ikc_row_distance(const ikc_robot *rb, const double *x, const double *y);  /* below */
+
+#define IKC_TANGENT_MARGIN 1e-3  /* a tangent line's leaves lie this close to the line (radians) */
+#define IKC_TANGENT_PROBE 1e-3   /* the step off the line along the second null direction */
+
+/* A self-motion line whose leaves are a tangent root (two roots of one step coincide: located to about
+ * sqrt(eps)) has, at its exact point p0 (Newton-polished), a Jacobian null space of two directions: the
+ * line's own, f, and one more, n.  Along a double root, n leads to no solution: Newton steps from
+ * p0 + IKC_TANGENT_PROBE n come back to the line (they halve the distance each step); on a sheet of
+ * solutions (a second self-motion, as the Rhino's planar arm) they stop where they start.  So the line
+ * is alone where the null space has exactly two directions and Newton from both sides returns to
+ * within a tenth of the step; or where it has only one (ikc_line_alone's case). */
+static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const double *p0, const double *s) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 3 || !(lam[2] >= floor)) return 0;
+    if (lam[1] >= floor) return 1;  /* one null direction: the line alone */
+    double f[m], fn = 0.0;
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);  /* revolute: scaled and joint units agree */
+    double n[m], best = 0.0;
+    for (int v = 0; v < 2; v++) {  /* the null vector least along f, made orthogonal to it */
+        double d = 0.0, w[m], len = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
+        if (len > best) {
+            best = len;
+            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
+        }
+    }
+    if (!(best > 0.25)) return 0;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_TANGENT_PROBE * n[a] * u;
+        }
+        ikc_newton(rb, g, x, 15);
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the line: a sheet */
+    }
+    return 1;
+}
+
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
  * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
  * representative that is exact and inside the limits (the family's interval of reachable values may
  * not contain 0, or 0 may lie outside a limit).  Family leaves that no
- * representative completes (an interval narrower than the grid: a stretched arm at a wrist lock) get
- * Newton steps from their best representative, as the reference runtime pulls its representatives
- * onto the family.  Count or IKC_PYTHON. */
+ * representative completes are settled, where the family is a straight line alone (above), by the
+ * line: dropped where it misses the limits, else taken at the middle of its widest in-limit stretch;
+ * the others (an interval narrower than the grid: a stretched arm at a wrist lock) get Newton steps
+ * from their best representative, as the reference runtime pulls its representatives onto the
+ * family.  Count or IKC_PYTHON. */
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont) {
     const int dof = rb->dof;
@@ -454,19 +724,40 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
-    double Q2[L * dof], E2[L], B[L * dof], EB[L];
-    int F2[L];
+    double Q2[L * dof], E2[L], B[L * dof], EB[L], Q0[L * dof], E0[L], S[L * dof];
+    int F2[L], line[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
-        for (int c = 0; c < dof; c++) B[j * dof + c] = Q[j * dof + c];
+        for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
+        E0[j] = E[j];
         EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
+        /* a candidate straight line: exact at rep = 0, or a tangent root there (its slopes come from the
+         * first other rep) */
+        line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) &&
+                  (E[j] <= exact_tol || ((F[j] & IKC_TANGENT_ROOT) && E[j] < near));
     }
     for (int r = 1; r < IKC_REPS; r++) {
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
         int n2 = chain(g, fr, rep, Q2, E2, F2);
-        if (n2 != n) return IKC_PYTHON;
+        if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
         for (int j = 0; j < n; j++) {
+            if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
+                const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
+                int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) &&
+                           (E2[j] <= exact_tol || ((F2[j] & IKC_TANGENT_ROOT) && E2[j] < near));
+                for (int c = 0; c < dof && fits; c++) {
+                    double d = ikc_joint_step(rb, c, row[c], q0[c]), unit = rb->revolute[c] ? 1.0 : rb->scale;
+                    if (r == 1) {
+                        double sl = d / rep, whole = nearbyint(sl);
+                        fits = rb->revolute[c] ? fabs(sl - whole) <= IKC_LINE_FIT / rep : fabs(d) <= IKC_LINE_FIT * unit;
+                        S[j * dof + c] = rb->revolute[c] ? whole : 0.0;
+                    } else {
+                        fits = fabs(ikc_joint_step(rb, c, d, S[j * dof + c] * rep)) <= IKC_LINE_FIT * unit;
+                    }
+                }
+                line[j] = fits;
+            }
             if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
                 continue;
             if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;  /* settled */
@@ -486,6 +777,37 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     for (int j = 0; j < n; j++) {
         if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
         if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
+        /* a tangent line: its exact point near the leaf of rep = 0 (the line is known to the margin) */
+        const int tangent = line[j] && !(E0[j] <= exact_tol);
+        double p0[dof];
+        for (int c = 0; c < dof; c++) p0[c] = Q0[j * dof + c];
+        if (tangent && !(ikc_newton(rb, g, p0, 15) <= exact_tol &&
+                         ikc_row_distance(rb, p0, Q0 + j * dof) <= IKC_TANGENT_MARGIN))
+            line[j] = 0;
+        if (line[j] && (tangent ? ikc_tangent_line_alone(rb, g, p0, S + j * dof)
+                                : ikc_line_alone(rb, Q0 + j * dof, S + j * dof))) {
+            double t = 0.0;
+            const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+            const int found = ikc_line_in_limits(rb, Q0 + j * dof, S + j * dof, slack,
+                                                 tangent ? slack * rb->scale : slack, &t);
+            if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
+                F[j] |= IKC_EMPTY;
+                continue;
+            }
+            double e3 = INFINITY;
+            if (found == 1 && chain(g, fr, t, Q2, E2, F2) == n && (F2[j] & IKC_FAMILY) &&
+                !(F2[j] & (IKC_DEFER | IKC_EMPTY))) {
+                e3 = E2[j];
+                if (exact_tol < e3 && e3 < near) e3 = ikc_newton(rb, g, Q2 + j * dof, 15);
+            }
+            if (e3 <= exact_tol && ikc_row_inside(rb, Q2 + j * dof)) {
+                E2[j] = e3;
+                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
+                E[j] = E2[j];
+                F[j] = F2[j];
+                continue;
+            }
+        }
         double e = ikc_newton(rb, g, B + j * dof, 60);
         if (e <= exact_tol && (!limits || ikc_row_inside(rb, B + j * dof))) {
             for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
@@ -493,15 +815,18 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         }
     }
     k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
-    return k == IKC_FAMILY_MISS ? IKC_PYTHON : k;
+    return k == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : k;
 }
 
 /* The chain, then (where it cannot settle the target) the alternative chain. */
 static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                       double *res, int *ls, int *cont) {
     int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont);
-    if (k == IKC_PYTHON && rb->chain_alt)
+    if (k == IKC_PYTHON && rb->chain_alt) {
+        const int why = ikc_why;
         k = ikc_settle_chain(rb, rb->chain_alt, rb->leaves_alt, g, fr, limits, q, res, ls, cont);
+        ikc_why = k == IKC_PYTHON ? why + IKC_WHY_ALT * ikc_why : 0;
+    }
     return k;
 }
 
@@ -515,7 +840,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
                       double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof, G = rb->grid, S = rb->nsearch;
     const int cells = S == 1 ? G : G * G;
-    if (S < 1 || S > 2 || G < 3) return IKC_PYTHON;
+    if (S < 1 || S > 2 || G < 3) return ikc_hand_back(IKC_WHY_SEARCH);
     double *E = malloc(sizeof(double) * (size_t)cells * L);
     double *Q = malloc(sizeof(double) * (size_t)cells * L * dof);
     int *F = malloc(sizeof(int) * (size_t)L);
@@ -558,7 +883,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         int CF[count > 0 ? count : 1];
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
-            CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0);  /* plain steps, as the Python search */
+            CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0, NULL);  /* plain steps, as the Python search */
             /* merged within IKC_SPLIT_ROOT, as the Python search: two seeds of one double root stop on
              * its flat valley up to ~1e-7 apart */
             CF[a] = IKC_TANGENT_ROOT;
@@ -566,6 +891,7 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
         if (status < 0) status = IKC_PYTHON;
     }
+    if (status == IKC_PYTHON) ikc_why = IKC_WHY_SEARCH;
     free(E);
     free(Q);
     free(F);
@@ -654,33 +980,34 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
         good[k] = 0;
-        if (F[k] & IKC_DEFER) return IKC_PYTHON;
+        if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
         if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
-            if (E[k] <= rb->near_singular * rb->scale) return IKC_PYTHON;
+            if (E[k] <= rb->near_singular * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
         } else {
             good[k] = 1;
         }
         for (int j = 0; j < dof; j++) Q0[k * dof + j] = Q[k * dof + j];
-        E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0);  /* plain steps, as the Python path */
+        E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0, NULL);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
         if (good[k]) {
-            if (!(E[k] <= exact)) return IKC_PYTHON;
-            if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return IKC_PYTHON;
-            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return IKC_PYTHON;
+            if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
+            if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return ikc_hand_back(IKC_WHY_SNAPPED);
+            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
         }
     }
     for (int a = 0; a < n; a++)
         for (int c = a + 1; c < n; c++)
             if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&
                 ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) > IKC_SEPARATE)
-                return IKC_PYTHON;  /* a collision: one branch went to the other's solution */
+                return ikc_hand_back(IKC_WHY_SNAPPED);  /* a collision: one branch went to the other's */
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
-    return k < 0 ? IKC_PYTHON : k;
+    return k == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : k;
 }
 
 static int ikc_solve_goal(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                           double *res, int *ls, int *cont) {
+    ikc_why = 0;
     if (rb->nsearch) return ikc_search(rb, g, fr, limits, q, res, ls, cont);
     if (rb->polish) return ikc_polished(rb, g, fr, limits, q, res, ls, cont);
     return ikc_settle(rb, g, fr, limits, q, res, ls, cont);
@@ -691,7 +1018,7 @@ static int ikc_one(const ikc_robot *rb, const double *T, const double *fr, int l
                    double *res, int *ls, int *cont) {
     double g[12];
     const int checked = ikc_goal_checked(rb, T, g);
-    if (checked != 1) return checked == 0 ? IKC_INVALID : IKC_PYTHON;
+    if (checked != 1) return checked == 0 ? IKC_INVALID : ikc_hand_back(IKC_WHY_ROTATION);
     return ikc_solve_goal(rb, g, fr, limits, q, res, ls, cont);
 }
 

@@ -140,7 +140,9 @@ def _key(*parts: str) -> str:
 # declarations in front, and its entry points' calls renamed to the shared ones.  `__typeof__` takes
 # each signature from the header itself, so the two sides cannot disagree.  The finish calls the
 # chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
-FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_g6_leaves")  # what a chain's entry points call
+FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ikc_g6_leaves")  # chains call
+# (ikc_last_reason: why this thread's last target was handed back, for the benchmarks' cause counts;
+# ikc_g6_leaves: the general-6r elimination of general6.h, docs/general6.md "Native path")
 SHARED_PREFIX = "ikc_shared_"
 
 
@@ -264,6 +266,10 @@ class NativeChain:
         self.leaves_fn = lib.ikc_leaves
         self.leaves_fn.argtypes = [P, P, P, P, P]
         self.leaves_fn.restype = I
+        # why the last target handed back was (fast_finish.h IKC_WHY_*; the split build only)
+        self._reason = getattr(lib, SHARED_PREFIX + "last_reason", None)
+        if self._reason is not None:
+            self._reason.argtypes, self._reason.restype = [], I
         # one target: buffers reused under a lock (the call and the copies out are one critical section)
         self._lock = threading.Lock()
         self.target_shape = _TARGET_SHAPES[target]  # one raw target: (4, 4), (3, 3) or (3,)
@@ -308,6 +314,11 @@ class NativeChain:
             aT, aF, aq = self._addr[:3]
             k = self._exact(aT, aF, 1 if limits else 0, aq)
             return None if k < 0 else self._q[:k].copy()
+
+    def last_reason(self) -> int | None:
+        """Why this thread's last target was handed back (fast_finish.h ``IKC_WHY_*``: main chain plus
+        16 times the alternative chain's; 0 when settled), or None without the split build."""
+        return None if self._reason is None else int(self._reason())
 
     def many(self, goals, free, limits: bool, workers: int | None = None):
         """Solutions of N raw targets ``goals`` ((N, 4, 4) poses, (N, 3, 3) orientations or (N, 3)

@@ -1,0 +1,669 @@
+"""The finish of one target on the scalar fast chain: the specification that the C finish
+(``fast_finish.h``: ``ikc_settle``, ``ikc_finish``, ``ikc_newton_steps`` and their helpers) ports,
+statement for statement (docs/design.md section 6, "The finish, specified once").
+
+Given a chain (the module's ``_fast_chain``, and its alternative chain where the plan has one) and one
+goal (12 entries, :func:`subproblems.fast.goal_entries`), :func:`settle` returns the rows the C finish
+returns for that goal -- ``(q, residual, ls, continuum)`` each, exact rows first -- or :data:`PYTHON`
+where the C finish hands the target back to the reference runtime.  The steps: the leaves at the
+self-motion representative ``rep = 0``; near misses (a tangent root) polished by Newton steps on the
+true robot; values wrapped and brought inside the limits (a value within ``LIMIT_EPS`` of a limit
+clamped onto it and the row re-converged with that joint held); duplicates merged; and where a
+self-motion has no exact representative inside the limits, the chain again at other representatives,
+the straight-line test (a self-motion that is a line alone in joint space is dropped where it misses
+the limits, or taken inside them) and Newton steps along the family.
+
+Plain floats and lists, in the C's order of operations, so that the two agree bit for bit
+(``tests/test_finish_spec.py`` compares them on random and special poses of the zoo).  Search and
+snapped plans (``ikc_search``, ``ikc_polished``) are not specified here: their Python paths are
+``ikcompiler.runtime.fastchain`` and ``subproblems.continuation``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from subproblems import fast as _fk
+from subproblems.angles import wrap
+
+PYTHON = -1  # IKC_PYTHON: the reference runtime takes the target
+FAMILY_MISS = -3  # IKC_FAMILY_MISS: a self-motion whose representatives all miss (internal)
+REPS = 16  # IKC_REPS: representatives tried, rep = k pi / 8
+NEAR_MISS = 1e-4  # IKC_NEAR_MISS
+SPLIT_ROOT = 1e-6  # IKC_SPLIT_ROOT
+LIMIT_EPS = 1e-7  # IKC_LIMIT_EPS (fast.LIMIT_EPS)
+PI_SNAP = 1e-13  # IKC_PI_SNAP (fast.PI_SNAP)
+CLAMPED_NEWTON = 3  # IKC_CLAMPED_NEWTON
+LINE_FIT = 1e-9  # IKC_LINE_FIT
+LINE_RANK = 1e-5  # IKC_LINE_RANK
+TWO_PI = 6.283185307179586
+PI = 3.141592653589793
+INSIDE, ADJUSTED, OUTSIDE, CLAMPED = 0, 1, 2, 3
+TARGET_CODES = {"pose": 0, "position": 1, "orientation": 2}
+
+
+@dataclass(frozen=True)
+class FinishRobot:
+    """What the C finish knows of a module (its ``ikc_robot``): returned joints, limits, the true robot."""
+
+    dof: int
+    slots: int
+    target: int  # 0 pose, 1 position, 2 orientation
+    revolute: tuple
+    lower: tuple
+    upper: tuple
+    scale: float
+    tol: float
+    twists: tuple  # every joint of the true robot, (v, w) each
+    home: tuple  # rotation row-major, then translation
+    A: tuple  # all joint values = A q + b, row-major (nall x dof)
+    b: tuple
+    is_free: tuple
+    chain: Callable[..., Any]
+    chain_alt: Callable[..., Any] | None
+
+    @classmethod
+    def from_namespace(cls, ns: dict, chain_alt=None) -> FinishRobot:
+        """The finish's robot of a generated module (``csource.chain_c_source`` reads the same fields)."""
+        dof = len(ns["JOINT_TYPES"])
+        H = [[float(x) for x in row] for row in ns["_HOME"]]
+        return cls(
+            dof=dof, slots=int(ns["MAX_SOLUTIONS"]), target=TARGET_CODES[ns["TARGET"]],
+            revolute=tuple(k == "R" for k in ns["JOINT_TYPES"]),
+            lower=tuple(float(x) for x in ns["LOWER"]), upper=tuple(float(x) for x in ns["UPPER"]),
+            scale=float(ns["SCALE"]), tol=float(ns["TOLERANCE"]),
+            twists=tuple(tuple(float(x) for x in t) for t in ns["_TWISTS"]),
+            home=tuple([H[i][j] for i in range(3) for j in range(3)] + [H[i][3] for i in range(3)]),
+            A=tuple(float(x) for row in ns["_A"] for x in row), b=tuple(float(x) for x in ns["_B"]),
+            is_free=tuple(j in list(ns["_FREE"]) for j in range(dof)),
+            chain=ns["_fast_chain"], chain_alt=chain_alt)
+
+    def leaves(self, chain, goal, free, rep):
+        """(Q rows, errors, flags) of a chain at representative rep."""
+        found = chain(_fk.SCALAR, goal, free, rep)
+        return ([list(leaf[:-2]) for leaf in found], [leaf[-2] for leaf in found],
+                [leaf[-1] for leaf in found])
+
+
+# -- forward kinematics, error and Newton steps (ikc_fk_jacobian, ikc_pose_error, ikc_newton_steps) --
+
+def fk_jacobian(rb: FinishRobot, q):
+    """Tool pose G (12 entries) and space Jacobian J (6 x dof row-major) at returned joint values q."""
+    dof = rb.dof
+    R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    p = [0.0, 0.0, 0.0]
+    cols = []
+    for i, tw in enumerate(rb.twists):
+        th = rb.b[i]
+        for j in range(dof):
+            th += rb.A[i * dof + j] * q[j]
+        v, w = tw[:3], tw[3:]
+        Rw = [R[3 * r] * w[0] + R[3 * r + 1] * w[1] + R[3 * r + 2] * w[2] for r in range(3)]
+        Rv = [R[3 * r] * v[0] + R[3 * r + 1] * v[1] + R[3 * r + 2] * v[2] for r in range(3)]
+        pxw = [p[1] * Rw[2] - p[2] * Rw[1], p[2] * Rw[0] - p[0] * Rw[2], p[0] * Rw[1] - p[1] * Rw[0]]
+        cols.append([Rv[r] + pxw[r] for r in range(3)] + Rw)
+        if w[0] == 0.0 and w[1] == 0.0 and w[2] == 0.0:
+            E = [1.0 if k % 4 == 0 else 0.0 for k in range(9)]
+            t = [v[k] * th for k in range(3)]
+        else:
+            c, s = math.cos(th), math.sin(th)
+            C = 1.0 - c
+            E = [c + w[0] * w[0] * C, w[0] * w[1] * C - w[2] * s, w[0] * w[2] * C + w[1] * s,
+                 w[1] * w[0] * C + w[2] * s, c + w[1] * w[1] * C, w[1] * w[2] * C - w[0] * s,
+                 w[2] * w[0] * C - w[1] * s, w[2] * w[1] * C + w[0] * s, c + w[2] * w[2] * C]
+            wv = [w[1] * v[2] - w[2] * v[1], w[2] * v[0] - w[0] * v[2], w[0] * v[1] - w[1] * v[0]]
+            wdv = w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
+            t = []
+            for k in range(3):
+                Ewv = E[3 * k] * wv[0] + E[3 * k + 1] * wv[1] + E[3 * k + 2] * wv[2]
+                t.append(wv[k] - Ewv + w[k] * wdv * th)
+        R2 = [R[3 * r] * E[k] + R[3 * r + 1] * E[3 + k] + R[3 * r + 2] * E[6 + k]
+              for r in range(3) for k in range(3)]
+        p = [R[3 * r] * t[0] + R[3 * r + 1] * t[1] + R[3 * r + 2] * t[2] + p[r] for r in range(3)]
+        R = R2
+    H = rb.home
+    G = [R[3 * r] * H[k] + R[3 * r + 1] * H[3 + k] + R[3 * r + 2] * H[6 + k]
+         for r in range(3) for k in range(3)]
+    G += [R[3 * r] * H[9] + R[3 * r + 1] * H[10] + R[3 * r + 2] * H[11] + p[r] for r in range(3)]
+    tp = G[9:]
+    J = [0.0] * (6 * dof)
+    for j in range(dof):
+        col = [0.0] * 6
+        for i, c in enumerate(cols):
+            a = rb.A[i * dof + j]
+            if a == 0.0:
+                continue
+            wxp = [c[4] * tp[2] - c[5] * tp[1], c[5] * tp[0] - c[3] * tp[2], c[3] * tp[1] - c[4] * tp[0]]
+            for r in range(3):
+                col[r] += a * (c[r] + wxp[r])
+                col[3 + r] += a * c[3 + r]
+        for r in range(6):
+            J[r * dof + j] = col[r]
+    return G, J
+
+
+def _max2(a, b):
+    if a != a or b != b:
+        return math.nan
+    return a if a > b else b
+
+
+def pose_error(rb: FinishRobot, G, g) -> float:
+    dp = 0.0
+    for k in range(3):
+        dp += (G[9 + k] - g[9 + k]) * (G[9 + k] - g[9 + k])
+    dp = math.sqrt(dp)
+    dr = 0.0
+    for k in range(9):
+        d = G[k] - g[k]
+        if d != d:
+            return math.nan
+        dr += d * d
+    dr = rb.scale * math.sqrt(dr)
+    if rb.target == 1:
+        return dp
+    if rb.target == 2:
+        return dr
+    return _max2(dp, dr)
+
+
+def measure(rb: FinishRobot, g, q) -> float:
+    return pose_error(rb, fk_jacobian(rb, q)[0], g)
+
+
+def solve_linear(n: int, M):
+    """x of M x = M[:, n] by Gaussian elimination with partial pivoting (M changed), or None."""
+    for k in range(n):
+        piv = k
+        for r in range(k + 1, n):
+            if abs(M[r][k]) > abs(M[piv][k]):
+                piv = r
+        if piv != k:
+            M[k], M[piv] = M[piv], M[k]
+        if M[k][k] == 0.0:
+            return None
+        for r in range(k + 1, n):
+            f = M[r][k] / M[k][k]
+            for c in range(k, n + 1):
+                M[r][c] -= f * M[k][c]
+    x = [0.0] * n
+    for k in range(n - 1, -1, -1):
+        s = M[k][n]
+        for c in range(k + 1, n):
+            s -= M[k][c] * x[c]
+        x[k] = s / M[k][k]
+    return x
+
+
+def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=None) -> float:
+    """Damped Gauss-Newton steps on q (in place; free and ``held`` joints kept); the new pose error."""
+    dof = rb.dof
+    done = 1e-3 * rb.tol * rb.scale
+    lam = 1e-12
+    G, J = fk_jacobian(rb, q)
+    now = pose_error(rb, G, g)
+    r0, r1 = (3 if rb.target == 2 else 0), (3 if rb.target == 1 else 6)
+    for _ in range(iters):
+        if now != now:
+            return math.nan
+        if now <= done:
+            return now
+        e = [g[9 + k] - G[9 + k] for k in range(3)] + [0.0, 0.0, 0.0]
+        for c in range(3):
+            a0, a1, a2, b0, b1, b2 = G[c], G[3 + c], G[6 + c], g[c], g[3 + c], g[6 + c]
+            e[3] += 0.5 * (a1 * b2 - a2 * b1)
+            e[4] += 0.5 * (a2 * b0 - a0 * b2)
+            e[5] += 0.5 * (a0 * b1 - a1 * b0)
+        col, Js = [0.0] * dof, [0.0] * (6 * dof)
+        for j in range(dof):
+            s = 0.0
+            for r in range(r0, r1):
+                s += J[r * dof + j] * J[r * dof + j]
+            col[j] = math.sqrt(s) if math.sqrt(s) > 1e-300 else 1e-300
+            hold = rb.is_free[j] or (held is not None and held[j])
+            for r in range(r0, r1):
+                Js[r * dof + j] = 0.0 if hold else J[r * dof + j] / col[j]
+        JtJ = [[0.0] * dof for _ in range(dof)]
+        Jte = [0.0] * dof
+        for a in range(dof):
+            for c in range(dof):
+                s = 0.0
+                for r in range(r0, r1):
+                    s += Js[r * dof + a] * Js[r * dof + c]
+                JtJ[a][c] = s
+            s = 0.0
+            for r in range(r0, r1):
+                s += Js[r * dof + a] * e[r]
+            Jte[a] = s
+        accepted = False
+        for _attempt in range(8):
+            M = [[JtJ[a][c] + (lam if a == c else 0.0) for c in range(dof)] + [Jte[a]] for a in range(dof)]
+            dq = solve_linear(dof, M)
+            if dq is None:
+                return now
+            trial = [q[j] + (0.0 if (rb.is_free[j] or (held is not None and held[j])) else dq[j] / col[j])
+                     for j in range(dof)]
+            G2, J2 = fk_jacobian(rb, trial)
+            nxt = pose_error(rb, G2, g)
+            if nxt < now or not guarded:
+                q[:] = trial
+                G, J, now = G2, J2, nxt
+                lam = lam * 0.1 if lam > 1e-11 else 1e-12
+                accepted = True
+                break
+            lam *= 100.0
+        if not accepted:
+            break
+    return now
+
+
+# -- values as returned (ikc_represent) and the finish of the leaves (ikc_finish) ---------------------
+
+def represent(rb: FinishRobot, q, limits: bool, clamped=None) -> int:
+    """q (in place) as returned; INSIDE, ADJUSTED, OUTSIDE or CLAMPED (and which joints were clamped)."""
+    status = INSIDE
+    for j in range(rb.dof):
+        if clamped is not None:
+            clamped[j] = False
+        x, rev = q[j], rb.revolute[j]
+        if rev:
+            x = wrap(x)
+            if x <= -PI + PI_SNAP:
+                if x != -PI and status == INSIDE:
+                    status = ADJUSTED
+                x = PI
+        lo, hi = rb.lower[j], rb.upper[j]
+        if limits and not (lo <= x <= hi):
+            choices = (x, x - TWO_PI, x + TWO_PI) if rev else (x,)
+            found = False
+            for c in choices:
+                if lo <= c <= hi:
+                    x, found = c, True
+                    break
+            if not found:
+                for c in choices:
+                    if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS:
+                        x = lo if c < lo else (hi if c > hi else c)
+                        found, status = True, CLAMPED
+                        if clamped is not None:
+                            clamped[j] = True
+                        break
+            if not found:
+                return OUTSIDE
+        q[j] = x
+    return status
+
+
+def row_inside(rb: FinishRobot, q) -> bool:
+    return represent(rb, list(q), True) != OUTSIDE
+
+
+def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
+    """Rows of one target from its leaves (exact first, by error; duplicates and rows outside the limits
+    left out), or PYTHON, or FAMILY_MISS."""
+    dof = rb.dof
+    exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
+    same = 1e-9 * (rb.scale if rb.scale > 1.0 else 1.0)
+    kept_rows, inexact, err, W = [], {}, {}, {}
+    family_any = family_exact = False
+    for k, flag in enumerate(F):
+        if flag & _fk.EMPTY:
+            continue
+        err[k] = E[k]
+        if flag & _fk.DEFER or err[k] != err[k]:
+            return PYTHON
+        w = list(Q[k])
+        if exact_tol < err[k] < near:
+            err[k] = newton_steps(rb, g, w, 15)
+            if err[k] != err[k]:
+                return PYTHON
+            same = SPLIT_ROOT
+        if flag & _fk.TANGENT_ROOT:
+            same = SPLIT_ROOT
+        if any(x != x for x in w):
+            return PYTHON
+        held = [False] * dof
+        status = represent(rb, w, limits, held)
+        if status == CLAMPED:
+            newton_steps(rb, g, w, CLAMPED_NEWTON, True, held)
+            if any(x != x for x in w):
+                return PYTHON
+            status = represent(rb, w, limits, held)
+            if status == CLAMPED:
+                return PYTHON
+            if status != OUTSIDE:
+                status = ADJUSTED
+        ok = status != OUTSIDE
+        if status == ADJUSTED:
+            err[k] = measure(rb, g, w)
+        inexact[k] = not err[k] <= exact_tol
+        W[k] = w
+        if flag & _fk.FAMILY:
+            family_any = True
+            if ok and not inexact[k]:
+                family_exact = True
+        if ok:
+            kept_rows.append(k)
+    if family_any and not family_exact:
+        return FAMILY_MISS
+    kept_rows.sort(key=lambda k: (inexact[k], err[k]))  # stable, as the C's insertion sort
+    out = []
+    for k in kept_rows:
+        if len(out) == rb.slots:
+            break
+        w = W[k]
+        duplicate = False
+        for o in out:
+            differs = False
+            for j in range(dof):
+                d = w[j] - o[0][j] if w[j] > o[0][j] else o[0][j] - w[j]
+                if rb.revolute[j]:
+                    d = math.fmod(d, TWO_PI)
+                    if d > PI:
+                        d = TWO_PI - d
+                if d > same:
+                    differs = True
+                    break
+            if not differs:
+                duplicate = True
+                break
+        if not duplicate:
+            out.append((w, err[k], inexact[k], bool(F[k] & _fk.FAMILY)))
+    return out
+
+
+# -- self-motions that are straight lines (ikc_two_weakest, ikc_line_*) --------------------------------
+
+def jtj_eigen(rb: FinishRobot, q, vectors: bool = False):
+    """(col, eigenvalues ascending, eigenvectors as columns V[k][a] or None) of the size-free J^T J over
+    the joints that are not free; (col, None, None) when fewer than 2 or more than the target's rows."""
+    dof = rb.dof
+    _, J = fk_jacobian(rb, q)
+    r0, r1 = (3 if rb.target == 2 else 0), (3 if rb.target == 1 else 6)
+    col = [j for j in range(dof) if not rb.is_free[j]]
+    m = len(col)
+    if m < 2 or m > r1 - r0:
+        return col, None, None
+    S = [[0.0] * m for _ in range(m)]
+    U = [[1.0 if a == c else 0.0 for c in range(m)] for a in range(m)]
+    for a in range(m):
+        for c in range(m):
+            t = 0.0
+            for r in range(r0, r1):
+                f = 1.0 / (rb.scale * rb.scale) if r < 3 else 1.0
+                t += f * J[r * dof + col[a]] * J[r * dof + col[c]]
+            ua = 1.0 if rb.revolute[col[a]] else rb.scale
+            uc = 1.0 if rb.revolute[col[c]] else rb.scale
+            S[a][c] = t * ua * uc
+    for _ in range(30):
+        off = diag = 0.0
+        for a in range(m):
+            diag += S[a][a] * S[a][a]
+            for c in range(a + 1, m):
+                off += S[a][c] * S[a][c]
+        if off <= 1e-34 * diag:
+            break
+        for a in range(m):
+            for c in range(a + 1, m):
+                if S[a][c] == 0.0:
+                    continue
+                theta = (S[c][c] - S[a][a]) / (2.0 * S[a][c])
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                cs = 1.0 / math.sqrt(t * t + 1.0)
+                sn = t * cs
+                for k in range(m):
+                    x, y = S[k][a], S[k][c]
+                    S[k][a] = cs * x - sn * y
+                    S[k][c] = sn * x + cs * y
+                    x, y = U[k][a], U[k][c]
+                    U[k][a] = cs * x - sn * y
+                    U[k][c] = sn * x + cs * y
+                for k in range(m):
+                    x, y = S[a][k], S[c][k]
+                    S[a][k] = cs * x - sn * y
+                    S[c][k] = sn * x + cs * y
+    order = sorted(range(m), key=lambda a: S[a][a])  # stable, as the C's insertion sort
+    lam = [S[a][a] for a in order]
+    V = [[U[k][a] for a in order] for k in range(m)] if vectors else None
+    return col, lam, V
+
+
+def two_weakest(rb: FinishRobot, q):
+    """The two smallest singular values of the size-free Jacobian at q (free joints left out)."""
+    _, lam, _ = jtj_eigen(rb, q)
+    if lam is None:
+        return 0.0, 0.0
+    return math.sqrt(lam[0] if lam[0] > 0.0 else 0.0), math.sqrt(lam[1] if lam[1] > 0.0 else 0.0)
+
+
+def joint_step(rb: FinishRobot, j: int, a: float, b: float) -> float:
+    return wrap(a - b) if rb.revolute[j] else a - b
+
+
+def line_alone(rb: FinishRobot, q0, s) -> bool:
+    """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3."""
+    if not any(x != 0.0 for x in s):
+        return False
+    for t in (0.0, TWO_PI / 3.0, -1.0 * TWO_PI / 3.0):
+        q = [q0[j] + s[j] * t for j in range(rb.dof)]
+        if not two_weakest(rb, q)[1] >= LINE_RANK:
+            return False
+    return True
+
+
+def line_inside(rb: FinishRobot, q0, s, t: float, slack: float, slide_slack: float) -> bool:
+    for j in range(rb.dof):
+        sl = slack if rb.revolute[j] else slide_slack
+        x, lo, hi = q0[j] + s[j] * t, rb.lower[j] - sl, rb.upper[j] + sl
+        if rb.revolute[j]:
+            if hi - lo >= TWO_PI:
+                continue
+            x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
+        if not (lo <= x <= hi):
+            return False
+    return True
+
+
+def line_in_limits(rb: FinishRobot, q0, s, slack: float = LIMIT_EPS, slide_slack: float = LIMIT_EPS):
+    """(0, None) when the line q0 + s t, t in [-pi, pi], misses the limits; (1, t) with t the middle of
+    its widest in-limit stretch; (-1, None) when undecided."""
+    cut = [-PI, PI]
+    for j in range(rb.dof):
+        if s[j] == 0.0:
+            continue
+        if rb.revolute[j] and rb.upper[j] - rb.lower[j] >= TWO_PI:
+            continue
+        wraps = int(math.ceil(abs(s[j]))) + 1 if rb.revolute[j] else 0
+        for bound in (rb.lower[j], rb.upper[j]):
+            for k in range(-wraps, wraps + 1):
+                t = (bound + TWO_PI * k - q0[j]) / s[j]
+                if -PI < t < PI:
+                    if len(cut) == 256:
+                        return -1, None
+                    cut.append(t)
+    cut.sort()
+    widest, t_mid, any_inside = -1.0, None, False
+    for a in range(len(cut) - 1):
+        mid, width = 0.5 * (cut[a] + cut[a + 1]), cut[a + 1] - cut[a]
+        if line_inside(rb, q0, s, mid, slack, slide_slack):
+            any_inside = True
+        if width > widest and line_inside(rb, q0, s, mid, 0.0, 0.0):
+            widest, t_mid = width, mid
+    if not any_inside:
+        any_inside = any(line_inside(rb, q0, s, t, slack, slide_slack) for t in cut)
+    if not any_inside:
+        return 0, None
+    return (1, t_mid) if widest > 0.0 else (-1, None)
+
+
+TANGENT_MARGIN = 1e-3  # IKC_TANGENT_MARGIN
+TANGENT_PROBE = 1e-3  # IKC_TANGENT_PROBE
+
+
+def row_distance(rb: FinishRobot, x, y) -> float:
+    """ikc_row_distance: revolute values modulo 2 pi, prismatic ones over the size; NaN wins."""
+    m = 0.0
+    for j in range(rb.dof):
+        d = abs(x[j] - y[j])
+        if rb.revolute[j]:
+            d = math.fmod(d, TWO_PI)
+            if d > PI:
+                d = TWO_PI - d
+        else:
+            d /= rb.scale
+        if not d <= m:
+            m = d
+    return m
+
+
+def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
+    """Whether the tangent line through its exact point p0 is a self-motion alone: a null space of two
+    directions, the line's and one along which Newton steps come back to the line (a double root),
+    or of one."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 3 or not lam[2] >= floor:
+        return False
+    if lam[1] >= floor:
+        return True
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    n, best = None, 0.0
+    for v in range(2):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        w = [V[a][v] - d * f[a] for a in range(m)]
+        length = 0.0
+        for a in range(m):
+            length += w[a] * w[a]
+        if length > best:
+            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    if not best > 0.25:
+        return False
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * TANGENT_PROBE * n[a] * u
+        newton_steps(rb, g, x, 15)
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) <= 0.1 * TANGENT_PROBE:
+            return False
+    return True
+
+
+# -- the chain and its self-motions (ikc_settle_chain, ikc_settle) ------------------------------------
+
+def _plain_family(flag) -> bool:
+    return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
+
+
+def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
+    dof = rb.dof
+    Q, E, F = rb.leaves(chain, g, free, 0.0)
+    n = len(Q)
+    k = finish(rb, g, Q, E, F, limits)
+    if k != FAMILY_MISS:
+        return k
+    exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
+    Q0 = [list(row) for row in Q]
+    B = [list(row) for row in Q]
+    EB = [E[j] if (not limits or row_inside(rb, Q[j])) else math.inf for j in range(n)]
+    E0 = list(E)
+    line = [limits and _plain_family(F[j])
+            and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
+    S = [[0.0] * dof for _ in range(n)]
+    for r in range(1, REPS):
+        step = (r + 1) // 2
+        rep = (1.0 if r % 2 else -1.0) * step * (TWO_PI / REPS)
+        if rep <= -PI:
+            continue
+        Q2, E2, F2 = rb.leaves(chain, g, free, rep)
+        if len(Q2) != n:
+            return PYTHON
+        for j in range(n):
+            if line[j]:
+                row, q0 = Q2[j], Q0[j]
+                fits = _plain_family(F2[j]) and (
+                    E2[j] <= exact_tol or bool(F2[j] & _fk.TANGENT_ROOT) and E2[j] < near)
+                for c in range(dof):
+                    if not fits:
+                        break
+                    d = joint_step(rb, c, row[c], q0[c])
+                    unit = 1.0 if rb.revolute[c] else rb.scale
+                    if r == 1:
+                        sl = d / rep
+                        whole = float(round(sl))
+                        fits = (abs(sl - whole) <= LINE_FIT / rep if rb.revolute[c]
+                                else abs(d) <= LINE_FIT * unit)
+                        S[j][c] = whole if rb.revolute[c] else 0.0
+                    else:
+                        fits = abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit
+                line[j] = fits
+            if not F[j] & _fk.FAMILY or not F2[j] & _fk.FAMILY or F2[j] & (_fk.DEFER | _fk.EMPTY):
+                continue
+            if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
+                continue
+            row, e = Q2[j], E2[j]
+            if exact_tol < e < near:
+                e = newton_steps(rb, g, row, 8)
+            inside = not limits or row_inside(rb, row)
+            if e <= exact_tol and inside:
+                Q[j], E[j], F[j] = list(row), e, F2[j]
+            elif inside and e < EB[j]:
+                B[j], EB[j] = list(row), e
+    for j in range(n):
+        if not F[j] & _fk.FAMILY or F[j] & (_fk.DEFER | _fk.EMPTY):
+            continue
+        if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
+            continue
+        tangent = line[j] and not E0[j] <= exact_tol
+        p0 = list(Q0[j])
+        if tangent and not (newton_steps(rb, g, p0, 15) <= exact_tol
+                            and row_distance(rb, p0, Q0[j]) <= TANGENT_MARGIN):
+            line[j] = False
+        if line[j] and (tangent_line_alone(rb, g, p0, S[j]) if tangent else line_alone(rb, Q0[j], S[j])):
+            slack = TANGENT_MARGIN if tangent else LIMIT_EPS
+            found, t = line_in_limits(rb, Q0[j], S[j], slack, slack * rb.scale if tangent else slack)
+            if found == 0:
+                F[j] |= _fk.EMPTY
+                continue
+            e3, row3 = math.inf, None
+            if found == 1:
+                Q3, E3, F3 = rb.leaves(chain, g, free, t)
+                if len(Q3) == n and _plain_family(F3[j]):
+                    row3, e3 = Q3[j], E3[j]
+                    if exact_tol < e3 < near:
+                        e3 = newton_steps(rb, g, row3, 15)
+            if e3 <= exact_tol and row_inside(rb, row3):
+                Q[j], E[j], F[j] = list(row3), e3, F3[j]
+                continue
+        e = newton_steps(rb, g, B[j], 60)
+        if e <= exact_tol and (not limits or row_inside(rb, B[j])):
+            Q[j], E[j] = list(B[j]), e
+    k = finish(rb, g, Q, E, F, limits)
+    return PYTHON if k == FAMILY_MISS else k
+
+
+def settle(rb: FinishRobot, g, free=(), limits: bool = True):
+    """Rows ``(q, residual, ls, continuum)`` of one goal as the C finish gives them, or PYTHON."""
+    k = settle_chain(rb, rb.chain, g, tuple(free), limits)
+    if k == PYTHON and rb.chain_alt is not None:
+        k = settle_chain(rb, rb.chain_alt, g, tuple(free), limits)
+    return k
