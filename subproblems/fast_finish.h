@@ -818,9 +818,40 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     return k == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : k;
 }
 
+/* Whether any filled leaf of n carries flag bit `bit`. */
+static int ikc_any_flag(int n, const int *F, int bit) {
+    for (int k = 0; k < n; k++)
+        if (!(F[k] & IKC_EMPTY) && (F[k] & bit)) return 1;
+    return 0;
+}
+
+/* A gimbal lock in the chain (a FAMILY leaf) where the plan has an alternative chain: the alternative
+ * chain's leaves.  Where they meet no lock (and no degenerate geometry) they are every solution -- a
+ * closed-form chain is complete where no step degenerates -- and the lock was no self-motion of the
+ * target (a 5-joint arm's O-RRR gimbal, whose waist value the position fixes): their finish, as the
+ * reference runtime's with_alternative.  Else IKC_FAMILY_MISS: the caller goes on as before. */
+static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const double *fr, int limits,
+                                  double *q, double *res, int *ls, int *cont) {
+    const int L = rb->leaves, La = rb->leaves_alt, dof = rb->dof;
+    double Q[L * dof], E[L], Qa[La * dof], Ea[La];
+    int F[L], Fa[La];
+    int n = rb->chain(g, fr, 0.0, Q, E, F);
+    if (!ikc_any_flag(n, F, IKC_FAMILY)) return IKC_FAMILY_MISS;
+    int na = rb->chain_alt(g, fr, 0.0, Qa, Ea, Fa);
+    int filled = 0;
+    for (int k = 0; k < na; k++) filled |= !(Fa[k] & IKC_EMPTY);
+    if (!filled || ikc_any_flag(na, Fa, IKC_FAMILY | IKC_DEFER)) return IKC_FAMILY_MISS;
+    int k = ikc_finish(rb, g, na, Qa, Ea, Fa, limits, q, res, ls, cont);
+    return k < 0 ? IKC_PYTHON : k;
+}
+
 /* The chain, then (where it cannot settle the target) the alternative chain. */
 static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                       double *res, int *ls, int *cont) {
+    if (rb->chain_alt) {
+        int k = ikc_settle_alternative(rb, g, fr, limits, q, res, ls, cont);
+        if (k != IKC_FAMILY_MISS) return k;
+    }
     int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont);
     if (k == IKC_PYTHON && rb->chain_alt) {
         const int why = ikc_why;
@@ -963,26 +994,31 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 
 #define IKC_MAX_MOVE 0.25      /* subproblems.continuation.MAX_MOVE */
 #define IKC_SEPARATE 1e-6      /* subproblems.continuation.SEPARATE */
+#define IKC_SNAPPED_LEAF 1e-9  /* subproblems.continuation.SNAPPED_LEAF: an exact leaf of the snapped robot */
 
 /* A snapped plan (the module's _POLISH branch): leaves of the snapped robot's chain, each corrected by
  * Newton steps on the true robot, then the finish.  The correction is kept only where it is
  * certainly the leaf's own solution (subproblems.continuation, docs/calibrated.md): every exact leaf
  * converged, moved less than IKC_MAX_MOVE, no two distinct leaves ended on one solution, no corrected
  * leaf near a singular configuration, no least-squares leaf that nearly reaches the target (a pair of
- * solutions may be born there).  Otherwise IKC_PYTHON: the Python continuation takes the target.
- * Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
+ * solutions may be born there), no self-motion leaf.  Otherwise IKC_PYTHON: the Python continuation
+ * takes the target.  Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
-    const double exact = rb->tol * rb->scale;
+    const double exact = rb->tol * rb->scale, leaf_exact = IKC_SNAPPED_LEAF * rb->scale;
     double Q[L * dof], E[L], Q0[L * dof];
-    int F[L], good[L];
+    int F[L], good[L], any_exact = 0, fold = 0;
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
         good[k] = 0;
         if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
-        if (!(E[k] <= exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
+        /* a self-motion of the snapped robot (also a gimbal lock where the plan has an alternative
+         * chain: reference.with_alternative): whether the corrected row stays a representative (the
+         * true robot leaves it unresolved) is the Python continuation's call (its `family` rows) */
+        if (F[k] & IKC_FAMILY) return ikc_hand_back(IKC_WHY_SNAPPED);
+        if (!(E[k] <= leaf_exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
             if (E[k] <= rb->near_singular * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
         } else {
             good[k] = 1;
@@ -994,8 +1030,17 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
             if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
+        } else if (!(E[k] <= exact) && !fold && ikc_weakest(rb, Q + k * dof) < rb->near_singular) {
+            fold = 1;  /* a least-squares leaf ending near a singular configuration */
         }
+        if (E[k] <= exact) any_exact = 1;
     }
+    /* No leaf ends exact and one ends near a singular configuration (a fold: the true robot may have a
+     * pair of solutions there, which the snapped robot lacks -- every leaf of a chain with fewer joints
+     * than the target misses it): the continuation seeds it, as it seeds every such row.  A target
+     * with exact rows keeps the C answer: an unreachable branch's least-squares end is often singular
+     * (a stretched elbow), and handing all those over cost 100x on kr16_2 at 1e-3. */
+    if (!any_exact && fold) return ikc_hand_back(IKC_WHY_SNAPPED);
     for (int a = 0; a < n; a++)
         for (int c = a + 1; c < n; c++)
             if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&

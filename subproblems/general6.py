@@ -54,7 +54,11 @@ displacement d (over the robot size) in ``p`` linearly and in ``p.p``, ``(p.p) l
 quadratically, so its basis (1, cos, sin) becomes (1, d, d^2), interpolated on d in {-1, 0, 1}, and
 steps 3-6 stand.  Products of the (a, b) basis that never occur are structurally zero columns of B';
 they are dropped (found once per arrangement), and a, b are read from the products of each alone
-(``d = a_1 / a_0``).  A prismatic joint 3 or 4 cannot be put at a or b: refused (docs/general6.md).
+(``d = a_1 / a_0``).  On the left side a prismatic joint may sit at d or e (c is the eigenvalue's
+half-angle; f's axis point must stay fixed): the same (1, d, d^2) basis on its grid, the identity as its
+basis-to-monomial map, d read as a ratio of monomials.  With a prismatic joint on each side of the split
+the 12 x 12 pencil is singular for every x_c (the 6 equations' d^2 terms span one dimension): the
+deflated 9 x 9 pencil of :func:`_deflated` replaces it.  Adjacent prismatic d and e: refused.
 
 **Special geometry.**  Parallel or intersecting axes can make B lose rank or the pencil M singular
 (``det M(x) == 0`` for every x).  :func:`prepare` tries the arrangements (the joint order forward, and
@@ -96,6 +100,7 @@ EXACT = _tol.PRECISION  # accepted pose error: position / size and rotation (Fro
 NEWTON_ITERS = 6
 SAME = _tol.VERIFY_SAME_ANGLE  # polished rows closer than this (rad, max over joints) are one solution
 SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
+TWIN = 1e-6  # roots of one target closer than this (rad): read as a double eigenvalue's two solutions
 LEADING_OK = _tol.G6_LEADING_OK  # |det L| / prod(row norms of L) above which L is used as is
 RANK = _tol.G6_RANK  # B' loses rank below this singular value ratio: doubtful
 STALLED = _tol.G6_STALLED  # a candidate missing by less after Newton (of the size) stalled: doubtful
@@ -227,10 +232,13 @@ class _Arrangement:
     E: np.ndarray  # (9, 4, 4) X_b^-1 X_a^-1 on the (a, b) grid
     u: np.ndarray  # unit vector normal to w_f (reads th_f)
     H: tuple  # per axis in arrangement order, its twist matrices (H1, H2, prismatic) (see _hat_list)
-    prism: tuple  # (6,) bool in arrangement order; only positions a, b may be prismatic
+    prism: tuple  # (6,) bool in arrangement order; prismatic joints at a, b, d, e (c and f revolute)
     inv9: np.ndarray  # (9, 9) interpolation of the right side on the (a, b) grid
     grid_ab: np.ndarray  # (9, 2) the (a, b) grid values
+    half9: np.ndarray  # (9, 9) (d, e) basis products -> monomials x_d^i x_e^j (i * 3 + j)
     cols: tuple = tuple(range(8))  # columns of B' (non-constant (a, b) monomials) present in the equations
+    swap: bool = False  # the equations are multiplied by x_e instead of x_d (monomials x_e^i x_d^j)
+    deflate: int | None = None  # rank of the multiplier's squared block: the 9 x 9 deflated pencil is used
 
 
 def _arrangement_order(sign, conj) -> list[int]:
@@ -245,19 +253,28 @@ def _arrangement(w, r, sign, conj, prism) -> _Arrangement:
     w = sign * w[list(order)]
     r = r[list(order)]
     prism = tuple(bool(prism[i]) for i in order)
-    assert not any(prism[2:]), "prismatic joints only at positions a, b"
-    th = np.stack(np.meshgrid(_GRID, _GRID, _GRID, indexing="ij"), axis=-1).reshape(27, 3)
-    X = _exp(w[2], r[2], th[:, 0]) @ _exp(w[3], r[3], th[:, 1]) @ _exp(w[4], r[4], th[:, 2])
+    assert not (prism[2] or prism[5]), "the eliminated joint c and the last joint f must be revolute"
+    # a prismatic d or e: its basis (1, cos, sin) becomes (1, d, d^2) on the grid {-1, 0, 1}, as on the
+    # right side; c and f stay revolute (c is the eigenvalue's half-angle, f's axis point must be fixed)
+    gd, ge = (_GRID_T if prism[3] else _GRID), (_GRID_T if prism[4] else _GRID)
+    th = np.stack(np.meshgrid(_GRID, gd, ge, indexing="ij"), axis=-1).reshape(27, 3)
+    X = (_exp(w[2], r[2], th[:, 0]) @ _joint_exp(w[3], r[3], th[:, 1], prism[3])
+         @ _joint_exp(w[4], r[4], th[:, 2], prism[4]))
     p = np.einsum("kij,j->ki", X[:, :3, :3], r[5]) + X[:, :3, 3]
     lv = X[:, :3, :3] @ w[5]
-    A = (_INV27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
+    inv27 = _INV27 if not (prism[3] or prism[4]) else np.linalg.inv(
+        np.kron(np.kron(_PHI, _PHI_T if prism[3] else _PHI), _PHI_T if prism[4] else _PHI))
+    A = (inv27 @ _fourteen(p, lv)).T.reshape(14, 3, 9)
     ga, gb = (_GRID_T if prism[0] else _GRID), (_GRID_T if prism[1] else _GRID)
     ab = np.stack(np.meshgrid(ga, gb, indexing="ij"), axis=-1).reshape(9, 2)
     inv9 = np.linalg.inv(np.kron(_PHI_T if prism[0] else _PHI, _PHI_T if prism[1] else _PHI))
     E = _inv(_joint_exp(w[1], r[1], ab[:, 1], prism[1])) @ _inv(_joint_exp(w[0], r[0], ab[:, 0], prism[0]))
     u = np.cross(w[5], np.eye(3)[np.argmin(np.abs(w[5]))])
+    # basis of d and e -> monomials: (1, cos, sin) (1 + x^2) in powers of x = tan(th / 2), or for a
+    # prismatic joint (1, d, d^2), already monomials
+    half9 = np.kron(np.eye(3) if prism[3] else _HALF, np.eye(3) if prism[4] else _HALF)
     return _Arrangement(tuple(order), sign, conj, w, r, A, E, u / np.linalg.norm(u), _hat_list(w, r, prism),
-                        prism, inv9, ab)
+                        prism, inv9, ab, half9)
 
 
 def _axes(arr: _Arrangement, H):
@@ -310,19 +327,20 @@ class General6:
         self.r = np.where(self.prism[:, None], 0.0, (r - self.center) / self._s)
         self.Mn = self._norm(self.home[None])[0]
         self._H = _hat_list(self.w, self.r, self.prism)
-        # arrangements whose left side (c, d, e, f) is revolute: a prismatic joint only at a or b
+        # arrangements whose eliminated joint c and last joint f are revolute (prismatic at a, b, d, e)
         layouts = [(sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
         self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
-                     if not self.prism[_arrangement_order(sign, conj)[2:]].any() else None
+                     if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any() else None
                      for sign, conj in layouts]
         if self.prism.any():
             self._arr = [self._present_columns(a) if a is not None else None for a in self._arr]
+            self._arr = [self._regular_variant(a) if a is not None else None for a in self._arr]
         if all(a is None for a in self._arr):
             k = int(np.nonzero(self.prism)[0][0])
             raise General6Error(
-                f"general6: joint {k + 1} is prismatic and no joint order puts every prismatic joint among "
-                "the first two of the chain or of a rotated or inverted copy (joints 1, 2, 5, 6): use the "
-                "compiler's search fallback"
+                f"general6: joint {k + 1} is prismatic and no joint order of the chain or of a rotated or "
+                "inverted copy has a revolute joint at both the eliminated position (c) and the last (f): "
+                "use the compiler's search fallback"
             )
         if arrangement is None:
             self.usable = [0]
@@ -330,6 +348,41 @@ class General6:
         else:
             self.usable = [int(k) for k in np.atleast_1d(arrangement)]
         self.arrangement = self.usable[0]
+
+    def _singular(self, arr: _Arrangement, Gn) -> bool:
+        """Whether the arrangement's pencil is singular for every x (median over the targets Gn)."""
+        _, _, C, _ = self._pencil(arr, Gn)
+        M = self._matrices(C, np.full(len(Gn), SHIFTS[0]), arr)
+        x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
+        sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
+        ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(len(Gn)), where=sv[:, 0] > 0)  # 0 / 0: singular
+        return bool(np.median(ratio) < 1e-10)
+
+    def _regular_variant(self, arr: _Arrangement, count: int = 8, seed: int = 22) -> _Arrangement:
+        """The arrangement, or where a prismatic d or e makes its 12 x 12 pencil singular, the deflated
+        9 x 9 pencil multiplied by that joint (:func:`_deflated`) when that one is regular (measured on
+        random targets, so the choice is the same for every instance of the robot)."""
+        if not (arr.prism[3] or arr.prism[4]):
+            return arr
+        rng = np.random.default_rng(seed)
+        Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
+        Q[:, self.prism] /= math.pi
+        Gn = self._fk_norm(Q) @ _inv(self.Mn)
+        if not self._singular(arr, Gn):
+            return arr
+        for swap in (False, True):
+            if not arr.prism[4 if swap else 3]:
+                continue
+            _, _, C, _ = self._pencil(arr, Gn)
+            P = self._powers(C, np.full(count, SHIFTS[0]), dataclasses.replace(arr, swap=swap))
+            sv = np.linalg.svd(_squared_block(P), compute_uv=False)
+            rank = int(np.max((sv > 1e-9 * sv[:, :1]).sum(axis=1)))
+            if rank >= 3:
+                continue
+            variant = dataclasses.replace(arr, swap=swap, deflate=rank)
+            if not self._singular(variant, Gn):
+                return variant
+        return arr
 
     def _present_columns(self, arr: _Arrangement, count: int = 8, seed: int = 21):
         """The arrangement with B's structurally zero columns dropped (measured on random targets), or
@@ -405,12 +458,24 @@ class General6:
         return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
 
     @staticmethod
-    def _matrices(C, delta):
-        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2)."""
+    def _powers(C, delta, arr: _Arrangement):
+        """The 6 equations (N, 3 powers of y, 6, 9 monomials) in y = tan((th_c - delta) / 2), monomials
+        x_d^i x_e^j at i * 3 + j (x_e^i x_d^j when the arrangement multiplies by x_e)."""
         cd, sd = np.cos(delta)[:, None, None], np.sin(delta)[:, None, None]
         C0, C1, C2 = C[:, :, 0], C[:, :, 1], C[:, :, 2]
         Ct = np.stack([C0, C1 * cd + C2 * sd, C2 * cd - C1 * sd], axis=1)  # (N, 3 trig, 6, 9)
-        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ _HALF9  # (N, 3 powers, 6, 9 monomials)
+        P = np.einsum("tk,ntej->nkej", _HALF, Ct) @ arr.half9  # (N, 3 powers, 6, 9 monomials)
+        if arr.swap:  # the multiplier's power first
+            P = P.reshape(P.shape[:3] + (3, 3)).swapaxes(3, 4).reshape(P.shape)
+        return P
+
+    @staticmethod
+    def _matrices(C, delta, arr: _Arrangement):
+        """The 12 x 12 pencil (N, 3, 12, 12) in y = tan((th_c - delta) / 2), or the arrangement's
+        deflated 9 x 9 one (:func:`_deflated`)."""
+        P = General6._powers(C, delta, arr)
+        if arr.deflate is not None:
+            return _deflated(P, arr.deflate)
         N = len(C)
         M = np.zeros((N, 3, 12, 12))
         for i in range(3):
@@ -424,22 +489,23 @@ class General6:
         N = len(Gn)
         B0, pinv, C, brank = self._pencil(arr, Gn)
         delta = np.full(N, SHIFTS[0])
-        M = self._matrices(C, delta)
+        M = self._matrices(C, delta, arr)
         good = _leading_ok(M[:, 2])
         for d in SHIFTS[1:]:
             if good.all():
                 break
             bad = np.nonzero(~good)[0]
-            M2 = self._matrices(C[bad], np.full(len(bad), d))
+            M2 = self._matrices(C[bad], np.full(len(bad), d), arr)
             ok = _leading_ok(M2[:, 2])
             take = bad[ok]
             M[take], delta[take], good[take] = M2[ok], d, True
         L = M[:, 2]
-        K = np.zeros((N, 24, 24))
-        K[:, :12, 12:] = np.eye(12)
-        rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, 12, 24)
+        n = M.shape[-1]  # 12, or 9 for a deflated pencil
+        K = np.zeros((N, 2 * n, 2 * n))
+        K[:, :n, n:] = np.eye(n)
+        rhs = np.concatenate([M[:, 0], M[:, 1]], axis=2)  # (N, n, 2 n)
         with np.errstate(all="ignore"):
-            K[:, 12:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(12), rhs)
+            K[:, n:, :] = -np.linalg.solve(L + (~good)[:, None, None] * 1e-14 * np.eye(n), rhs)
             lam = np.linalg.eigvals(np.nan_to_num(K))
             th_c = delta[:, None] + 2 * np.arctan(lam)
         keep = np.isfinite(th_c) & (np.abs(th_c.imag) < IMAG_TOL)
@@ -451,12 +517,22 @@ class General6:
         doubt = ~good | (brank < RANK) | split
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
-        v = _null_vectors(M[own], np.tan(0.5 * (th_c - delta[own]))).reshape(-1, 4, 3)
-        th_d = _read_ratio(v[:, :3, :], v[:, 1:, :])
-        th_e = _read_ratio(v[:, :, :2], v[:, :, 1:])
+        y = np.tan(0.5 * (th_c - delta[own]))
+        v = _null_vectors(M[own], y)
+        twin = _twins(own, th_c)
+        if twin.any():  # two solutions sharing th_c: both read from the 2-dimensional null space
+            idx = np.nonzero(twin)[0]
+            v2, pick = _two_monomial_vectors(M[own[idx]], y[idx])
+            v, own, th_c = np.concatenate([v, v2]), np.concatenate([own, own[idx[pick]]]), \
+                np.concatenate([th_c, th_c[idx[pick]]])
+        v = v.reshape(-1, n // 3, 3)
+        # v[i, j] = x_d^i x_e^j (x_e^i x_d^j when swapped): the first joint from rows, the other from columns
+        first, second = (4, 3) if arr.swap else (3, 4)
+        th_1 = _read_ratio(v[:, :-1, :], v[:, 1:, :], arr.prism[first])
+        th_2 = _read_ratio(v[:, :, :2], v[:, :, 1:], arr.prism[second])
+        th_d, th_e = (th_2, th_1) if arr.swap else (th_1, th_2)
         tc = np.stack([np.ones_like(th_c), np.cos(th_c), np.sin(th_c)], axis=1)
-        ud = np.stack([np.ones_like(th_d), np.cos(th_d), np.sin(th_d)], axis=1)
-        ue = np.stack([np.ones_like(th_e), np.cos(th_e), np.sin(th_e)], axis=1)
+        ud, ue = _basis(th_d, arr.prism[3]), _basis(th_e, arr.prism[4])
         u = (ud[:, :, None] * ue[:, None, :]).reshape(-1, 9)
         rhs = np.einsum("qtj,nt->nqj", arr.A, tc)
         rhs = np.einsum("nqj,nj->nq", rhs, u) - B0[own]
@@ -643,15 +719,11 @@ class General6:
         Gn = Tn @ _inv(self.Mn)
         why, found = [], []
         for k, arr in enumerate(self._arr):
-            if arr is None:  # a prismatic joint would sit on the left side
+            if arr is None:  # a prismatic joint would sit at c or f
                 continue
-            _, _, C, _ = self._pencil(arr, Gn[:count])
-            M = self._matrices(C, np.full(count, SHIFTS[0]))
-            x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
-            sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
-            ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(count), where=sv[:, 0] > 0)  # 0 / 0: singular
-            if np.median(ratio) < _tol.G6_SINGULAR_PENCIL:
-                why.append(f"order {arr.order} ({arr.conj} moved ahead): the 12 x 12 pencil is singular")
+            if self._singular(arr, Gn[:count]):
+                kind = "9 x 9 deflated" if arr.deflate is not None else "12 x 12"
+                why.append(f"order {arr.order} ({arr.conj} moved ahead): the {kind} pencil is singular")
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
             Qc, err = self._newton(Qc, Tn[own])
@@ -686,12 +758,43 @@ def _leading_ok(L):
 
 
 _PROBE = np.random.default_rng(12).normal(size=12)
+_MIX = np.random.default_rng(14).normal(size=(9, 12))  # deflated pencil: 9 fixed combinations of its rows
+
+
+def _squared_block(P):
+    """(N, 6 equations, 9): the terms of the 6 equations P (N, 3, 6, 9) in the multiplier's square
+    d^2 x^j, over every power of the elimination variable."""
+    return P[:, :, :, 6:9].transpose(0, 2, 1, 3).reshape(len(P), 6, 9)
+
+
+def _deflated(P, rank):
+    """The 9 x 9 pencil (N, 3, 9, 9) of a prismatic multiplier joint whose squared block is
+    rank-deficient (docs/general6.md, "Prismatic joints").
+
+    With a prismatic joint on each side of the split, the 6 equations' terms in the multiplier's d^2
+    span only ``rank`` < 3 dimensions (the displacements enter only p.p and (p.p) l - 2 (p.l) p), so
+    multiplying all 6 by d gives d^3 columns that only ``rank`` rows touch: the 12 x 12 pencil is
+    singular for every x_c.  Instead: the 6 equations, and d times the 6 - rank combinations of them
+    free of d^2 (the left null space of the d^2 block over all powers of x_c), all in the 9 monomials
+    d^i x^j (i, j <= 2): 12 - rank equations.  Any true solution satisfies every one, so the
+    determinant of 9 fixed combinations of them vanishes at every true x_c (completeness); the extra
+    roots it may have are removed by Newton and the final check like any spurious candidate."""
+    N = len(P)
+    U = np.linalg.svd(_squared_block(P))[0]
+    low = np.einsum("nek,npej->npkj", U[:, :, rank:], P)  # (N, 3, 6 - rank, 9): no d^2 terms
+    low[..., 6:9] = 0.0
+    rows = np.zeros((N, 3, 12 - rank, 9))
+    rows[:, :, :6] = P
+    rows[:, :, 6:, 3:9] = low[..., 0:6]  # d * (d^i x^j) = d^(i+1) x^j
+    M = np.einsum("re,npej->nprj", _MIX[:, :12 - rank], rows)
+    scale = np.linalg.norm(M, axis=(1, 3), keepdims=True)
+    return M / np.where(scale > 0, scale, 1.0)
 _PERTURB = np.random.default_rng(13).normal(size=(2, 3))
 _PERTURB /= np.linalg.norm(_PERTURB, axis=1, keepdims=True)
 
 
 def _null_vectors(M, y):
-    """Null vectors (K, 12) of the pencils M (K, 3, 12, 12) at real roots y (K,): two steps of inverse
+    """Null vectors (K, n) of the pencils M (K, 3, n, n) at real roots y (K,): two steps of inverse
     iteration; y is moved by ~1e-11 so that an exact root cannot make the factorisation singular."""
     big = np.abs(y) > 1
     yi = np.where(big, 1 / np.where(big, y, 1), y)
@@ -700,24 +803,116 @@ def _null_vectors(M, y):
     c0 = np.where(big, yi * yi, 1.0)[:, None, None]
     c2 = np.where(big, 1.0, yi * yi)[:, None, None]
     P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
-    z = np.broadcast_to(_PROBE, (len(y), 12))[..., None]
+    n = M.shape[-1]
+    z = np.broadcast_to(_PROBE[:n], (len(y), n))[..., None]
     with np.errstate(all="ignore"):
         for _ in range(2):
             try:
                 z = np.linalg.solve(P, z)
-            except np.linalg.LinAlgError:  # an exactly singular P in the stack: the SVD's null vectors
-                z = np.linalg.svd(P)[2][:, -1, :, None]
-                break
+            except np.linalg.LinAlgError:  # an exactly singular P in the stack: that one's SVD null vector
+                z = _solve_each(P, z)
             z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), _tol.TINY)
     return np.nan_to_num(z[..., 0])
 
 
-def _read_ratio(den, num):
-    """th = 2 atan2(num, den) from the (den, num) pair of largest magnitude: (M, ...) -> (M,)."""
+def _twins(own, th_c):
+    """Candidates (K,) with another root of the same target within TWIN of theirs: an eigenvalue of
+    geometric multiplicity two, two solutions that share th_c (a modular arm's special poses: RRRRTT
+    at q2 = pi has two solutions differing only in q1, q3, q6)."""
+    order = np.lexsort((th_c, own))
+    o, t = own[order], th_c[order]
+    close = (o[1:] == o[:-1]) & (np.abs(t[1:] - t[:-1]) < TWIN)
+    out = np.zeros(len(own), dtype=bool)
+    out[order[1:][close]] = out[order[:-1][close]] = True
+    return out
+
+
+_IDENTITIES: dict = {}
+
+
+def _identities(rows: int) -> np.ndarray:
+    """(K, 4) index quadruples (p, q, r, s) of a monomial vector laid out (rows, 3) at i * 3 + j with
+    u_p u_q = u_r u_s (the exponents of p and q add up to those of r and s)."""
+    if rows not in _IDENTITIES:
+        cells = [(i, j) for i in range(rows) for j in range(3)]
+        pairs: dict = {}
+        for a in range(len(cells)):
+            for b in range(a, len(cells)):
+                key = (cells[a][0] + cells[b][0], cells[a][1] + cells[b][1])
+                pairs.setdefault(key, []).append((a, b))
+        quads = [(p, q, r, s) for group in pairs.values() for k, (p, q) in enumerate(group)
+                 for (r, s) in group[k + 1:]]
+        _IDENTITIES[rows] = np.array(quads, dtype=int)
+    return _IDENTITIES[rows]
+
+
+def _two_monomial_vectors(M, y):
+    """At twin roots y (K,) of the pencils M (K, 3, n, n): the two monomial vectors in the pencil's
+    2-dimensional null space.  With V1, V2 its basis (the SVD's last two right singular vectors), u =
+    b V1 + a V2 is a monomial vector exactly when every identity u_p u_q = u_r u_s holds: each is a
+    homogeneous quadratic in (b, a), all of them multiples of the one whose roots are the two
+    solutions; it is read from the identities' stacked coefficients (their top singular vector).
+    Returns (vectors (2 K, n), index into the K twins of each)."""
+    n = M.shape[-1]
+    big = np.abs(y) > 1
+    yi = np.where(big, 1 / np.where(big, y, 1), y)
+    c0 = np.where(big, yi * yi, 1.0)[:, None, None]
+    c2 = np.where(big, 1.0, yi * yi)[:, None, None]
+    P = c0 * M[:, 0] + yi[:, None, None] * M[:, 1] + c2 * M[:, 2]
+    Vh = np.linalg.svd(P)[2]
+    V1, V2 = Vh[:, -1, :], Vh[:, -2, :]
+    p, q, r, s = _identities(n // 3).T
+    quad = np.stack([V1[:, p] * V1[:, q] - V1[:, r] * V1[:, s],  # b^2
+                     V1[:, p] * V2[:, q] + V2[:, p] * V1[:, q] - V1[:, r] * V2[:, s] - V2[:, r] * V1[:, s],
+                     V2[:, p] * V2[:, q] - V2[:, r] * V2[:, s]], axis=2)  # a^2; (K, identities, 3)
+    h = np.linalg.svd(quad)[2][:, 0, :]  # (K, 3): h0 b^2 + h1 a b + h2 a^2 = 0
+    disc = np.sqrt(np.maximum(h[:, 1] ** 2 - 4 * h[:, 0] * h[:, 2], 0.0))
+    out = []
+    for sign in (1.0, -1.0):
+        # the root of the larger coefficient's variable: a / b when |h2| >= |h0|, else b / a
+        with np.errstate(all="ignore"):
+            ratio_ab = (-h[:, 1] + sign * disc) / (2 * h[:, 2])
+            ratio_ba = (-h[:, 1] + sign * disc) / (2 * h[:, 0])
+        use_ab = np.abs(h[:, 2]) >= np.abs(h[:, 0])
+        b = np.where(use_ab, 1.0, np.nan_to_num(ratio_ba))
+        a = np.where(use_ab, np.nan_to_num(ratio_ab), 1.0)
+        out.append(b[:, None] * V1 + a[:, None] * V2)
+    K = len(y)
+    return np.concatenate(out), np.concatenate([np.arange(K), np.arange(K)])
+
+
+def _solve_each(P, z):
+    """P^-1 z per matrix of the stack, the SVD's null vector for an exactly singular one: each root
+    gets what it gets when solved alone (before, one singular P switched the whole stack to SVD null
+    vectors, so at a self-motion a target's rows depended on the other targets of its batch)."""
+    out = np.empty_like(z)
+    for k in range(len(P)):
+        try:
+            out[k] = np.linalg.solve(P[k], z[k])
+        except np.linalg.LinAlgError:
+            out[k] = np.linalg.svd(P[k])[2][-1, :, None]
+    return out
+
+
+def _read_ratio(den, num, prism=False):
+    """th = 2 atan2(num, den) from the (den, num) pair of largest magnitude: (M, ...) -> (M,); for a
+    prismatic joint (monomials in its displacement d, not in a half-angle) d = num / den from the pair
+    of largest den."""
     den, num = den.reshape(len(den), -1), num.reshape(len(num), -1)
-    k = np.argmax(den * den + num * num, axis=1)
     i = np.arange(len(den))
+    if prism:
+        k = np.argmax(np.abs(den), axis=1)
+        with np.errstate(all="ignore"):
+            return num[i, k] / den[i, k]
+    k = np.argmax(den * den + num * num, axis=1)
     return 2 * np.arctan2(num[i, k], den[i, k])
+
+
+def _basis(th, prism=False):
+    """(M, 3): (1, cos th, sin th) of a revolute joint, (1, d, d^2) of a prismatic one."""
+    if prism:
+        return np.stack([np.ones_like(th), th, th * th], axis=1)
+    return np.stack([np.ones_like(th), np.cos(th), np.sin(th)], axis=1)
 
 
 def _wrap(Q, prism=None):

@@ -661,8 +661,29 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
     return PYTHON if k == FAMILY_MISS else k
 
 
+def _any_flag(F, bit) -> bool:
+    return any(not f & _fk.EMPTY and f & bit for f in F)
+
+
+def settle_alternative(rb: FinishRobot, g, free, limits: bool):
+    """A gimbal lock of the chain where the plan has an alternative chain: the alternative chain's
+    finish where it meets no lock and no degenerate geometry, else FAMILY_MISS."""
+    _, _, F = rb.leaves(rb.chain, g, free, 0.0)
+    if not _any_flag(F, _fk.FAMILY):
+        return FAMILY_MISS
+    Qa, Ea, Fa = rb.leaves(rb.chain_alt, g, free, 0.0)
+    if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER):
+        return FAMILY_MISS
+    k = finish(rb, g, Qa, Ea, Fa, limits)
+    return PYTHON if k == FAMILY_MISS else k
+
+
 def settle(rb: FinishRobot, g, free=(), limits: bool = True):
     """Rows ``(q, residual, ls, continuum)`` of one goal as the C finish gives them, or PYTHON."""
+    if rb.chain_alt is not None:
+        k = settle_alternative(rb, g, tuple(free), limits)
+        if k != FAMILY_MISS:
+            return k
     k = settle_chain(rb, rb.chain, g, tuple(free), limits)
     if k == PYTHON and rb.chain_alt is not None:
         k = settle_chain(rb, rb.chain_alt, g, tuple(free), limits)

@@ -23,13 +23,31 @@ SAMPLE = [
     ("RRRTT", "general", 0),
     ("RRRRRR", "modular", 2),
     ("TRRRRR", "modular", 1),
-    ("RRTRRR", "modular", 5),  # 1-D search
+    ("RRTRRR", "modular", 5),  # general-6r since prismatic joint 3 is covered: at a self-motion
+    # (special angles) its rows were batch-dependent until general6 solved a singular stack per matrix
+    # Issue 10 item 6, the classes that missed in benchmarks/results/configurations.md (2026-12-02 01:27):
+    ("RRRTRT", "general", 0),  # 1-D search 47/50 -> general-6r (deflated pencil, prismatic 4 and 6)
+    ("TRRRTR", "general", 0),  # 1-D search 48/50 -> general-6r (deflated pencil, prismatic 1 and 5)
+    ("TRRRRT", "modular", 0),  # general-6r 44/50: self-motions at special angles, rows now flagged
+    ("RRRRTT", "modular", 0),  # general-6r 43/50: self-motions, and two solutions sharing th_c
+    ("RRRT", "modular", 0),  # closed form 48/50 (known gap below)
+    ("RRTRR", "modular", 0),  # closed form 46/48 (known gap below)
+    ("RRRRT", "modular", 0),  # 1-D search 48/50 (known gap below)
 ]
 # ("RRTRRR", "modular", 5) was a known gap (1-D search: 1 of 40 random poses, seed 2, missed); it
 # recovers 40 of 40 since the class II batch solver wraps exactly (subproblems/angles.py; measured
 # 2026-12-02: with the former rounding wrap in _class2 alone it misses that pose again; the 1-D search's
 # completeness there hangs on the last bit of a class II row).
-KNOWN_GAPS: dict = {}
+KNOWN_GAPS: dict = {
+    ("RRRT", "modular", 0): "closed form O-RRR then S1-T: at q2 = pi axes 1 and 3 line up (gimbal lock), "
+    "the orientation triple's continuum representative misses the position and the isolated solution of "
+    "the whole chain is lost (2 of 10 special poses, Jacobian regular there)",
+    ("RRTRR", "modular", 0): "closed form at special angles on a self-motion of the whole chain: no exact "
+    "representative returned (0 or 1 inexact rows; 2 of 8 scored special poses)",
+    ("RRRRT", "modular", 0): "1-D search: two roots closer than a grid cell near a singular configuration "
+    "(sigma_min 6e-4..2e-2) merge into one; the twin lies along the Jacobian's null direction (2 of 40 "
+    "random poses); a 5-joint chain has no general-6r alternative",
+}
 
 
 def _rank(chain) -> int:

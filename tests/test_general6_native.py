@@ -104,7 +104,15 @@ def test_random_arms_same_sets_as_python(seed):
     assert back <= HANDED_BACK * len(T), back
 
 
-@pytest.mark.parametrize("kinds", ["TRRRRR", "RTRRRR", "RRRRRT", "TTRRRR", "RRRRTT"])
+def test_prismatic_at_d_or_e_stays_python():
+    """An arm whose preferred arrangement puts a prismatic joint at d or e (RTRRRR here: general6.py
+    chose its joint 2 at d) has no C chain: general6.h covers prismatic joints at a, b only."""
+    module = compile_robot(_prismatic_chain("RTRRRR", 1))
+    arr = module._GENERAL6._arr[module._GENERAL6.usable[0]]
+    assert any(arr.prism[2:]) and module._SOLVER.native_chain() is None
+
+
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "TTRRRR", "RRRRTT"])
 def test_prismatic_same_sets_as_python(kinds):
     chain = _prismatic_chain(kinds, 1)
     module, nc = _module(kinds, chain)

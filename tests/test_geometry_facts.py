@@ -1,31 +1,38 @@
 """The geometry facts found once (``ikcompiler.geometry.facts``; docs/design.md section 10).
 
 The compiler records on each S2-RR step the relation of its two axes (``axes``), judged on the one set
-of sampled configurations; the code generator's own measurement (``codegen.fastpath.classify_pairs``,
-its seeds and its sample count) must read the same relation on every plan, so that it can take the
-recorded fact instead of measuring again."""
+of sampled configurations, and the code generator reads it (``codegen.fastpath.classify_pairs``).  The
+relation must persist: judged on another draw of configurations (another seed, more of them) it is the
+same on every plan; and a step without it (a module written before ``_STEPS`` carried it) is judged
+by the code generator to the same relation."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
 from ikcompiler import configs
 from ikcompiler.codegen.fastpath import classify_pairs
 from ikcompiler.compiler import compile_plan
-from ikcompiler.geometry.facts import configurations
+from ikcompiler.geometry.facts import configurations, step_axes
 from ikcompiler.inputs import load_robot
 from ikcompiler.inputs.zoo import zoo_names
 
 
 def _compare(chain, plan):
     twists = np.asarray(plan.plan_twists if plan.plan_twists else chain.twists, dtype=float)
+    other_draw = configurations(chain.joint_types, chain.scale, count=6, seed=5)
     seen = []
     for steps in (plan.steps, plan.alternative):
-        theirs = classify_pairs(steps, twists, chain.joint_types, chain.scale)
-        for mine, other in zip(steps, theirs):
-            assert mine.get("axes") == other.get("_axes"), (chain.name, mine.get("rule"))
-            if "axes" in mine:
-                seen.append(mine["axes"])
+        for step in steps:
+            again = step_axes(step, twists, chain.joint_types, chain.scale, other_draw)
+            assert step.get("axes") == again, (chain.name, step.get("rule"))
+            if "axes" in step:
+                seen.append(step["axes"])
+        bare = [dataclasses.replace(s, axes=None) if s.kind == "S2" else s for s in steps]
+        judged = classify_pairs(bare, twists, chain.joint_types, chain.scale)
+        assert [s.get("axes") for s in judged] == [s.get("axes") for s in steps], chain.name
     return seen
 
 

@@ -146,6 +146,8 @@ def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: f
             or np.any(b != 0)):
         return None
     arr = solver._arr[solver.usable[0]]
+    if any(arr.prism[2:]) or getattr(arr, "deflate", None) is not None:
+        return None  # general6.h covers prismatic joints at a, b only, and the 12 x 12 pencil
     Mi = np.linalg.inv(solver.Mn)
     flat = lambda x: _array(np.asarray(x, float).ravel().tolist(), _number)  # noqa: E731
     ints = lambda x: _array(list(x), str)  # noqa: E731
@@ -197,9 +199,10 @@ _MODULE_FIELDS = (  # what the C depends on, besides the code of this package (s
     "_INDEPENDENT", "_VARY", "_VARY_LOWER", "_VARY_UPPER", "_FREE", "_POLISH", "_SEARCH", "_GRID",
     "_STEPS", "_ALT_STEPS",
 )
-# a change to these changes the C: the code generator, and what it reads from subproblems (the pair
-# classification runs plan_runtime; the snapped plan's threshold comes from continuation.near_singular)
-_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py")
+# a change to these changes the C: the code generator, the steps' lowerings (steps/kinds.py), and what
+# it reads from subproblems (the pair classification runs plan_runtime; the snapped plan's threshold
+# comes from continuation.near_singular)
+_GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py", "../steps/kinds.py")
 _READ_FROM_SUBPROBLEMS = ("plan_runtime.py", "continuation.py", "tolerances.py", "general6.py")
 _SOURCES: dict[str, str | None] = {}  # data hash -> C text, for this process
 

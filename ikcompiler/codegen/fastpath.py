@@ -22,13 +22,15 @@ data a generated module holds as well, so the C can be printed again from a modu
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ikcompiler.codegen import ir
-from subproblems import plan_runtime as rt
+from ikcompiler.geometry import facts
+from ikcompiler.steps import Step
 
 ZERO = 1e-15  # constants below this (rounding noise of a URDF's rpy) fold to zero
 FAST_TARGETS = ("pose", "position", "orientation")
@@ -296,112 +298,55 @@ class _Emitter:
         screws = tuple(_arg(self.screw(t, k)) for t, k in zip(tws, kinds))
         return ("reference", code, screws, tuple((k, _arg(v)) for k, v in inputs.items()))
 
-    # -- steps -------------------------------------------------------------------------------------
-    def step(self, step, Td):
-        kind = step["kind"]
+    # -- what a step's lowering uses (the steps' ``lower`` methods, ikcompiler/steps/kinds.py) ---------
+    Unsupported = Unsupported
+
+    def rewrite(self, step, Td):
+        """The step's equation with its known factors moved right (rule 7): ``(G_u, all_key, sign, Tp)``,
+        ``G_u[u]`` the motion key carrying unknown u, ``Tp`` the target (inverted for rule 5)."""
         c = self.c
-        if kind == "SUM":
-            j, g, members = step["solve"][0], step["group"], step["members"]
-            s_j = dict(members)[j]
-            terms = [(1.0 / s_j, self.sig[g])] + [(-s / s_j, self.q[m]) for m, s in members if m != j]
-            self.q[j] = c.lin(terms, "q")
-            self._couple()
-            return
-        if kind not in ("S1", "S2", "S3", "HL", "HT", "O"):
-            raise Unsupported(f"step kind {kind}")
-        known = set(step["known"])
+        known = set(step.known)
         missing = [j for j in known if j not in self.q]
         if missing:
             raise Unsupported(f"joints {missing} known to the plan but not to the emitter")
         G_u, all_key = self.equation(known)
-        sign = -1.0 if step.get("inverted") else 1.0
+        inverted = getattr(step, "inverted", None)
+        sign = -1.0 if inverted else 1.0
         Tp = c.mat_mul(Td, c.inverse(self.prefix(all_key)))
-        if step.get("inverted"):
+        if inverted:
             Tp = c.inverse(Tp)
-        code = step["code"]
-        if kind == "S1":
-            tws = [self.twist(j, G_u[j], sign) for j in step["solve"]]
-            if code == "S1-TTT":
-                call = _call("slide3", tws[0][0], tws[1][0], tws[2][0], Tp[9:])
-            elif code == "S1-RTT":
-                call = _call("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
-            else:
-                call = self.reference_call(code, tws, {"T": Tp})
-            outs = self._loop([f"a{c.count}_{i}" for i in range(len(step["solve"]))], call)
-            for j, name in zip(step["solve"], outs):
-                self.q[j] = name
-            self._couple(step["solve"])
-            return
-        if kind == "O":
-            ws = [self.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in step["groups"]]
-            fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
-            outs = self._loop([f"a{c.count}_{i}" for i in range(len(ws))],
-                              _call(fn, *ws, Tp[:9], *([self.rep()] if len(ws) == 3 else [])))
-            for col, g in enumerate(step["group_ids"]):
-                group = step["groups"][col]
-                if len(group) == 1:
-                    j, s = group[0]
-                    self.q[j] = c.lin([(s, outs[col])], "q")
-                else:
-                    self.sig[g] = outs[col]
-            self._couple(step["solve"])
-            return
-        p0 = step["p0"]
-        point = c.mat_vec(self.prefix(G_u[step["trail"][0]] if step["trail"] else all_key), p0, True)
-        Tpp = c.mat_vec(Tp, point, True)
-        solve = step["solve"]
-        args = [self.twist(j, G_u[j], sign) for j in solve]
-        letters = code.split("-")[1]
-        if kind == "S2":
-            if code == "S2-R":
-                call = _call("point_r", args[0][0], args[0][1], point, Tpp)
-            elif code == "S2-RR":
-                (w1, r1), (w2, r2) = args
-                fn = "point_rr_parallel" if step.get("_axes") == "parallel" else "point_rr_meet"
-                if step.get("_axes") in ("parallel", "meet"):
-                    call = _call(fn, w1, r1, w2, r2, point, Tpp)
-                else:  # skew axes: the general solver
-                    call = self.reference_call(code, args, {"p": point, "q": Tpp})
-            elif code == "S2-TTT":
-                b = [c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
-                call = _call("slide3", args[0][0], args[1][0], args[2][0], b)
-            else:
-                call = self.reference_call(code, args, {"p": point, "q": Tpp})
-        elif kind == "S3":
-            centre = c.mat_vec(self.prefix(G_u[step["lead"][0]]), step["c0"], True)
-            diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
-            d = c.let(ir.call("sqrt", c.dot(diff, diff)), "d")
-            if code == "S3-R":
-                call = _call("dist_r", args[0][0], args[0][1], point, centre, d, self.rep())
-            elif code == "S3-T":
-                call = _call("dist_t", args[0][0], point, centre, d)
-            else:
-                call = self.reference_call(code, args, {"p": point, "q": centre, "d": d})
-        else:  # HL, HT: rule 6 with the axis h of a parallel group
-            lead = step["lead"][0]
-            h = self.twist(lead, G_u[lead], 1.0)[0] if self.kinds[lead] == "R" else None
-            if h is None:
-                raise Unsupported("rule 6 along a prismatic group")
-            if kind == "HL":
-                p_in, d = point, c.dot(h, Tpp, "d")
-                tw = args[0]
-            else:  # HT: h . exp(-xi' th) T'p = h . p
-                p_in, d = Tpp, c.dot(h, point, "d")
-                tw = tuple([c.scaled(-1.0, args[0][0])] + list(args[0][1:]))
-            if letters == "R":
-                call = _call("plane_r", tw[0], tw[1], p_in, h, d, self.rep())
-            elif letters == "T":
-                call = _call("plane_t", tw[0], p_in, h, d, self.rep(self.spans[solve[0]]))
-            else:
-                if kind == "HT":
-                    args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
-                call = self.reference_call(code, args, {"p": p_in, "h": h, "d": d})
-        outs = self._loop([f"a{c.count}_{i}" for i in range(len(solve))], call)
-        for j, name in zip(solve, outs):
-            self.q[j] = name
-        self._couple(solve)
+        return G_u, all_key, sign, Tp
 
-    def _loop(self, outs, call):
+    def point_image(self, step, G_u, all_key, Tp):
+        """The step's point ``p0`` carried by its trailing axes, and its image under ``Tp``."""
+        key = G_u[step.trail[0]] if step.trail else all_key
+        point = self.c.mat_vec(self.prefix(key), step.p0, True)
+        return point, self.c.mat_vec(Tp, point, True)
+
+    @staticmethod
+    def kernel(name: str, *args):
+        """A call of the kernel ``name`` of subproblems/fast.py (its C port in fast_kernels.h)."""
+        return _call(name, *args)
+
+    def slot_names(self, count: int) -> list[str]:
+        """The names of a loop's ``count`` outputs, numbered by the next name."""
+        return [f"a{self.c.count}_{i}" for i in range(count)]
+
+    def solved(self, joints, call, names=None) -> list:
+        """Loop over the slots of ``call`` (the rest of the chain nests inside), its outputs the values
+        of ``joints``; coupled joints follow.  ``names``: the outputs' names taken before the call was
+        built (else now)."""
+        outs = self.loop(names if names is not None else self.slot_names(len(joints)), call)
+        for j, name in zip(joints, outs):
+            self.q[j] = name
+        self._couple(joints)
+        return outs
+
+    def couple(self, solved=()):
+        self._couple(solved)
+
+    def loop(self, outs, call) -> list:
+        """Loop over the slots of ``call`` binding the names ``outs``: the rest of the chain nests inside."""
         flag = f"f{self.c.count}"
         self.c.count += 1
         if call[0] == "kernel":
@@ -432,27 +377,17 @@ class _Emitter:
         c.emit(ir.Leaf(tuple(ir.const(self.q[j]) for j in independent), tuple(parts), tuple(self.flags)))
 
 
-def classify_pairs(steps, twists, kinds, scale, samples: int = 6, seed: int = 5):
-    """Mark each S2-RR step with the relation of its two (transformed) axes: ``meet``, ``parallel``
-    or ``skew``, measured over random configurations (the relation the planner relies on persists)."""
-    rng = np.random.default_rng(seed)
-    n = len(kinds)
-    TH = rng.uniform(-math.pi, math.pi, size=(samples, n))
-    Td = rt.fk_batch(twists, rng.uniform(-math.pi, math.pi, size=(samples, n)), np.eye(4))
+def classify_pairs(steps, twists, kinds, scale):
+    """The steps with each S2-RR step's axis relation (``meet``, ``parallel``, ``skew``: which kernel
+    solves it) as the compiler recorded it (``geometry/facts.py``, docs/design.md section 10).  A step
+    without it (a module written before the relation was recorded in ``_STEPS``) is judged now, by the
+    same function on the same configurations."""
     out = []
     for step in steps:
-        step = dict(step)
-        if step.get("code") == "S2-RR" and step["kind"] == "S2":
-            tw, _ = rt._step_inputs(step, twists, kinds, Td, TH, None)
-            w1, w2 = tw[:, 0, 3:], tw[:, 1, 3:]
-            r1, r2 = np.cross(w1, tw[:, 0, :3]), np.cross(w2, tw[:, 1, :3])
-            n12 = np.cross(w1, w2)
-            nn = np.linalg.norm(n12, axis=1)
-            if np.all(nn <= 1e-9):
-                step["_axes"] = "parallel"
-            else:
-                gap = np.abs(np.sum((r2 - r1) * n12, axis=1)) / np.maximum(nn, 1e-300)
-                step["_axes"] = "meet" if np.all((gap <= 1e-9 * scale) & (nn > 1e-6)) else "skew"
+        if step.code == "S2-RR" and step.kind == "S2" and step.axes is None:
+            th = facts.configurations(kinds, scale)
+            axes = facts.step_axes(step, np.asarray(twists, float), kinds, scale, th)
+            step = dataclasses.replace(step, axes=axes)
         out.append(step)
     return out
 
@@ -530,7 +465,8 @@ def build_program(data: ChainData, *, cse: bool = True) -> ir.Program | None:
     ``cse``: name common subexpressions (off only to measure what it saves)."""
     if data.method not in ("closed-form", "1d-search", "2d-search") or data.target not in FAST_TARGETS:
         return None
-    steps = classify_pairs(data.steps, data.twists, data.kinds, data.scale)
+    steps = [s if isinstance(s, Step) else Step.from_module_entry(s) for s in data.steps]
+    steps = classify_pairs(steps, data.twists, data.kinds, data.scale)
     em = _Emitter(data.twists, data.kinds, data.home, data.couplings, list(data.known), data.scale,
                   data.target, data.spans())
     c = em.c
@@ -545,7 +481,7 @@ def build_program(data: ChainData, *, cse: bool = True) -> ir.Program | None:
                        [float(x) for x in Hinv[:3, :3].ravel()] + [float(x) for x in Hinv[:3, 3]])
     try:
         for step in steps:
-            em.step(step, Td)
+            step.lower(em, Td)
         em.leaf(data.independent, goal)
     except Unsupported:
         return None

@@ -84,7 +84,7 @@ def _literal(v) -> str:
     raise TypeError(f"cannot print {type(v).__name__}")
 
 
-STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lead", "c0")
+STEP_FIELDS = ("kind", "code", "known", "inverted", "solve", "trail", "p0", "lead", "c0", "axes")
 STEP_FIELDS += ("groups", "group_ids", "group", "members", "starts", "iters", "solve_pair", "var", "coupling")
 
 

@@ -69,27 +69,40 @@ class Solver:
             self._general6.append(reference.true_general6(self.robot))
         return self._general6[0]
 
-    def correct(self, TH, owner, goals):
-        """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct)."""
-        return reference.correct(self.robot, TH, owner, goals, self.general6)
+    def correct(self, TH, owner, goals, family):
+        """Snapped plan: candidates of the snapped robot carried to the true one (reference.correct):
+        (TH, owner, continuum)."""
+        return reference.correct(self.robot, TH, owner, goals, self.general6, family)
 
-    def reference_chunk(self, goals, Td, init, limits):
-        """The reference runtime on targets (chunked so that a search stays within the budget)."""
+    def reference_chunk(self, goals, Td, init, limits, alternative=None):
+        """The reference runtime on targets (chunked so that a search stays within the budget);
+        ``alternative`` marks the targets that also take the plan's alternative chain."""
         width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
         step = max(1, self.memory_budget // width)
         if len(goals) <= step:
-            return self._reference(goals, Td, init, limits)
-        return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits)
+            return self._reference(goals, Td, init, limits, alternative)
+        return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits,
+                                        None if alternative is None else alternative[i:i + step])
                         for i in range(0, len(goals), step)])
 
-    def _reference(self, goals, Td, init, limits):
+    def _reference(self, goals, Td, init, limits, alternative=None):
         r = self.robot
-        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct), goals, limits)
+        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct, alternative),
+                                  goals, limits)
+
+    def lock_targets(self, flag):
+        """Targets (N,) whose fast-chain leaves met a gimbal lock (FAMILY) where the plan has an
+        alternative chain: the reference runtime settles them with it (reference.with_alternative)."""
+        if not self.robot.alt_steps:
+            return np.zeros(len(flag), dtype=bool)
+        return ((flag & _fk.FAMILY) != 0).any(axis=1)
 
     def settle_leaves(self, goals, Td, init, limits, Q, err, flag):
         """Finish the fast chain's leaves of targets: done here, Newton steps on the near misses, or the
         reference runtime for targets near a degenerate geometry (fast.finish_many's routes)."""
         r = self.robot
+        lock = self.lock_targets(flag)
+        flag = np.where(lock[:, None], flag | _fk.DEFER, flag)  # to the reference runtime
         parts, route = _fk.finish_many(Q, err, flag, **r.finish_kwargs(limits))
         newton = np.nonzero(route == _fk.ROUTE_NEWTON)[0]
         if len(newton):
@@ -100,7 +113,8 @@ class Solver:
             _scatter(parts, newton, _fk.merge_split_roots(done, r.joint_types))
         defer = np.nonzero(route == _fk.ROUTE_REFERENCE)[0]
         if len(defer):
-            _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits))
+            _scatter(parts, defer, self.reference_chunk(goals[defer], Td[defer], init[defer], limits,
+                                                        lock[defer]))
         return tuple(parts)
 
     def python_chunk(self, goals, Td, init, limits):
@@ -116,19 +130,25 @@ class Solver:
         if not r.polish:
             return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
         # snapped plan: the leaves are candidates on the snapped robot; the continuation corrects them
-        defer = (flag & _fk.DEFER).any(axis=1)
+        # A gimbal lock goes to the reference runtime, which takes the alternative chain, only on a chain
+        # of fewer than 6 independent joints (a 5-joint arm's O-RRR gimbal, whose waist value the
+        # position fixes).  On a 6-joint chain the snapped lock is a self-motion: the family path below
+        # keeps its representatives (puma560_robot.urdf at q5 = 0: sent away, 4 of 30 poses missed).
+        lock = self.lock_targets(flag) & (len(r.vary) < 6)
+        defer = (flag & _fk.DEFER).any(axis=1) | lock
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
-        # a leaf on a self-motion of the snapped robot stays a representative of it on the true robot
-        # (the relation missed by ~1e-9: numerically the same family); the continuation keeps the
-        # tracked rows first, in order, and appends its rescue rows (not representatives)
+        # a leaf on a self-motion of the snapped robot stays a representative of it where the true
+        # robot leaves it unresolved (the relation missed by ~1e-9: numerically the same family)
         family = (flag[rows, leaf] & _fk.FAMILY) != 0
-        TH, rows = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals)
+        TH, rows, cont = self.correct(Q[rows, leaf] @ r.A.T + r.B, rows, goals, family)
         none = np.zeros(len(TH), dtype=bool)
-        cont = np.concatenate([family, none[len(family):]])
-        parts = list(reference.complete(r, TH, rows, none, cont, goals, limits))
+        # rows of one target that the continuation left on one solution (a double root tracked from its
+        # two snapped copies) are one row: merged as the Newton route merges split roots
+        parts = list(_fk.merge_split_roots(reference.complete(r, TH, rows, none, cont, goals, limits),
+                                           r.joint_types))
         idx = np.nonzero(defer)[0]
         if len(idx):
-            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits))
+            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx]))
         return tuple(parts)
 
     def handed_back(self, goals, Td, init, limits):
@@ -154,7 +174,7 @@ class Solver:
             return _unpack(self.handed_back(goals, Td, init, limits), exact_only)
         # the scalar fast chain once; its leaves, if its finish cannot settle them, routed once
         leaves = fastchain.scalar_leaves(r, T, free) if self.fast_path() else None
-        if leaves is not None:
+        if leaves is not None and not (r.alt_steps and any(int(leaf[-1]) & _fk.FAMILY for leaf in leaves)):
             found = _fk.finish_one(leaves, **r.finish_kwargs(limits))
             if found is not None:
                 q, res, ls, cont = fastchain.rows_of_one(found, len(r.joint_names))

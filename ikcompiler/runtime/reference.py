@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ikcompiler.runtime import selfmotion
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
@@ -19,24 +20,35 @@ CONTINUUM_NEWTON = 60  # Newton steps pulling a self-motion's representative ont
 SEARCH_NEWTON = 8  # Newton steps on the search's seeds
 NEAR_MISS = _tol.NEAR_MISS  # rows missing by less (of the size) get more Newton steps in _complete
 FINISH_MARGIN = _tol.FINISH_MARGIN  # as the C finish: on to well inside the precision
+# Offsets (rad, or lengths over the size) along a self-motion at which a representative that misses or
+# lies outside the limits is tried again: the circle in 64 steps.  A numerical self-motion (a relation
+# missed by ~1e-9) is exact to the precision only on an arc around the true solution, ~0.3 rad wide on
+# puma560.urdf (rtb-data) at q5 = 0; Newton's damped steps do not move along it (docs/calibrated.md).
+SELF_MOTION_OFFSETS = np.arange(-31, 33) * (np.pi / 32)
+SELF_MOTION_NEWTON = 5  # Newton steps at each offset (across the family: it converges fast)
 
 
-def correct(robot, TH, owner, goals, general6):
+def correct(robot, TH, owner, goals, general6, family):
     """Snapped plan: carry the snapped robot's candidates to the true robot by continuation in the
     geometry, re-tracking rows that collide (subproblems.continuation; docs/calibrated.md).  Targets
     where the count may differ (rescue seeds were needed) are also given to the general 6R solver of
-    the true robot when there is one: its rows join the candidates."""
+    the true robot when there is one: its rows join the candidates.  ``family``: the rows that are
+    representatives of a self-motion of the snapped robot.  Returns (TH, owner, continuum): the
+    representatives of a self-motion among the rows are those the true robot leaves unresolved."""
     report = {}
     TH, owner = _ct.correct(TH, goals[owner], owner, twists0=robot.plan_twists, twists1=robot.twists,
                             home=robot.home, A=robot.A, b=robot.B, independent=robot.vary,
                             kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free,
-                            scale=robot.scale, tol=robot.tol, plain=robot.polish, report=report)
-    doubt = report.get("uncertain", ())
+                            scale=robot.scale, tol=robot.tol, plain=robot.polish, family=family,
+                            report=report)
+    cont = report["continuum"]
+    doubt = report["uncertain"]
     solver = general6() if len(doubt) else None
     if solver is not None:
         TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
         TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, np.asarray(doubt)[own2]])
-    return TH, owner
+        cont = np.concatenate([cont, np.zeros(len(TH2), dtype=bool)])
+    return TH, owner, cont
 
 
 def true_general6(robot):
@@ -60,8 +72,11 @@ def true_general6(robot):
         return None
 
 
-def candidates(robot, goals, Td, init, correct):
-    """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum)."""
+def candidates(robot, goals, Td, init, correct, alternative=None):
+    """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum).
+
+    ``alternative`` (N,) marks targets that take the plan's alternative chain whatever the chain
+    gives (the fast chain saw a gimbal lock there that the reference step may not flag)."""
     N = len(goals)
     if robot.method == "numerical":
         step = robot.steps[0]
@@ -73,7 +88,8 @@ def candidates(robot, goals, Td, init, correct):
         return TH, owner, *_no_flags(len(TH))
     if robot.method == "general-6r":
         TH, owner = robot.general6.rows(goals)
-        return TH, owner, *_no_flags(len(TH))
+        # isolated points of the elimination; those on a self-motion are flagged as its representatives
+        return TH, owner, np.zeros(len(TH), dtype=bool), selfmotion.flags(robot, TH, goals[owner])
     if robot.search:
         step = {"search": list(robot.search), "grid": robot.grid, "steps": robot.steps, "home": robot.home,
                 "scale": robot.scale, "target": robot.solve_target}
@@ -83,21 +99,41 @@ def candidates(robot, goals, Td, init, correct):
         return TH, owner, *_no_flags(len(TH))
     TH, owner, ls, _, cont = _rt.run_plan(robot.steps, robot.plan_twists, robot.kinds, Td,
                                           robot.couplings, robot.n_groups, init)
-    if robot.alt_steps and cont.any():
-        redo = np.unique(owner[cont])
-        TH2, own2, ls2, _, cont2 = _rt.run_plan(robot.alt_steps, robot.plan_twists, robot.kinds,
-                                                Td[redo], robot.couplings, robot.n_groups, init[redo])
-        TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, redo[own2]])
-        ls, cont = np.concatenate([ls, ls2]), np.concatenate([cont, cont2])
+    if robot.alt_steps:
+        TH, owner, ls, cont = with_alternative(robot, Td, init, TH, owner, ls, cont, alternative)
     if cont.any():
         # A self-motion: the representative a step chose may not complete the pose; Newton steps
         # on every joint pull it onto a nearby exact solution of the continuum.
         TH[cont] = robot.newton_until_exact(TH[cont], goals[owner[cont]], CONTINUUM_NEWTON)
     if robot.polish and len(TH):
-        TH, owner = correct(TH, owner, goals)
-        extra = np.zeros(len(TH) - len(ls), dtype=bool)
-        ls, cont = np.concatenate([ls, extra]), np.concatenate([cont, extra])
+        TH, owner, cont = correct(TH, owner, goals, cont)
+        ls = np.concatenate([ls, np.zeros(len(TH) - len(ls), dtype=bool)])
     return TH, owner, ls, cont
+
+
+def with_alternative(robot, Td, init, TH, owner, ls, cont, alternative=None):
+    """The chain's candidates (TH, owner, ls, cont) with the alternative chain's on the targets where
+    the chain met a continuum (or ``alternative`` marks them).  A target where the alternative chain
+    meets none is no self-motion: a closed-form chain is complete wherever no step degenerates, so its
+    rows are every solution and replace the chain's representatives (a 5-joint arm's O-RRR gimbal:
+    the family's waist value is fixed by the position equations, which the representative ignores;
+    docs/design.md section 5, "Alternative chain").  Elsewhere both chains' rows are candidates."""
+    redo = np.zeros(len(Td), dtype=bool)
+    redo[owner[cont]] = True
+    if alternative is not None:
+        redo |= alternative
+    redo = np.nonzero(redo)[0]
+    if not len(redo):
+        return TH, owner, ls, cont
+    TH2, own2, ls2, _, cont2 = _rt.run_plan(robot.alt_steps, robot.plan_twists, robot.kinds, Td[redo],
+                                            robot.couplings, robot.n_groups, init[redo])
+    own2 = redo[own2]
+    settled = np.zeros(len(Td), dtype=bool)
+    settled[own2] = True
+    settled[own2[cont2]] = False
+    keep = ~settled[owner]
+    return (np.concatenate([TH[keep], TH2]), np.concatenate([owner[keep], own2]),
+            np.concatenate([ls[keep], ls2]), np.concatenate([cont[keep], cont2]))
 
 
 def _no_flags(n):
@@ -114,6 +150,7 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
         TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
+        TH = onto_self_motion(robot, TH, owner, cont & ~ls, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
@@ -122,6 +159,47 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
                       slots=robot.slots, error=robot.error, cont=cont,
                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
                       vary=robot.vary, dedupe=dedupe)
+
+
+def onto_self_motion(robot, TH, owner, cont, goals, limits):
+    """Representatives of a self-motion (rows ``cont``) that miss the precision or lie outside the
+    limits, moved along their family: Newton steps from points at SELF_MOTION_OFFSETS along the
+    Jacobian's weakest direction; the exact point (inside the limits) of least error replaces the row.
+    A step's representative (its last angle 0) may lie outside the limits, and on a numerical
+    self-motion far from the arc that is exact, while the family has exact points inside them."""
+    ind = list(robot.independent)
+    ok = ~np.isnan(TH).any(axis=1)
+    exact = robot.tol * robot.scale
+    bad = np.zeros(len(TH), dtype=bool)
+    look = np.nonzero(cont & ok)[0]
+    if not len(look):
+        return TH
+    bad[look] = ~(robot.error(_rt.fk_batch(robot.twists, TH[look], robot.home), goals[owner[look]]) <= exact)
+    if limits:
+        bad |= _fk.represent(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower, robot.upper, True)[2]
+    rows = np.nonzero(cont & ok & bad)[0]
+    if not len(rows):
+        return TH
+    vary = list(robot.vary)
+    Q = TH[rows][:, vary]
+    _, n = _ct.weakest(Q, robot.twists, A=robot.A, b=robot.B, home=robot.home, kinds=robot.vary_kinds,
+                       target=robot.solve_target, hold=robot.free, scale=robot.scale)
+    k = len(SELF_MOTION_OFFSETS)
+    X = (Q[:, None, :] + SELF_MOTION_OFFSETS[None, :, None] * n[:, None, :]).reshape(-1, len(vary))
+    g = goals[np.repeat(owner[rows], k)]
+    X = robot.newton(X @ robot.A.T + robot.B, g, SELF_MOTION_NEWTON)
+    e = robot.error(_rt.fk_batch(robot.twists, X, robot.home), g)
+    good = e <= exact
+    if limits:
+        good &= ~_fk.represent(X[:, ind], robot.joint_types, robot.lower, robot.upper, True)[2]
+    good = good.reshape(len(rows), k)
+    if not good.any():
+        return TH
+    best = np.argmin(np.where(good, e.reshape(len(rows), k), np.inf), axis=1)  # the deepest point
+    moved = good.any(axis=1)
+    TH = TH.copy()
+    TH[rows[moved]] = X.reshape(len(rows), k, -1)[moved, best[moved]]
+    return TH
 
 
 def clamped_onto_limits(robot, TH, owner, goals):

@@ -150,6 +150,30 @@ class Step(Mapping):
         check_fields(target, data, f"step {kind!r}", header=("kind",), null_unset=True)
         return target(**{k: v for k, v in data.items() if k != "kind"})
 
+    @classmethod
+    def from_module_entry(cls, data: Mapping) -> Step:
+        """The step of a generated module's ``_STEPS`` entry, which holds the fields the runtime and the
+        code generator read (``STEP_FIELDS`` of codegen/module.py): the others (the rule, the snap
+        flag) are absent there and get neutral values."""
+        from ikcompiler.steps import step_class
+
+        if not isinstance(data, Mapping):
+            raise PlanFormatError(f"a step must be an object, got {type(data).__name__}")
+        target = step_class(data.get("kind"))
+        names = _field_names(target)
+        filled = dict(data)
+        for name, neutral in (("rule", ""), ("snapped", False)):
+            if name in names and name not in filled:
+                filled[name] = neutral
+        return target.from_dict(filled)
+
+    # -- lowering to the code IR -----------------------------------------------------------------------
+    def lower(self, em, Td) -> None:
+        """Append this step's code IR to the fast chain being built by ``em`` (the emitter of
+        codegen/fastpath.py, docs/design.md section 11), ``Td`` the target as 12 IR entries.  A kind
+        without a lowering raises ``em.Unsupported``: a plan holding it runs the reference runtime."""
+        raise em.Unsupported(f"step kind {self.kind}")
+
     # -- read-only Mapping view (transition; see the module docstring) ---------------------------------
     def _present(self) -> list[str]:
         return ["kind"] + [n for n in _field_names(type(self)) if getattr(self, n) is not None]

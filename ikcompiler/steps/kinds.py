@@ -8,6 +8,11 @@ Fields shared by the kinds that rewrite the POE equation:
 * ``inverted``: the step works on the inverted equation (rule 5);
 * ``snapped``: a relation the step relies on holds only to the snap tolerance (its validation in the
   search then uses the looser trial tolerance, and the module polishes on the true robot).
+
+Each kind owns its lowering, ``lower(em, Td)``: the code IR of its step in the fast chain, built with
+the emitter ``em`` of :mod:`ikcompiler.codegen.fastpath` (docs/design.md section 11, "Code IR"): a
+call of its kernel of ``subproblems/fast.py``, ``em.reference_call`` for a subproblem without a
+kernel, or the base class's ``em.Unsupported``.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 from typing import ClassVar
 
+from ikcompiler.codegen import ir
 from ikcompiler.steps.base import Step
 
 _frozen = dataclasses.dataclass(frozen=True, kw_only=True)
@@ -31,6 +37,17 @@ class S1Step(Step):
     known: tuple[int, ...]
     inverted: bool
     solve: tuple[int, ...]
+
+    def lower(self, em, Td) -> None:
+        G_u, _, sign, Tp = em.rewrite(self, Td)
+        tws = [em.twist(j, G_u[j], sign) for j in self.solve]
+        if self.code == "S1-TTT":
+            call = em.kernel("slide3", tws[0][0], tws[1][0], tws[2][0], Tp[9:])
+        elif self.code == "S1-RTT":
+            call = em.kernel("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
+        else:
+            call = em.reference_call(self.code, tws, {"T": Tp})
+        em.solved(self.solve, call)
 
 
 @_frozen
@@ -50,6 +67,21 @@ class OrientationStep(Step):
     @property
     def gives_sums(self):
         return tuple(g for g in self.groups if len(g) > 1)
+
+    def lower(self, em, Td) -> None:
+        G_u, _, sign, Tp = em.rewrite(self, Td)
+        ws = [em.twist(g[0][0], G_u[g[0][0]], sign)[0] for g in self.groups]
+        names = em.slot_names(len(ws))  # named before the representative's own name
+        fn = {1: "rot_r", 2: "rot_rr", 3: "rot_rrr"}[len(ws)]
+        outs = em.loop(names, em.kernel(fn, *ws, Tp[:9], *([em.rep()] if len(ws) == 3 else [])))
+        for col, g in enumerate(self.group_ids):
+            group = self.groups[col]
+            if len(group) == 1:  # a joint of its own
+                j, s = group[0]
+                em.q[j] = em.c.lin([(s, outs[col])], "q")
+            else:  # a parallel run's sum, for its SUM steps
+                em.sig[g] = outs[col]
+        em.couple(self.solve)
 
     def describe(self, names) -> str:
         gives = [
@@ -92,6 +124,23 @@ class PointStep(Step):
     # "skew"), recorded by the compiler (ikcompiler/geometry/facts.py, docs/design.md section 10)
     axes: str | None = None
 
+    def lower(self, em, Td) -> None:
+        G_u, all_key, sign, Tp = em.rewrite(self, Td)
+        point, Tpp = em.point_image(self, G_u, all_key, Tp)
+        args = [em.twist(j, G_u[j], sign) for j in self.solve]
+        if self.code == "S2-R":
+            call = em.kernel("point_r", args[0][0], args[0][1], point, Tpp)
+        elif self.code == "S2-RR" and self.axes in ("parallel", "meet"):
+            (w1, r1), (w2, r2) = args
+            fn = "point_rr_parallel" if self.axes == "parallel" else "point_rr_meet"
+            call = em.kernel(fn, w1, r1, w2, r2, point, Tpp)
+        elif self.code == "S2-TTT":
+            b = [em.c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
+            call = em.kernel("slide3", args[0][0], args[1][0], args[2][0], b)
+        else:  # skew S2-RR and the types without a kernel: the general solver
+            call = em.reference_call(self.code, args, {"p": point, "q": Tpp})
+        em.solved(self.solve, call)
+
 
 @_frozen
 class DistanceStep(PointStep):
@@ -101,6 +150,22 @@ class DistanceStep(PointStep):
     kind: ClassVar[str] = "S3"
     lead: tuple[int, ...]
     c0: tuple[float, float, float]
+
+    def lower(self, em, Td) -> None:
+        c = em.c
+        G_u, all_key, sign, Tp = em.rewrite(self, Td)
+        point, Tpp = em.point_image(self, G_u, all_key, Tp)
+        args = [em.twist(j, G_u[j], sign) for j in self.solve]
+        centre = c.mat_vec(em.prefix(G_u[self.lead[0]]), self.c0, True)
+        diff = [c.lin([(1.0, a), (-1.0, b)]) for a, b in zip(Tpp, centre)]
+        d = c.let(ir.call("sqrt", c.dot(diff, diff)), "d")
+        if self.code == "S3-R":
+            call = em.kernel("dist_r", args[0][0], args[0][1], point, centre, d, em.rep())
+        elif self.code == "S3-T":
+            call = em.kernel("dist_t", args[0][0], point, centre, d)
+        else:
+            call = em.reference_call(self.code, args, {"p": point, "q": centre, "d": d})
+        em.solved(self.solve, call)
 
 
 @_frozen
@@ -120,6 +185,9 @@ class CoupledDistanceStep(DistanceStep):
 
         return COUPLED_ROOT_SLOTS
 
+    def lower(self, em, Td) -> None:  # its root search runs in the reference runtime only
+        raise em.Unsupported(f"step kind {self.kind}")
+
 
 @_frozen
 class LeadingAxialStep(PointStep):
@@ -129,6 +197,9 @@ class LeadingAxialStep(PointStep):
     kind: ClassVar[str] = "HL"
     lead: tuple[int, ...]
 
+    def lower(self, em, Td) -> None:
+        _lower_axial(self, em, Td, trailing=False)
+
 
 @_frozen
 class TrailingAxialStep(PointStep):
@@ -137,6 +208,38 @@ class TrailingAxialStep(PointStep):
 
     kind: ClassVar[str] = "HT"
     lead: tuple[int, ...]
+
+    def lower(self, em, Td) -> None:
+        _lower_axial(self, em, Td, trailing=True)
+
+
+def _lower_axial(step, em, Td, trailing: bool) -> None:
+    """Rule 6 with the axis ``h`` of the parallel run ``lead``: HL projects the carried point
+    (``h . exp(xi th) p = h . T'p``), HT the target (``h . exp(-xi th) T'p = h . p``)."""
+    c = em.c
+    G_u, all_key, sign, Tp = em.rewrite(step, Td)
+    point, Tpp = em.point_image(step, G_u, all_key, Tp)
+    args = [em.twist(j, G_u[j], sign) for j in step.solve]
+    lead = step.lead[0]
+    if em.kinds[lead] != "R":
+        raise em.Unsupported("rule 6 along a prismatic group")
+    h = em.twist(lead, G_u[lead], 1.0)[0]
+    if trailing:  # the inverse motion of the unknown: its axis reversed
+        p_in, d = Tpp, c.dot(h, point, "d")
+        tw = tuple([c.scaled(-1.0, args[0][0])] + list(args[0][1:]))
+    else:
+        p_in, d = point, c.dot(h, Tpp, "d")
+        tw = args[0]
+    letters = step.code.split("-")[1]
+    if letters == "R":
+        call = em.kernel("plane_r", tw[0], tw[1], p_in, h, d, em.rep())
+    elif letters == "T":
+        call = em.kernel("plane_t", tw[0], p_in, h, d, em.rep(em.spans[step.solve[0]]))
+    else:
+        if trailing:
+            args = [tuple([c.scaled(-1.0, t[0])] + list(t[1:])) for t in args]
+        call = em.reference_call(step.code, args, {"p": p_in, "h": h, "d": d})
+    em.solved(step.solve, call)
 
 
 @_frozen
@@ -161,6 +264,13 @@ class SumStep(Step):
 
     def describe(self, names) -> str:
         return self.rule
+
+    def lower(self, em, Td) -> None:
+        j = self.solve[0]
+        s_j = dict(self.members)[j]
+        terms = [(1.0 / s_j, em.sig[self.group])] + [(-s / s_j, em.q[m]) for m, s in self.members if m != j]
+        em.q[j] = em.c.lin(terms, "q")
+        em.couple()
 
 
 @_frozen

@@ -141,10 +141,20 @@ def test_special_geometry_matches_the_closed_form(name):
             assert _distance(theirs, q) < SAME, (name, n, q)
 
 
-def test_prismatic_joint_is_refused_with_a_reason():
-    twists, home = random_6r_geometry(0)
-    twists[2] = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
-    with pytest.raises(g6.General6Error, match="joint 3 is prismatic"):
+def test_prismatic_joints_no_order_takes_are_refused_with_a_reason():
+    """TTRRRT: every joint order of the chain, rotated or inverted, puts a prismatic joint at the
+    eliminated position c or at the last position f (whose axis point must stay fixed)."""
+    twists, home = _with_prismatic(0, "TTRRRT")
+    with pytest.raises(g6.General6Error, match="joint 1 is prismatic"):
+        g6.prepare(twists, home)
+
+
+def test_adjacent_prismatic_joints_in_the_middle_are_refused_as_a_singular_pencil():
+    """RRTTRR: the two orders with c and f revolute put the prismatic joints at d and e together, and
+    their pencil is singular: refused with the orders and the reason, so that the compiler keeps its
+    search (docs/general6.md, "Prismatic joints")."""
+    twists, home = _with_prismatic(0, "RRTTRR")
+    with pytest.raises(g6.General6Error, match="pencil is singular"):
         g6.prepare(twists, home)
 
 
@@ -157,10 +167,12 @@ def _with_prismatic(seed, kinds):
     return twists, home
 
 
-@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT"])
-def test_prismatic_joints_on_the_right_side_every_sampled_vector_recovered_and_exact(kinds):
-    """A prismatic joint where an arrangement puts it at position a or b (joints 1, 2, 5, 6): its
-    displacement enters the 14 quantities as (1, d, d^2) (docs/general6.md, "Prismatic joints")."""
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "RTRRRR", "TTRRRR", "RRRRTT", "RRTRRR", "RRRTRR",
+                                   "RRRTRT", "TRRRTR", "RTRRRT", "RRTRTR", "RTRRTR", "TRTRRT"])
+def test_prismatic_joints_every_sampled_vector_recovered_and_exact(kinds):
+    """A prismatic joint where an arrangement puts it at position a or b (joints 1, 2, 5, 6), or at
+    position d or e: its displacement enters the 14 quantities as (1, d, d^2); with prismatic joints on
+    both sides of the split the deflated 9 x 9 pencil (docs/general6.md, "Prismatic joints")."""
     prism = np.array([k == "T" for k in kinds])
     for seed in (0, 1):
         twists, home = _with_prismatic(seed, kinds)
@@ -192,3 +204,39 @@ def test_bad_input_is_refused():
     T[0, 3] = np.nan
     with pytest.raises(SubproblemInputError, match="NaN"):
         solver.solve(T)
+
+
+def test_two_solutions_sharing_the_eliminated_angle_are_both_read():
+    """The configuration zoo's modular RRRRTT (seed 0) at q2 = pi: four solutions, two pairs of which
+    share th_c (joint 4) and th_e (joint 2) and differ in joint 3: a double eigenvalue whose null space
+    is 2-dimensional.  Its single mixed null vector converged to one of each pair; the sampled vector
+    was lost (before: 2 rows, now 4, the sampled vector among them)."""
+    from ikcompiler.configs import modular_chain
+
+    chain = modular_chain("RRRRTT", seed=0, geometry="modular")
+    solver = g6.General6(chain.twists, chain.home, chain.scale)
+    q = np.array([-math.pi / 2, math.pi, -math.pi / 2, -math.pi / 2, 0.0678, 0.25038])
+    T = chain.fk(q)
+    rows = solver.solve(T)
+    prism = np.array([k == "T" for k in chain.joint_types])
+    gap = np.where(prism, np.abs(rows - q) / chain.scale, np.abs(np.angle(np.exp(1j * (rows - q)))))
+    assert len(rows) == 4 and gap.max(axis=1).min() < SAME, rows
+    G = chain.fk_batch(rows)
+    assert np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1).max() <= EXACT * chain.scale
+
+
+def test_a_target_gets_the_same_rows_alone_and_in_a_batch():
+    """At a self-motion the rows depend on the last bits of the null vectors: one exactly singular
+    matrix in a batch's stack used to switch every root of the batch to SVD null vectors (modular
+    RRTRRR seed 5, special angles: a representative 6.8e-3 rad away from the single-pose one)."""
+    from ikcompiler.configs import modular_chain
+    from ikcompiler.verify import sample_configurations
+
+    chain = modular_chain("RRTRRR", seed=5, geometry="modular")
+    solver = g6.General6(chain.twists, chain.home, chain.scale)
+    T = chain.fk_batch(sample_configurations(chain, 10, seed=1, special=1.0))
+    many = solver.solve_batch(T)
+    for n in range(len(T)):
+        one = solver.solve_batch(T[n:n + 1])
+        assert np.array_equal(many.valid[n], one.valid[0]), n
+        assert np.array_equal(many.Q[n][many.valid[n]], one.Q[0][one.valid[0]]), n

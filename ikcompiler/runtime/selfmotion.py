@@ -1,0 +1,61 @@
+"""Which exact rows of the general 6R elimination lie on a self-motion (docs/design.md section 6).
+
+The elimination returns isolated points.  At a pose with a continuum of solutions (a modular arm at a
+home or taught position: two axes lined up, a prismatic joint along a revolute axis, ...) its rows
+are samples of the family; unflagged, a caller (and ``verify``) takes them for the whole answer and the
+sampled joint vector, another point of the family, counts as missed.
+
+A row is flagged when its Jacobian is rank-deficient and the family goes on through it: a step of
+``STEP`` along the null direction, then Newton with the joint that moved most held, lands on another
+exact solution of the same pose.  At an isolated double root (a fold) the step leaves the solution
+set and Newton stalls at a residual of about ``STEP^2``, so a double root is not flagged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems import newton as _newton
+from subproblems import tolerances as _tol
+from subproblems.screw import fk_batch
+
+RANK_DEFICIENT = _tol.VERIFY_SINGULAR  # smallest singular value (linear rows over the size): singular
+STEP = 1e-3  # rad (revolute) or of the size (prismatic) along the null direction
+NEWTON_STEPS = 10  # back onto the pose with one joint held (quadratic convergence from ~STEP^2)
+
+
+def flags(robot, TH, goals) -> np.ndarray:
+    """(M,) True where row TH[m] (exact for goals[m]) is one point of a self-motion."""
+    out = np.zeros(len(TH), dtype=bool)
+    if not len(TH):
+        return out
+    _, J = _newton.tool_jacobian(robot.twists, TH, robot.home, robot.A)
+    J = J.copy()
+    J[:, :3] /= robot.scale
+    # |det J| = prod(sigma) <= sigma_min |J|_F^5: rows whose determinant rules out a small sigma_min
+    # skip the SVD (about 20 us a pose of the general 6R's 225 us otherwise)
+    if J.shape[1] == J.shape[2]:
+        bound = RANK_DEFICIENT * np.linalg.norm(J, axis=(1, 2)) ** (J.shape[2] - 1)
+        idx = np.nonzero(np.abs(np.linalg.det(J)) < bound)[0]
+    else:
+        idx = np.arange(len(J))
+    if not len(idx):
+        return out
+    _, s, Vh = np.linalg.svd(J[idx])
+    low = s[:, -1] < RANK_DEFICIENT
+    cand = idx[low]
+    if not len(cand):
+        return out
+    n = Vh[low, -1, :]  # null direction in the independent joints
+    k = np.argmax(np.abs(n), axis=1)
+    prismatic = np.array([kind == "T" for kind in robot.vary_kinds])
+    move = np.where(prismatic[k], STEP * robot.scale, STEP)
+    n = n * (move / n[np.arange(len(cand)), k])[:, None]  # joint k moves by exactly STEP
+    start = TH[cand] + n @ robot.A.T
+    for held in np.unique(k):
+        rows = np.nonzero(k == held)[0]
+        hold = sorted(set(robot.free) | {int(held)})
+        Q = robot.newton(start[rows], goals[cand[rows]], NEWTON_STEPS, hold=hold)
+        err = robot.error(fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
+        out[cand[rows]] = np.isfinite(err) & (err <= robot.tol * robot.scale)
+    return out
