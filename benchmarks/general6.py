@@ -10,6 +10,9 @@
   1-D or 2-D search), on the first SEARCH_POSES poses of the first SEARCH_ARMS arms (it is slow), in
   chunks of 4 poses to bound its memory;
 * the zoo's Jaco (no closed form): general-6r vs the 1-D search on the same generic poses;
+* the native general-6r path (``subproblems/general6.h``, the generated module's default): targets
+  handed back to the Python general6, single-pose ``solve`` median and 90th percentile, batch CPU per
+  pose, on the random arms and on the Jaco (generic and special-angle poses inside its limits);
 * 6-joint chains with prismatic joints (the random arms with joints made prismatic along their drawn
   directions, for each joint string the elimination accepts): recovery, real solutions, residual, CPU;
 * the compile-time choice between the 1-D search and general-6r (``ikcompiler.general6_route``) on
@@ -95,13 +98,80 @@ def bench_arm(seed, poses, log):
     Sm, Vm = module.solve_batch(T)
     wall_mod = (time.perf_counter() - t) / poses
     hits_mod = _recovery(Sm, Vm, Q)
-    log(f"arm {seed}: recovered {hits}/{poses}, module {hits_mod}/{poses}, {wall * 1e6:.0f} us/pose")
+    worst_mod = max(_residual(tw, home, chain.scale, Sm[n][Vm[n]], T[n]) for n in range(poses))
+    native = _native_numbers(module, T)
+    log(f"arm {seed}: recovered {hits}/{poses}, module {hits_mod}/{poses}, {wall * 1e6:.0f} us/pose; "
+        f"native single {native['single'] * 1e6:.0f} us, handed back {native['back']}")
     return {
         "seed": seed, "method": module.METHOD, "poses": poses, "hits": hits, "hits_mod": hits_mod,
         "counts": np.bincount(counts, minlength=17), "worst": worst, "wall": wall, "cpu": cpu,
         "single": float(np.median(single)), "wall_mod": wall_mod, "prep": t_prep, "compile": t_compile,
-        "arr": solver.usable,
+        "arr": solver.usable, "worst_mod": worst_mod, **{f"native_{k}": v for k, v in native.items()},
     }
+
+
+def _native_numbers(module, T):
+    """The module's native general-6r path (subproblems/general6.h) on targets T: targets handed back
+    to the Python general6 (``NativeChain.exact`` None), median and 90th percentile of one ``solve``
+    (wall, warm, every target), and one ``solve_batch`` in process CPU per pose (C threads included)."""
+    nc = module._SOLVER.native_chain()
+    if nc is None:
+        return {"back": -1, "single": math.nan, "p90": math.nan, "batch_cpu": math.nan}
+    back = sum(nc.exact(t, (), True) is None for t in T)
+    module.solve(T[0])
+    single = []
+    for t in T:
+        s = time.perf_counter()
+        module.solve(t)
+        single.append(time.perf_counter() - s)
+    c = time.process_time()
+    module.solve_batch(T)
+    batch = (time.process_time() - c) / len(T)
+    return {"back": int(back), "single": float(np.median(single)), "p90": float(np.percentile(single, 90)),
+            "batch_cpu": batch}
+
+
+def native_jaco_section(log, poses):
+    """The zoo's Jaco (general-6r) through its module: poses inside the limits, generic and special."""
+    from ikcompiler.verify import sample_configurations
+
+    chain = load_robot("jaco")
+    t = time.perf_counter()
+    module = compile_robot(chain)
+    t_compile = time.perf_counter() - t
+    lines = ["", "## Native path on the zoo's Jaco", "",
+             f"{poses} poses inside the limits (seed 21), generic and with a third of the joint values at "
+             "0, +-pi/2, pi. Handed back: targets the C gives to the Python general6. Single: module `solve` "
+             "per pose (wall, median / 90th percentile); batch: one module `solve_batch` (process CPU per "
+             "pose). Python: the same module with `NATIVE = False`.", "",
+             "| poses | recovered | handed back | native single us (median / p90) | native batch CPU us "
+             "| Python single us (median) | Python batch CPU us | compile s |",
+             "|---|---|---|---|---|---|---|---|"]
+    for special in (0.0, 0.3):
+        Q = sample_configurations(chain, poses, seed=21, special=special)
+        T = chain.fk_batch(Q)
+        nat = _native_numbers(module, T)
+        S, V = module.solve_batch(T)
+        hits = _recovery(S, V, Q)
+        module.NATIVE = False
+        try:
+            py_single = []
+            for t in T[:60]:
+                s = time.perf_counter()
+                module.solve(t)
+                py_single.append(time.perf_counter() - s)
+            c = time.process_time()
+            module.solve_batch(T)
+            py_batch = (time.process_time() - c) / len(T)
+        finally:
+            module.NATIVE = True
+        label = "generic" if special == 0 else "special (1/3)"
+        log(f"jaco {label}: native single {nat['single'] * 1e6:.0f} us, handed back {nat['back']}")
+        lines.append(f"| {label} | {hits}/{poses} | {nat['back']}/{poses} | {nat['single'] * 1e6:.0f} / "
+                     f"{nat['p90'] * 1e6:.0f} | {nat['batch_cpu'] * 1e6:.0f} "
+                     f"| {np.median(py_single) * 1e6:.0f} "
+                     f"| {py_batch * 1e6:.0f} | {t_compile:.2f} |")
+    return lines
 
 
 def bench_search(chain, Q, log):
@@ -254,9 +324,16 @@ def main(argv=None) -> int:
         "Recovered: the sampled joint vector among the returned rows (1e-6 rad). Residual: worst returned "
         "row, recomputed by FK, max(position / size, Frobenius rotation). Times per pose.",
         "",
+        "Python: `subproblems.general6` alone (batch, and single-pose `solve` median over 60). Module: the "
+        "generated module, whose default path is now the native general-6r elimination "
+        "(`subproblems/general6.h`): handed back = targets it gives to the Python general6; native single = "
+        "module `solve` per pose (wall, median over every pose); native batch = one module `solve_batch` "
+        "(process CPU per pose, its C threads included).",
+        "",
         "| arm | method | recovered | module recovered | real solutions 2/4/6/8/10/12/14/16 | worst residual "
-        "| batch wall us | batch CPU us | module batch us | single solve us | prepare s | compile s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| module worst residual | Python batch wall us | Python batch CPU us | Python single us "
+        "| handed back | native single us (median / p90) | native batch CPU us | prepare s | compile s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         c = r["counts"]
@@ -264,8 +341,10 @@ def main(argv=None) -> int:
         lines.append(
             f"| {r['seed']} | {r['method']} | {r['hits']}/{r['poses']} | {r['hits_mod']}/{r['poses']} "
             f"| {dist} "
-            f"| {r['worst']:.1e} | {r['wall'] * 1e6:.0f} | {r['cpu'] * 1e6:.0f} | {r['wall_mod'] * 1e6:.0f} "
-            f"| {r['single'] * 1e6:.0f} | {r['prep']:.2f} | {r['compile']:.2f} |"
+            f"| {r['worst']:.1e} | {r['worst_mod']:.1e} | {r['wall'] * 1e6:.0f} | {r['cpu'] * 1e6:.0f} "
+            f"| {r['single'] * 1e6:.0f} | {r['native_back']}/{r['poses']} | {r['native_single'] * 1e6:.0f} / "
+            f"{r['native_p90'] * 1e6:.0f} | {r['native_batch_cpu'] * 1e6:.0f} | {r['prep']:.2f} "
+            f"| {r['compile']:.2f} |"
         )
     total = sum(r["poses"] for r in rows)
     hits = sum(r["hits"] for r in rows)
@@ -274,7 +353,10 @@ def main(argv=None) -> int:
         f"Total: {hits}/{total} poses recovered; median batch wall "
         f"{np.median([r['wall'] for r in rows]) * 1e6:.0f} "
         f"us/pose, CPU {np.median([r['cpu'] for r in rows]) * 1e6:.0f} us/pose; median single-pose solve "
-        f"{np.median([r['single'] for r in rows]) * 1e6:.0f} us; median compile "
+        f"{np.median([r['single'] for r in rows]) * 1e6:.0f} us (Python); native: median single-pose "
+        f"`solve` {np.median([r['native_single'] for r in rows]) * 1e6:.0f} us, batch CPU "
+        f"{np.median([r['native_batch_cpu'] for r in rows]) * 1e6:.0f} us/pose, handed back "
+        f"{sum(r['native_back'] for r in rows)}/{total}; median compile "
         f"{np.median([r['compile'] for r in rows]):.2f} s.",
     ]
     K = np.random.default_rng(0).normal(size=(2000, 24, 24))
@@ -310,6 +392,7 @@ def main(argv=None) -> int:
         lines.append(f"| {chain.name} | {method} | {s_hits}/{len(Q)} | {s_time * 1e3:.1f} | {int(Vs.sum())} "
                      f"| {_recovery(S, V, Q)}/{len(Q)} | {g_time * 1e6:.0f} | {int(V.sum())} | {only_s} "
                      f"| {only_g} | {dup} |")
+    lines += native_jaco_section(log, args.poses)
     lines += prismatic_section(log, args.poses)
     lines += route_section(log)
     OUT.parent.mkdir(parents=True, exist_ok=True)

@@ -94,14 +94,16 @@ from subproblems.screw import inverse_transform as _inv
 __all__ = ["General6", "General6Error", "Batch", "prepare", "solve", "solve_batch", "MAX_SOLUTIONS"]
 
 MAX_SOLUTIONS = 16
-IMAG_TOL = 2e-3  # |imaginary part| of a candidate angle kept for Newton (near-real roots)
-NEAR_REAL = 1e-9  # a kept candidate with a larger imaginary part makes its target doubtful
+IMAG_TOL = _tol.G6_IMAG_TOL  # |imaginary part| of a candidate angle kept for Newton (near-real roots)
+NEAR_REAL = _tol.G6_NEAR_REAL  # a kept candidate with a larger imaginary part makes its target doubtful
 EXACT = _tol.PRECISION  # accepted pose error: position / size and rotation (Frobenius)
 NEWTON_ITERS = 6
 SAME = _tol.VERIFY_SAME_ANGLE  # polished rows closer than this (rad, max over joints) are one solution
 SHIFTS = (0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944)
 TWIN = 1e-6  # roots of one target closer than this (rad): read as a double eigenvalue's two solutions
-LEADING_OK = 1e-9  # |det L| / prod(row norms of L) above which the leading matrix is used as is
+LEADING_OK = _tol.G6_LEADING_OK  # |det L| / prod(row norms of L) above which L is used as is
+RANK = _tol.G6_RANK  # B' loses rank below this singular value ratio: doubtful
+STALLED = _tol.G6_STALLED  # a candidate missing by less after Newton (of the size) stalled: doubtful
 
 _GRID = np.array([0.0, 2 * math.pi / 3, 4 * math.pi / 3])
 _PHI = np.stack([np.ones(3), np.cos(_GRID), np.sin(_GRID)], axis=1)  # PHI[p, t] = b_t(grid_p)
@@ -308,9 +310,9 @@ class General6:
         if tw.shape != (6, 6) or not np.all(np.isfinite(tw)):
             raise SubproblemInputError(f"general6 needs 6 finite twists (6, 6); got shape {tw.shape}")
         nw = np.linalg.norm(tw[:, 3:], axis=1)
-        self.prism = nw < 1e-9  # w = 0: a prismatic joint, its direction in v
-        if np.any(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < 1e-9)):
-            k = int(np.argmax(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < 1e-9)))
+        self.prism = nw < _tol.G6_PRISMATIC_AXIS  # w = 0: a prismatic joint, its direction in v
+        if np.any(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < _tol.G6_PRISMATIC_AXIS)):
+            k = int(np.argmax(self.prism & (np.linalg.norm(tw[:, :3], axis=1) < _tol.G6_PRISMATIC_AXIS)))
             raise SubproblemInputError(f"general6: joint {k + 1} has a zero twist")
         w = np.where(self.prism[:, None], tw[:, :3], tw[:, 3:])  # rotation axis, or translation direction
         w = w / np.linalg.norm(w, axis=1, keepdims=True)
@@ -397,7 +399,7 @@ class General6:
         lv = np.einsum("nkij,nj->nki", E[..., :3, :3], m)
         B = np.einsum("kq,nqj->nkj", arr.inv9, _fourteen(p, lv))  # (N, 9 monomials, 14)
         size = np.linalg.norm(B, axis=2).max(axis=0)  # per monomial (a_t b_u at t * 3 + u)
-        present = size[1:] > 1e-10 * size.max()
+        present = size[1:] > _tol.G6_ABSENT_COLUMN * size.max()
         if not all(present[k - 1] for k in (1, 2, 3, 6)):  # a_0 b_1, a_0 b_2, a_1 b_0, a_2 b_0
             return None
         return dataclasses.replace(arr, cols=tuple(int(k) for k in np.nonzero(present)[0]))
@@ -450,7 +452,7 @@ class General6:
         C = np.einsum("nqe,qtj->netj", Nl, arr.A)
         C[:, :, 0, 0] -= np.einsum("nqe,nq->ne", Nl, B[:, :, 0])  # the right side's constant column
         with np.errstate(divide="ignore", invalid="ignore"):
-            sinv = np.where(s > 1e-13 * s[:, :1], 1.0 / s, 0.0)
+            sinv = np.where(s > _tol.G6_PINV_CUTOFF * s[:, :1], 1.0 / s, 0.0)
         pinv = np.zeros((len(B), 8, 14))
         pinv[:, cols] = np.einsum("nji,nj,nkj->nik", Vh, sinv, U[:, :, :len(cols)])
         return B[:, :, 0], pinv, C, s[:, -1] / s[:, 0]
@@ -512,7 +514,7 @@ class General6:
         own, idx = np.nonzero(keep)
         th_c = th_c.real[own, idx]
         # no well-conditioned shift, B' loses rank, or a split double root: ask the other orders too
-        doubt = ~good | (brank < 1e-9) | split
+        doubt = ~good | (brank < RANK) | split
         if not len(own):  # no real root: the pose is unreachable
             return np.zeros((0, 6)), own, doubt
         y = np.tan(0.5 * (th_c - delta[own]))
@@ -600,9 +602,10 @@ class General6:
                 size = np.abs(e).max(axis=1)
                 wild = ~np.isfinite(dq).all(axis=1) | (np.abs(dq).max(axis=1) > 1e3 * size + 1e-3)
                 if wild.any():
-                    dq[wild] = np.einsum("nij,nj->ni", np.linalg.pinv(J[wild], rcond=1e-7), e[wild])
+                    pinv = np.linalg.pinv(J[wild], rcond=_tol.G6_PINV_RCOND)
+                    dq[wild] = np.einsum("nij,nj->ni", pinv, e[wild])
             step = np.abs(dq).max(axis=1)
-            dq *= np.minimum(1.0, 0.5 / np.maximum(step, 1e-300))[:, None]  # a far candidate: bounded steps
+            dq *= np.minimum(1.0, 0.5 / np.maximum(step, _tol.TINY))[:, None]  # a far candidate: bounded
             Q[idx] += np.nan_to_num(dq)
         return best, best_err
 
@@ -640,7 +643,7 @@ class General6:
         Qc, own, doubt = self._candidates(self._arr[order[0]], Gn)
         Qc, err = self._newton(Qc, Tn[own])
         stalled = np.zeros(N, dtype=bool)
-        stalled[own[(err > EXACT) & (err < 1e-3)]] = True
+        stalled[own[(err > EXACT) & (err < STALLED)]] = True
         todo = np.nonzero(doubt | stalled)[0]
         if len(todo) and arrangement is None:
             Qs, owns, errs = [Qc], [own], [err]
@@ -652,7 +655,7 @@ class General6:
                     break
                 Qk, ok_, dk = self._candidates(self._arr[k], Gn[todo])
                 Qk, ek = self._newton(Qk, Tn[todo[ok_]], iters=3 * NEWTON_ITERS)
-                dk[ok_[(ek > EXACT) & (ek < 1e-3)]] = True
+                dk[ok_[(ek > EXACT) & (ek < STALLED)]] = True
                 Qs.append(Qk), owns.append(todo[ok_]), errs.append(ek)
                 todo = todo[dk]
             # still doubtful under every order (a double root, a degenerate pencil): two copies of the
@@ -724,11 +727,11 @@ class General6:
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
             Qc, err = self._newton(Qc, Tn[own])
-            doubt[own[(err > EXACT) & (err < 1e-3)]] = True
+            doubt[own[(err > EXACT) & (err < STALLED)]] = True
             ok = err <= EXACT
             b = _pack(_wrap(Qc[ok], self.prism), own[ok], err[ok], 2 * count, self.prism)
             d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
-            hit = np.where(b.valid, d, np.inf).min(axis=1) < 1e-6
+            hit = np.where(b.valid, d, np.inf).min(axis=1) < _tol.VERIFY_SAME_ANGLE
             generic, special_hits = int(hit[:count].sum()), int(hit[count:].sum())
             rows = int(b.valid[:count].sum())  # generic samples: special ones may hold double roots
             # more exact rows: fewer missed solutions (an order can recover the sampled vector and miss
@@ -750,7 +753,7 @@ class General6:
 def _leading_ok(L):
     """Leading matrices far enough from singular: |det| / product of row norms (Hadamard ratio)."""
     sign, logdet = np.linalg.slogdet(L)
-    rows = np.log(np.maximum(np.linalg.norm(L, axis=2), 1e-300)).sum(axis=1)
+    rows = np.log(np.maximum(np.linalg.norm(L, axis=2), _tol.TINY)).sum(axis=1)
     return (sign != 0) & (logdet - rows > math.log(LEADING_OK))
 
 
@@ -795,7 +798,7 @@ def _null_vectors(M, y):
     iteration; y is moved by ~1e-11 so that an exact root cannot make the factorisation singular."""
     big = np.abs(y) > 1
     yi = np.where(big, 1 / np.where(big, y, 1), y)
-    yi = yi + 1e-11 * np.where(yi >= 0, 1, -1)
+    yi = yi + _tol.G6_ROOT_SHIFT * np.where(yi >= 0, 1, -1)
     # |y| <= 1: M0 + y M1 + y^2 M2; |y| > 1 (with yi = 1 / y): yi^2 M0 + yi M1 + M2, the same null vector
     c0 = np.where(big, yi * yi, 1.0)[:, None, None]
     c2 = np.where(big, 1.0, yi * yi)[:, None, None]
@@ -808,7 +811,7 @@ def _null_vectors(M, y):
                 z = np.linalg.solve(P, z)
             except np.linalg.LinAlgError:  # an exactly singular P in the stack: that one's SVD null vector
                 z = _solve_each(P, z)
-            z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), 1e-300)
+            z = z / np.maximum(np.abs(z).max(axis=1, keepdims=True), _tol.TINY)
     return np.nan_to_num(z[..., 0])
 
 

@@ -40,7 +40,7 @@ last_error: str | None = None  # why the last load returned None (for `ikc compi
 _loaded: dict[str, ctypes.CDLL] = {}
 
 
-HEADERS = ("fast_kernels.h", "fast_finish.h")  # beside this file, put in front of every chain
+HEADERS = ("fast_kernels.h", "fast_finish.h", "general6.h")  # beside this file, put in front of every chain
 
 
 def kernels_source() -> str:
@@ -140,8 +140,9 @@ def _key(*parts: str) -> str:
 # declarations in front, and its entry points' calls renamed to the shared ones.  `__typeof__` takes
 # each signature from the header itself, so the two sides cannot disagree.  The finish calls the
 # chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
-FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason")  # what chains call
-# (ikc_last_reason: why this thread's last target was handed back, for the benchmarks' cause counts)
+FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ikc_g6_leaves")  # chains call
+# (ikc_last_reason: why this thread's last target was handed back, for the benchmarks' cause counts;
+# ikc_g6_leaves: the general-6r elimination of general6.h, docs/general6.md "Native path")
 SHARED_PREFIX = "ikc_shared_"
 
 

@@ -281,3 +281,50 @@ RR_AXES_MEET_ANGLE = 1e-6
 #: Lines whose normal-equation matrix has a condition number above this are (nearly) all parallel:
 #: they have no unique common point (``geometry.relations.lines_meet``; a ratio).
 LINES_MEET_CONDITION = 1e8
+
+# ------------------------------------- general 6-joint elimination, general6.py and general6.h (G6_*)
+
+#: A twist whose axis part is shorter than this is a prismatic joint's (general6's own test; absolute).
+G6_PRISMATIC_AXIS = 1e-9
+#: Eigenvalue candidates whose angle has an imaginary part below this (radians) are kept for Newton
+#: (near-real roots; a double root split by rounding).
+G6_IMAG_TOL = 2e-3
+#: ... and a kept candidate with an imaginary part above this makes its target doubtful (radians).
+G6_NEAR_REAL = 1e-9
+#: The leading matrix of the pencil is used as is when |det L| / prod(row norms) exceeds this (a ratio).
+G6_LEADING_OK = 1e-9
+#: B' (the right side's non-constant columns) loses rank below this smallest / largest singular value
+#: (a ratio): the target is doubtful.  general6.h ``G6_RANK`` (|R_last / R_first| of its pivoted QR).
+G6_RANK = 1e-9
+#: A candidate still missing by less than this (of the size) after Newton stalled near a solution (a
+#: double root): its target is doubtful.  general6.h ``G6_STALLED``.
+G6_STALLED = 1e-3
+#: A column of B' whose largest entry over sample targets is below this times B's largest is
+#: structurally absent (a prismatic joint's missing products; a ratio).
+G6_ABSENT_COLUMN = 1e-10
+#: Singular values of B' below this times the largest are left out of its pseudo-inverse (a ratio).
+G6_PINV_CUTOFF = 1e-13
+#: Inverse iteration at a root moves it by this (relative): an exact root would make the factorisation
+#: singular.
+G6_ROOT_SHIFT = 1e-11
+#: A pencil whose sampled smallest / largest singular value has a median below this is singular on
+#: every target (a ratio): that joint order is refused.
+G6_SINGULAR_PENCIL = 1e-10
+#: Newton near a double root: singular values of the Jacobian below this times the largest are left
+#: out of the truncated least-squares step (a ratio).
+G6_PINV_RCOND = 1e-7
+# The native path (general6.h) adds: G6_COEF_CHECK (1e-7: |coefficients 9, 10| of det M(th) over its
+# largest, which must vanish), G6_NEAR_DOUBLE (1e-3 rad: estimated imaginary part of a near-real root
+# pair), G6_TOUCH (1e-10: |det| at a minimum over the largest coefficient), G6_NOISE (32: det's error
+# bound over the largest of its coefficients 9, 10, which must vanish; |det| within it at an isolation
+# cell's middle), G6_CLOSE (1e-5 rad: two real roots), G6_COLLIDE (1e-4: two candidates after Newton,
+# joint distance), G6_CLEAN (1e-6 of the size: a candidate this close before Newton is a clean root),
+# G6_HMIN (1e-9 rad: the narrowest isolation cell): each makes a target doubtful (handed to general6.py).
+G6_COEF_CHECK = 1e-7
+G6_NEAR_DOUBLE = 1e-3
+G6_TOUCH = 1e-10
+G6_NOISE = 32.0
+G6_CLOSE = 1e-5
+G6_COLLIDE = 1e-4
+G6_CLEAN = 1e-6
+G6_HMIN = 1e-9

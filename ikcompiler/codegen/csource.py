@@ -77,6 +77,22 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         alt = c_function(alternative, "ikc_chain_alt", dof) if alternative is not None else None
     except Untranslatable:
         alt = None
+    head = [
+        "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
+        " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
+    ]
+    body = main[0] + (alt[0] if alt else [])
+    return _with_entries(head + body, leaves=main[1], alt=alt[1] if alt else None, kinds=kinds, lower=lower,
+                         upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
+                         twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
+                         near_singular=near_singular)
+
+
+def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target, scale, tol, slots, twists,
+                  home, A, b, search=0, grid=0, polish=0, near_singular=0.0) -> str:
+    """``lines`` (the C of ``ikc_chain`` and, when ``alt`` gives its leaf count, ``ikc_chain_alt``)
+    followed by the module's ``ikc_robot`` and the exported entry points."""
+    dof = len(kinds)
     nall = len(twists)
     flat_home = [home[i][j] for i in range(3) for j in range(3)] + [home[i][3] for i in range(3)]
     robot = [
@@ -88,18 +104,13 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         f"static const double ikc_home_[12] = {_array(flat_home, _number)};",
         f"static const double ikc_A_[{nall * dof}] = {_array([x for row in A for x in row], _number)};",
         f"static const double ikc_b_[{nall}] = {_array(b, _number)};",
-        f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {main[1]}, {slots},",
+        f"static const ikc_robot ikc_this = {{{dof}, {len(free)}, {leaves}, {slots},",
         f"    {TARGET_CODES[target]},",
         f"    ikc_revolute_, ikc_lower_, ikc_upper_, {_number(scale)}, {_number(tol)}, ikc_chain,",
         f"    {nall}, ikc_twists_, ikc_home_, ikc_A_, ikc_b_, ikc_free_, {search}, {grid},",
-        f"    {polish}, {'ikc_chain_alt' if alt else 'NULL'}, {alt[1] if alt else 0},",
+        f"    {polish}, {'ikc_chain_alt' if alt is not None else 'NULL'}, {alt or 0},",
         f"    {_number(near_singular)}}};",
     ]
-    head = [
-        "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
-        " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
-    ]
-    body = main[0] + (alt[0] if alt else [])
     tail = [
         *[w for line in robot for w in wrap(line)],
         "",
@@ -121,7 +132,52 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         "    return ikc_chain(goal, fr, 0.0, Q, E, F);",
         "}",
     ]
-    return "\n".join(head + body + tail) + "\n"
+    return "\n".join(list(lines) + tail) + "\n"
+
+
+def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: float, tol: float,
+                      slots: int, twists, home, A, b) -> str | None:
+    """C source of a general-6r module (docs/general6.md, "Native path"): the data of the preferred
+    arrangement of ``solver`` (a :class:`subproblems.general6.General6`) as an ``ikc_g6`` and a chain
+    ``ikc_chain`` that calls ``ikc_g6_leaves`` of ``subproblems/general6.h``; None when the module is
+    not a plain 6-joint pose chain (mimic or free joints)."""
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    if (target != "pose" or len(kinds) != 6 or A.shape != (6, 6) or not np.array_equal(A, np.eye(6))
+            or np.any(b != 0)):
+        return None
+    arr = solver._arr[solver.usable[0]]
+    if any(arr.prism[2:]) or getattr(arr, "deflate", None) is not None:
+        return None  # general6.h covers prismatic joints at a, b only, and the 12 x 12 pencil
+    Mi = np.linalg.inv(solver.Mn)
+    flat = lambda x: _array(np.asarray(x, float).ravel().tolist(), _number)  # noqa: E731
+    ints = lambda x: _array(list(x), str)  # noqa: E731
+    data = [
+        f"static const ikc_g6 ikc_g6_this = {{{int(arr.sign)}, {arr.conj}, {ints(arr.order)},",
+        f"    {ints(int(p) for p in arr.prism)}, {len(arr.cols)},",
+        f"    {ints(list(arr.cols) + [0] * (8 - len(arr.cols)))},",
+        f"    {flat(arr.w)}, {flat(arr.r)},",
+        f"    {flat(arr.A)},",
+        f"    {flat(arr.inv9)}, {flat(arr.grid_ab)}, {flat(arr.u)},",
+        f"    {flat(list(Mi[:3, :3].ravel()) + list(Mi[:3, 3]))},",
+        f"    {flat(solver.center)}, {_number(solver._s)}}};",
+        "static const ikc_robot ikc_this;",
+        "",
+        "static int ikc_chain(const double *goal, const double *fr, double rep, double *Q, double *E,",
+        "                     int *F) {",
+        "    (void)fr;",
+        "    (void)rep;",
+        "    return ikc_g6_leaves(&ikc_this, &ikc_g6_this, goal, Q, E, F);",
+        "}",
+        "",
+    ]
+    head = [
+        "/* The general-6r chain of this module in C (ikcompiler/codegen/csource.py): the elimination of",
+        " * subproblems/general6.h on the data of its preferred arrangement (subproblems/general6.py). */",
+    ]
+    lines = head + [w for line in data for w in wrap(line)]
+    return _with_entries(lines, leaves=16, alt=None, kinds=kinds, lower=lower, upper=upper, free=[],
+                         target=target, scale=scale, tol=tol, slots=slots, twists=twists, home=home,
+                         A=A.tolist(), b=b.tolist())
 
 
 def translatable(program: ir.Program | None, *, target: str, dof: int) -> bool:
@@ -147,7 +203,7 @@ _MODULE_FIELDS = (  # what the C depends on, besides the code of this package (s
 # it reads from subproblems (the pair classification runs plan_runtime; the snapped plan's threshold
 # comes from continuation.near_singular)
 _GENERATORS = ("ir.py", "printers.py", "fastpath.py", "csource.py", "../steps/kinds.py")
-_READ_FROM_SUBPROBLEMS = ("plan_runtime.py", "continuation.py", "tolerances.py")
+_READ_FROM_SUBPROBLEMS = ("plan_runtime.py", "continuation.py", "tolerances.py", "general6.py")
 _SOURCES: dict[str, str | None] = {}  # data hash -> C text, for this process
 
 
@@ -194,7 +250,7 @@ def native_source(namespace) -> str | None:
     the module holds (steps, twists, home, kinds, couplings, limits, free joints, scale), on the first
     native use, and kept per process and on disk (beside the C builds, ``subproblems.native``) under a
     hash of those data and of this package's code generators."""
-    if namespace.get("_fast_chain") is None:
+    if namespace.get("_fast_chain") is None and namespace.get("_GENERAL6") is None:
         return None
     key = data_key(namespace)
     if key in _SOURCES:
@@ -227,6 +283,12 @@ def module_c_source(ns) -> str | None:
     """The C of the module with globals ``ns``, printed now (:func:`native_source` caches it)."""
     from ikcompiler.codegen.fastpath import ChainData, build_program
 
+    if ns["METHOD"] == "general-6r":
+        return general6_c_source(
+            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+            target=ns["TARGET"],
+            scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
+            home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
     program = build_program(ChainData.from_module(ns))
     alternative = None
     if ns["_ALT_STEPS"] and not ns["_SEARCH"]:

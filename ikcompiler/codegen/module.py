@@ -189,9 +189,12 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
         "# many); targets near a degenerate geometry are handed to the reference runtime.  Set\n"
         "# FAST_PATH to False to use the reference runtime alone.\n"
     )
+    # a general-6r plan has no Python fast chain (FAST_PATH False); its native path is the C
+    # elimination (subproblems/general6.h), switched by NATIVE alone
+    general6_native = plan.method == "general-6r" and plan.target == "pose" and not free_idx
     out.append(f"FAST_PATH = {fast is not None}\n")
     out.append(python_source(fast) if fast is not None else "\n\n_fast_chain = None\n")
-    native = translatable(fast, target=plan.target, dof=len(output.independent))
+    native = translatable(fast, target=plan.target, dof=len(output.independent)) or general6_native
     out.append(
         "\n\n# Native backend: the fast chain above in C (the same arithmetic), printed from this module's\n"
         "# data by ikcompiler.codegen.csource.native_source and built with the machine's C compiler on\n"

@@ -45,7 +45,7 @@ class Solver:
     def native_chain(self):
         """The C build of the fast chain (printed from the module's data and compiled on first use, both
         cached: ikcompiler.codegen.csource.native_source, subproblems.native), or None."""
-        if not (self.fast_path() and self._ns.get("NATIVE")):
+        if not (self.fast_path() or self.general6_native()) or not self._ns.get("NATIVE"):
             return None
         if not self._native:
             from ikcompiler.codegen.csource import native_source
@@ -56,6 +56,13 @@ class Solver:
             self._native.append(source and native.bind(source, dof=len(r.joint_names), slots=r.slots,
                                                        nfree=len(r.free_joints), target=r.target))
         return self._native[0]
+
+    def general6_native(self) -> bool:
+        """A general-6r module: no Python fast chain, but a native one, the C elimination
+        (subproblems/general6.h, switched by NATIVE); the Python general6 stays the reference for the
+        targets the C hands back."""
+        r = self.robot
+        return r.method == "general-6r" and r.general6 is not None
 
     def general6(self):
         if not self._general6:

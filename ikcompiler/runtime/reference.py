@@ -55,7 +55,13 @@ def correct(robot, TH, owner, goals, general6, family):
 
 def true_general6(robot):
     """The true robot's general 6R solver (subproblems.general6), or None when the robot is no plain
-    6R pose chain or the package has no general solver."""
+    6R pose chain or the package has no general solver.
+
+    Built here without the plan's arrangements: a snapped plan (the only caller) has none, and
+    ``General6`` chooses them on fixed sample poses of the robot itself, so the order is the one the
+    compiler would record (same twists, home and seed).  A general-6r module's own solver is reused."""
+    if robot.general6 is not None:
+        return robot.general6
     if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
         return None
     try:

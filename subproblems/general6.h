@@ -1,0 +1,686 @@
+/* The general 6-joint elimination in C (docs/general6.md, "Native path"; docs/design.md section 5).
+ *
+ * The method is subproblems/general6.py's (Raghavan-Roth / Manocha-Canny in POE form, read its
+ * docstring for the derivation); only the root finding differs.  Per target:
+ *
+ *   1. the right side B (14 x 9) of the fourteen quantities on the (a, b) grid, interpolated;
+ *   2. its left null space (6 vectors) by a Householder QR with column pivoting of B' (no SVD);
+ *   3. the 12 x 12 pencil in *trigonometric* form, M(phi) = M0 + M1 cos(phi) + M2 sin(phi), phi the
+ *      joint value th_c itself (no half-angle, so no root at infinity and no shift: th_c = pi is an
+ *      ordinary point);
+ *   4. D(phi) = det M(phi) is a trigonometric polynomial of degree 8 (the 24 - 8 spurious half-angle
+ *      roots at +-i of general6.py are the factor (1 + x^2)^4 that the trigonometric form never has:
+ *      det M(x) / (1 + x^2)^12 = p16(x) / (1 + x^2)^8); its 17 coefficients come from D at G6_K
+ *      equispaced angles (LU determinants) by a discrete Fourier transform, well conditioned because
+ *      the points are on the circle.  The coefficients above 8 must vanish: their size is a check;
+ *   5. the real roots of D on the circle: sign changes on a fine grid, refined by safeguarded Newton
+ *      (bisection fallback); between grid points where D' changes sign and D does not, the extremum
+ *      is located and a hidden pair of roots split there, or, when the extremum nearly touches zero,
+ *      the target is *doubtful* (a near-double root);
+ *   6. null vector of M(root) by inverse iteration (LU), back-substitution as general6.py.
+ *
+ * A doubtful target (B' near rank loss, the coefficient check failing, a near-double root, two roots
+ * closer than G6_CLOSE, a clean candidate that Newton cannot bring to exact, two candidates that meet
+ * after Newton) is handed to the Python
+ * general6 (IKC_DEFER): the reference and fallback.  No LAPACK: every factorisation is written here.
+ * The G6_* thresholds below mirror subproblems/tolerances.py (same names, same values: a test reads
+ * both); iteration counts and grid sizes stay here. */
+
+#define G6_K 20            /* samples of D on the circle: degree 8 needs 17; 9 and 10 are the check */
+#define G6_GRID 48         /* first isolation cells on [0, 2 pi) */
+#define G6_COEF_CHECK 1e-7 /* |coefficient 9 or 10| / max |coefficient| above this: doubtful */
+#define G6_NEAR_DOUBLE 1e-3 /* estimated |imaginary part| of a near-real root pair below this: doubtful
+                             * (a double root split by rounding can reach ~1e-5 on a flat tangency) */
+#define G6_TOUCH 1e-10     /* |D| at a minimum of |D| below this times max |coefficient|: doubtful */
+#define G6_NOISE 32.0      /* D's error bound: this times max |coefficient 9, 10| (which must vanish) */
+#define G6_CLOSE 1e-5      /* two real roots (rad) closer than this: doubtful (a near-double root) */
+#define G6_COLLIDE 1e-4    /* two candidates closer than this after Newton (rad; prismatic / size): doubtful */
+#define G6_HMIN 1e-9       /* isolation cells narrower than this that settle nothing: doubtful */
+#define G6_STACK 256       /* isolation cells pending at once */
+#define G6_RANK 1e-9       /* |R_last / R_first| of B' below this: doubtful (general6 brank) */
+#define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
+#define G6_STALLED 1e-3    /* a clean candidate missing by less (of the size) after Newton: doubtful */
+#define G6_CLEAN 1e-6      /* prismatic pencils: a candidate missing by less (of the size) before Newton
+                            * is a clean root, a farther one may be spurious */
+
+typedef struct {
+    int sign;         /* +1 the chain, -1 its inverse */
+    int conj;         /* the first conj joints have their axes mapped by the target */
+    int order[6];     /* original joint index at positions a..f */
+    int prism[6];     /* prismatic, in arrangement order (only a, b can be) */
+    int ncols;        /* columns of B' present */
+    int cols[8];
+    double w[18], r[18];  /* axes in arrangement order, normalised coordinates */
+    double A[14 * 3 * 9]; /* left side: quantity, (1, c_c, s_c), (1,c_d,s_d) x (1,c_e,s_e) */
+    double inv9[81];      /* interpolation on the (a, b) grid */
+    double grid_ab[18];   /* (a, b) grid values */
+    double u[3];          /* unit vector normal to w_f */
+    double Mn_inv[12];    /* inverse normalised home pose (rotation row-major, translation) */
+    double center[3], s;  /* normalisation: x_n = (x - center) / s */
+} ikc_g6;
+
+/* ---- small rigid-motion helpers (rotation row-major R[9], translation t[3]) -------------------- */
+
+static void g6_rot(const double *w, double th, double *R) {
+    double c = cos(th), s = sin(th), v = 1.0 - c;
+    double x = w[0], y = w[1], z = w[2];
+    R[0] = c + v * x * x;     R[1] = v * x * y - s * z; R[2] = v * x * z + s * y;
+    R[3] = v * x * y + s * z; R[4] = c + v * y * y;     R[5] = v * y * z - s * x;
+    R[6] = v * x * z - s * y; R[7] = v * y * z + s * x; R[8] = c + v * z * z;
+}
+
+/* the joint's motion: rotation by th about the line (r, w), or translation th w */
+static void g6_joint(const double *w, const double *r, int prism, double th, double *R, double *t) {
+    if (prism) {
+        for (int k = 0; k < 9; k++) R[k] = (k % 4 == 0) ? 1.0 : 0.0;
+        for (int k = 0; k < 3; k++) t[k] = th * w[k];
+        return;
+    }
+    g6_rot(w, th, R);
+    for (int i = 0; i < 3; i++) t[i] = r[i] - (R[3 * i] * r[0] + R[3 * i + 1] * r[1] + R[3 * i + 2] * r[2]);
+}
+
+/* (R, t) <- (R, t) (R2, t2) */
+static void g6_compose(double *R, double *t, const double *R2, const double *t2) {
+    double Rn[9], tn[3];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++)
+            Rn[3 * i + j] = R[3 * i] * R2[j] + R[3 * i + 1] * R2[3 + j] + R[3 * i + 2] * R2[6 + j];
+        tn[i] = R[3 * i] * t2[0] + R[3 * i + 1] * t2[1] + R[3 * i + 2] * t2[2] + t[i];
+    }
+    for (int k = 0; k < 9; k++) R[k] = Rn[k];
+    for (int k = 0; k < 3; k++) t[k] = tn[k];
+}
+
+static void g6_apply(const double *R, const double *t, const double *x, double *y) {
+    for (int i = 0; i < 3; i++) y[i] = R[3 * i] * x[0] + R[3 * i + 1] * x[1] + R[3 * i + 2] * x[2] + (t ? t[i] : 0.0);
+}
+
+static void g6_fourteen(const double *p, const double *l, double *q) {
+    double pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2], pl = p[0] * l[0] + p[1] * l[1] + p[2] * l[2];
+    for (int k = 0; k < 3; k++) q[k] = p[k], q[3 + k] = l[k];
+    q[6] = pp;
+    q[7] = pl;
+    q[8] = p[1] * l[2] - p[2] * l[1];
+    q[9] = p[2] * l[0] - p[0] * l[2];
+    q[10] = p[0] * l[1] - p[1] * l[0];
+    for (int k = 0; k < 3; k++) q[11 + k] = pp * l[k] - 2.0 * pl * p[k];
+}
+
+/* ---- dense linear algebra ---------------------------------------------------------------------- */
+
+/* LU with partial pivoting of the n x n matrix a (row-major, in place); piv the row order; returns the
+ * determinant.  A zero pivot is replaced by a tiny one (inverse iteration at an exact root). */
+static double g6_lu(int n, double *a, int *piv) {
+    double det = 1.0;
+    for (int k = 0; k < n; k++) {
+        int p = k;
+        double best = fabs(a[k * n + k]);
+        for (int i = k + 1; i < n; i++)
+            if (fabs(a[i * n + k]) > best) best = fabs(a[i * n + k]), p = i;
+        piv[k] = p;
+        if (p != k) {
+            for (int j = 0; j < n; j++) {
+                double tmp = a[k * n + j];
+                a[k * n + j] = a[p * n + j];
+                a[p * n + j] = tmp;
+            }
+            det = -det;
+        }
+        double d = a[k * n + k];
+        det *= d;
+        if (d == 0.0) a[k * n + k] = d = 1e-300;
+        for (int i = k + 1; i < n; i++) {
+            double f = a[i * n + k] / d;
+            a[i * n + k] = f;
+            if (f != 0.0)
+                for (int j = k + 1; j < n; j++) a[i * n + j] -= f * a[k * n + j];
+        }
+    }
+    return det;
+}
+
+static void g6_lu_solve(int n, const double *a, const int *piv, double *x) {
+    for (int k = 0; k < n; k++) {
+        if (piv[k] != k) {
+            double tmp = x[k];
+            x[k] = x[piv[k]];
+            x[piv[k]] = tmp;
+        }
+        for (int i = k + 1; i < n; i++) x[i] -= a[i * n + k] * x[k];
+    }
+    for (int k = n - 1; k >= 0; k--) {
+        double s = x[k];
+        for (int j = k + 1; j < n; j++) s -= a[k * n + j] * x[j];
+        x[k] = s / a[k * n + k];
+    }
+}
+
+/* Householder QR with column pivoting of the 14 x nc matrix B (column-major b[c][14], in place):
+ * the reflectors stay below the diagonal, beta[k] their factors, rdiag the diagonal of R, perm the
+ * column order.  Returns |R_last| / |R_first| (general6's rank ratio of B'). */
+static double g6_qr(int nc, double b[][14], double *beta, double *rdiag, int *perm) {
+    double norms[8];
+    for (int c = 0; c < nc; c++) {
+        perm[c] = c;
+        double s = 0.0;
+        for (int i = 0; i < 14; i++) s += b[c][i] * b[c][i];
+        norms[c] = s;
+    }
+    for (int k = 0; k < nc; k++) {
+        int p = k;  /* pivot: the remaining column of largest norm below row k (recomputed: 14 rows) */
+        double best = -1.0;
+        for (int c = k; c < nc; c++) {
+            double s = 0.0;
+            for (int i = k; i < 14; i++) s += b[c][i] * b[c][i];
+            norms[c] = s;
+            if (s > best) best = s, p = c;
+        }
+        if (p != k) {
+            for (int i = 0; i < 14; i++) {
+                double tmp = b[k][i];
+                b[k][i] = b[p][i];
+                b[p][i] = tmp;
+            }
+            int tp = perm[k];
+            perm[k] = perm[p];
+            perm[p] = tp;
+        }
+        double alpha = sqrt(norms[p] > 0.0 ? best : 0.0);
+        double x0 = b[k][k];
+        if (alpha == 0.0) {
+            beta[k] = 0.0;
+            rdiag[k] = 0.0;
+            continue;
+        }
+        double v0 = x0 >= 0.0 ? x0 + alpha : x0 - alpha;
+        rdiag[k] = x0 >= 0.0 ? -alpha : alpha;
+        /* v = (v0, b[k][k+1..]) ; H = I - beta v v^T */
+        double vv = v0 * v0;
+        for (int i = k + 1; i < 14; i++) vv += b[k][i] * b[k][i];
+        beta[k] = 2.0 / vv;
+        b[k][k] = v0;
+        for (int c = k + 1; c < nc; c++) {
+            double s = 0.0;
+            for (int i = k; i < 14; i++) s += b[k][i] * b[c][i];
+            s *= beta[k];
+            for (int i = k; i < 14; i++) b[c][i] -= s * b[k][i];
+        }
+    }
+    double first = fabs(rdiag[0]), last = fabs(rdiag[nc - 1]);
+    return first > 0.0 ? last / first : 0.0;
+}
+
+/* x <- Q^T x (transpose = false) or Q x (true) for the reflectors of g6_qr */
+static void g6_qr_apply(int nc, double b[][14], const double *beta, double *x, int forward) {
+    for (int s = 0; s < nc; s++) {
+        int k = forward ? nc - 1 - s : s;
+        if (beta[k] == 0.0) continue;
+        double d = 0.0;
+        for (int i = k; i < 14; i++) d += b[k][i] * x[i];
+        d *= beta[k];
+        for (int i = k; i < 14; i++) x[i] -= d * b[k][i];
+    }
+}
+
+/* ---- the trigonometric polynomial D(phi) ------------------------------------------------------- */
+
+/* D, D' and D'' at phi from coefficients c[0] + sum_k a_k cos k phi + b_k sin k phi (k = 1..8) */
+static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
+    double c1 = cos(phi), s1 = sin(phi), ck = 1.0, sk = 0.0;
+    double v = a[0], d = 0.0, dd = 0.0;
+    for (int k = 1; k <= 8; k++) {
+        double cn = ck * c1 - sk * s1, sn = sk * c1 + ck * s1;
+        ck = cn, sk = sn;
+        v += a[k] * ck + b[k] * sk;
+        d += k * (b[k] * ck - a[k] * sk);
+        dd -= (double)(k * k) * (a[k] * ck + b[k] * sk);
+    }
+    *f = v;
+    if (df) *df = d;
+    if (ddf) *ddf = dd;
+}
+
+/* a root of D in [lo, hi] where D(lo), D(hi) differ in sign: Newton inside the bracket, else bisection */
+static double g6_refine(const double *a, const double *b, double lo, double hi, double flo) {
+    double x = 0.5 * (lo + hi);
+    for (int it = 0; it < 80; it++) {
+        double f, df;
+        g6_trig(a, b, x, &f, &df, NULL);
+        if (f == 0.0) return x;
+        if ((f < 0.0) == (flo < 0.0)) lo = x, flo = f;
+        else hi = x;
+        double next = df != 0.0 ? x - f / df : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (fabs(next - x) <= 4e-16 * (1.0 + fabs(x)) || hi - lo <= 4e-16 * (1.0 + fabs(x))) return next;
+        x = next;
+    }
+    return x;
+}
+
+/* a zero of D' in [lo, hi] where D' changes sign and is monotone: Newton on D' inside the bracket */
+static double g6_extremum(const double *a, const double *b, double lo, double hi) {
+    double f, dlo, x = 0.5 * (lo + hi);
+    g6_trig(a, b, lo, &f, &dlo, NULL);
+    for (int it = 0; it < 80; it++) {
+        double d, dd;
+        g6_trig(a, b, x, &f, &d, &dd);
+        if (d == 0.0) return x;
+        if ((d < 0.0) == (dlo < 0.0)) lo = x, dlo = d;
+        else hi = x;
+        double next = dd != 0.0 ? x - d / dd : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (fabs(next - x) <= 4e-16 * (1.0 + fabs(x)) || hi - lo <= 4e-16 * (1.0 + fabs(x))) return next;
+        x = next;
+    }
+    return x;
+}
+
+/* cos and sin of the first isolation grid, 2 pi i / G6_GRID (printed by Python's math) */
+static const double g6_grid_cos[G6_GRID] = {
+    1.0, 0.9914448613738104, 0.9659258262890683, 0.9238795325112867, 0.8660254037844387, 0.7933533402912352,
+    0.7071067811865476, 0.6087614290087207, 0.5000000000000001, 0.38268343236508984, 0.25881904510252074,
+    0.1305261922200517, 6.123233995736766e-17, -0.1305261922200516, -0.25881904510252063,
+    -0.3826834323650895, -0.4999999999999998, -0.6087614290087207, -0.7071067811865475, -0.793353340291235,
+    -0.8660254037844387, -0.9238795325112867, -0.9659258262890682, -0.9914448613738104, -1.0,
+    -0.9914448613738104, -0.9659258262890683, -0.9238795325112868, -0.8660254037844388, -0.7933533402912352,
+    -0.7071067811865479, -0.6087614290087209, -0.5000000000000004, -0.3826834323650895, -0.25881904510252063,
+    -0.13052619222005163, -1.8369701987210297e-16, 0.13052619222005127, 0.2588190451025203,
+    0.38268343236508917, 0.5000000000000001, 0.6087614290087199, 0.7071067811865474, 0.7933533402912349,
+    0.8660254037844384, 0.9238795325112868, 0.9659258262890681, 0.9914448613738104};
+static const double g6_grid_sin[G6_GRID] = {
+    0.0, 0.13052619222005157, 0.25881904510252074, 0.3826834323650898, 0.49999999999999994,
+    0.6087614290087207, 0.7071067811865475, 0.7933533402912352, 0.8660254037844386, 0.9238795325112867,
+    0.9659258262890683, 0.9914448613738104, 1.0, 0.9914448613738104, 0.9659258262890683, 0.9238795325112868,
+    0.8660254037844387, 0.7933533402912352, 0.7071067811865476, 0.6087614290087209, 0.49999999999999994,
+    0.3826834323650899, 0.258819045102521, 0.130526192220052, 1.2246467991473532e-16, -0.13052619222005177,
+    -0.2588190451025208, -0.38268343236508967, -0.4999999999999997, -0.6087614290087207, -0.7071067811865471,
+    -0.7933533402912349, -0.8660254037844384, -0.9238795325112868, -0.9659258262890683, -0.9914448613738104,
+    -1.0, -0.9914448613738105, -0.9659258262890684, -0.923879532511287, -0.8660254037844386,
+    -0.7933533402912357, -0.7071067811865477, -0.6087614290087209, -0.5000000000000004, -0.38268343236508956,
+    -0.25881904510252157, -0.13052619222005168};
+
+/* D and its first three derivatives at the angle of cosine c1 and sine s1 */
+static void g6_trig3(const double *a, const double *b, double c1, double s1, double *d) {
+    double ck = 1.0, sk = 0.0;
+    d[0] = a[0], d[1] = d[2] = d[3] = 0.0;
+    for (int k = 1; k <= 8; k++) {
+        double cn = ck * c1 - sk * s1, sn = sk * c1 + ck * s1;
+        ck = cn, sk = sn;
+        double even = a[k] * ck + b[k] * sk, odd = b[k] * ck - a[k] * sk;
+        d[0] += even;
+        d[1] += k * odd;
+        d[2] -= (double)(k * k) * even;
+        d[3] -= (double)(k * k * k) * odd;
+    }
+}
+
+/* Real roots of D on [0, 2 pi) into roots (at most 16); -1 when doubtful.
+ *
+ * Certified isolation by subdivision.  On a cell of half-width r about its middle, Taylor's theorem
+ * with the derivatives there and the bound L4 >= |D''''| (sum of k^4 |c_k|) bounds how far D, D'
+ * and D'' can move from their middle values: the cell is root-free when D cannot reach zero, D is
+ * monotone there when D' cannot (one root at a sign change), and D' is monotone when D'' cannot (at
+ * most two roots, split at the extremum of D).  A cell narrower than G6_HMIN that none of these
+ * settles, two roots closer than G6_CLOSE, an extremum that nearly touches zero (a complex pair
+ * within G6_NEAR_DOUBLE of the real axis, or |D| below G6_TOUCH there) or D within its error bound
+ * `noise` at a cell's middle make the target doubtful.  The bounds carry that error too (8^j noise
+ * for the j-th derivative: the error is itself a trigonometric polynomial of degree 8). */
+static int g6_roots(const double *a, const double *b, double noise, double *roots) {
+    double L4 = 0.0, big = fabs(a[0]);
+    for (int k = 1; k <= 8; k++) {
+        double c = hypot(a[k], b[k]);
+        L4 += (double)(k * k) * (k * k) * c;
+        big = fmax(big, c);
+    }
+    if (!(big > 0.0)) return -1;
+    int n = 0, top = 0;
+    double lo[G6_STACK], hi[G6_STACK], flo[G6_STACK], fhi[G6_STACK];
+    const double h0 = IKC_TWO_PI / G6_GRID;
+    double fg[G6_GRID + 1], d[4];
+    for (int i = 0; i < G6_GRID; i++) {
+        g6_trig3(a, b, g6_grid_cos[i], g6_grid_sin[i], d);
+        fg[i] = d[0];
+    }
+    fg[G6_GRID] = fg[0];
+    for (int i = G6_GRID - 1; i >= 0; i--) {  /* pushed in reverse: taken in order */
+        lo[top] = i * h0, hi[top] = (i + 1) * h0, flo[top] = fg[i], fhi[top] = fg[i + 1];
+        top++;
+    }
+    while (top > 0) {
+        top--;
+        const double x0 = lo[top], x1 = hi[top], y0 = flo[top], y1 = fhi[top], h = x1 - x0;
+        const double xm = 0.5 * (x0 + x1), r = 0.5 * h;
+        g6_trig3(a, b, cos(xm), sin(xm), d);
+        const double m2 = fabs(d[2]), m3 = fabs(d[3]);
+        const double move0 = r * (fabs(d[1]) + r * (m2 / 2.0 + r * (m3 / 6.0 + r * L4 / 24.0)));
+        const double move1 = r * (m2 + r * (m3 / 2.0 + r * L4 / 6.0));
+        const double move2 = r * (m3 + r * L4 / 2.0);
+        const double fm = d[0];
+        /* D within its interpolation error (noise, from the coefficients that must vanish) at a
+         * cell's middle: the sign means nothing there (a cluster of roots, a degenerate pose); a
+         * simple root that close to a middle is a chance of order noise / |D'| */
+        if (fabs(fm) < noise) return -1;
+        if (fabs(fm) > move0 + noise) continue;  /* root-free, the error included */
+        const int change = y0 == 0.0 || (y1 != 0.0 && (y0 < 0.0) != (y1 < 0.0));
+        if (fabs(d[1]) > move1 + 8.0 * noise) {  /* monotone: one root where the sign changes */
+            if (change) {
+                if (n >= 16) return -1;
+                roots[n++] = y0 == 0.0 ? x0 : g6_refine(a, b, x0, x1, y0);
+            }
+            continue;
+        }
+        if (fabs(d[2]) > move2 + 64.0 * noise) {  /* D' monotone: one extremum of D at most */
+            double f, d0, d1;
+            g6_trig(a, b, x0, &f, &d0, NULL);
+            g6_trig(a, b, x1, &f, &d1, NULL);
+            if ((d0 < 0.0) == (d1 < 0.0)) {  /* monotone after all */
+                if (change) {
+                    if (n >= 16) return -1;
+                    roots[n++] = y0 == 0.0 ? x0 : g6_refine(a, b, x0, x1, y0);
+                }
+                continue;
+            }
+            const double xe = g6_extremum(a, b, x0, x1);
+            double fe, de, dde;
+            g6_trig(a, b, xe, &fe, &de, &dde);
+            const int left = y0 == 0.0 || fe == 0.0 || (y0 < 0.0) != (fe < 0.0);
+            const int right = y1 != 0.0 && fe != 0.0 && (fe < 0.0) != (y1 < 0.0);
+            if (!left && !right) {  /* no root; at a minimum of |D|, a complex pair xe +- i y with
+                                      * D ~ fe + dde (x - xe)^2 / 2, y = sqrt(2 fe / dde) */
+                if (dde == 0.0 || (fe / dde > 0.0 && (2.0 * fe / dde < G6_NEAR_DOUBLE * G6_NEAR_DOUBLE ||
+                                                      fabs(fe) < G6_TOUCH * big || fabs(fe) < 4.0 * noise)))
+                    return -1;
+                continue;
+            }
+            if (n + left + right > 16) return -1;
+            if (left) roots[n++] = y0 == 0.0 ? x0 : (fe == 0.0 ? xe : g6_refine(a, b, x0, xe, y0));
+            if (right) roots[n++] = g6_refine(a, b, xe, x1, fe);
+            continue;
+        }
+        if (h < G6_HMIN || top + 2 > G6_STACK) return -1;
+        lo[top] = xm, hi[top] = x1, flo[top] = fm, fhi[top] = y1;  /* the right half after the left */
+        top++;
+        lo[top] = x0, hi[top] = xm, flo[top] = y0, fhi[top] = fm;
+        top++;
+    }
+    /* a root on a cell boundary may be found from both sides: merged; then close roots are doubtful */
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++) {
+            double d = fabs(roots[i] - roots[j]);
+            if (d > IKC_PI_F) d = IKC_TWO_PI - d;
+            if (d < 1e-12) {
+                roots[j--] = roots[--n];
+                continue;
+            }
+            if (d < G6_CLOSE) return -1;
+        }
+    return n;
+}
+
+/* ---- the elimination ---------------------------------------------------------------------------- */
+
+static const double g6_probe[12] = {0.31, -0.77, 0.52, 0.13, -0.48, 0.91, -0.26, 0.67, -0.84, 0.39, 0.58, -0.19};
+
+/* th = 2 atan2(num, den) from the pair of largest magnitude */
+static double g6_ratio(int n, const double *den, const double *num) {
+    int best = 0;
+    double m = -1.0;
+    for (int k = 0; k < n; k++) {
+        double s = den[k] * den[k] + num[k] * num[k];
+        if (s > m) m = s, best = k;
+    }
+    return 2.0 * atan2(num[best], den[best]);
+}
+
+/* Candidates of goal g (12 entries, robot units) in the original joint order, prismatic values in
+ * robot units: their count (at most 16), or -1 when the target is doubtful. */
+static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
+    /* normalised target Tn and Gn = Tn Mn^-1, inverted for the inverse chain */
+    double R[9], t[3];
+    for (int k = 0; k < 9; k++) R[k] = g[k];
+    for (int k = 0; k < 3; k++) t[k] = (g[9 + k] - G->center[k]) / G->s;
+    g6_compose(R, t, G->Mn_inv, G->Mn_inv + 9);
+    if (G->sign < 0) {
+        double Ri[9], ti[3];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) Ri[3 * i + j] = R[3 * j + i];
+        for (int i = 0; i < 3; i++) ti[i] = -(Ri[3 * i] * t[0] + Ri[3 * i + 1] * t[1] + Ri[3 * i + 2] * t[2]);
+        for (int k = 0; k < 9; k++) R[k] = Ri[k];
+        for (int k = 0; k < 3; k++) t[k] = ti[k];
+    }
+    /* per-target axes: the first conj joints mapped by the target */
+    double W[18], P[18];
+    for (int k = 0; k < 6; k++) {
+        if (k < G->conj) {
+            g6_apply(R, NULL, G->w + 3 * k, W + 3 * k);
+            g6_apply(R, t, G->r + 3 * k, P + 3 * k);
+        } else {
+            for (int i = 0; i < 3; i++) W[3 * k + i] = G->w[3 * k + i], P[3 * k + i] = G->r[3 * k + i];
+        }
+    }
+    double y[3], m[3];
+    g6_apply(R, t, G->r + 15, y);
+    g6_apply(R, NULL, G->w + 15, m);
+    /* the fourteen quantities of X_b^-1 X_a^-1 (y, m) on the (a, b) grid, then interpolated */
+    double F[9][14], B[9][14];
+    for (int k = 0; k < 9; k++) {
+        double Ra[9], ta[3], Rb[9], tb[3], p1[3], l1[3], p2[3], l2[3];
+        g6_joint(W, P, G->prism[0], -G->grid_ab[2 * k], Ra, ta);
+        g6_joint(W + 3, P + 3, G->prism[1], -G->grid_ab[2 * k + 1], Rb, tb);
+        g6_apply(Ra, ta, y, p1);
+        g6_apply(Ra, NULL, m, l1);
+        g6_apply(Rb, tb, p1, p2);
+        g6_apply(Rb, NULL, l1, l2);
+        g6_fourteen(p2, l2, F[k]);
+    }
+    for (int q = 0; q < 9; q++)
+        for (int j = 0; j < 14; j++) {
+            double s = 0.0;
+            for (int k = 0; k < 9; k++) s += G->inv9[9 * q + k] * F[k][j];
+            B[q][j] = s;
+        }
+    /* left null space of B' (its present columns) */
+    const int nc = G->ncols;
+    double Bp[8][14], beta[8], rdiag[8];
+    int perm[8];
+    for (int c = 0; c < nc; c++)
+        for (int i = 0; i < 14; i++) Bp[c][i] = B[1 + G->cols[c]][i];
+    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK) return -1;
+    double Nl[6][14];
+    for (int e = 0; e < 6; e++) {
+        for (int i = 0; i < 14; i++) Nl[e][i] = (i == 8 + e) ? 1.0 : 0.0;
+        g6_qr_apply(nc, Bp, beta, Nl[e], 1);
+    }
+    /* C[e][t][j] = N^T A, the right side's constant column moved over; then to x_d, x_e monomials */
+    double Cm[6][3][9];
+    for (int e = 0; e < 6; e++) {
+        for (int tt = 0; tt < 3; tt++)
+            for (int j = 0; j < 9; j++) {
+                double s = 0.0;
+                for (int q = 0; q < 14; q++) s += Nl[e][q] * G->A[(q * 3 + tt) * 9 + j];
+                Cm[e][tt][j] = s;
+            }
+        double s = 0.0;
+        for (int q = 0; q < 14; q++) s += Nl[e][q] * B[0][q];
+        Cm[e][0][0] -= s;
+    }
+    /* (1, c, s) times (1 + x^2) in powers of x: 1 -> (1, 0, 1), c -> (1, 0, -1), s -> (0, 2, 0) */
+    static const double half[3][3] = {{1.0, 0.0, 1.0}, {1.0, 0.0, -1.0}, {0.0, 2.0, 0.0}};
+    double Mt[3][12][12];
+    for (int tt = 0; tt < 3; tt++)
+        for (int i = 0; i < 12; i++)
+            for (int j = 0; j < 12; j++) Mt[tt][i][j] = 0.0;
+    for (int e = 0; e < 6; e++)
+        for (int tt = 0; tt < 3; tt++)
+            for (int md = 0; md < 3; md++)
+                for (int me = 0; me < 3; me++) {
+                    double s = 0.0;
+                    for (int td = 0; td < 3; td++)
+                        for (int te = 0; te < 3; te++)
+                            s += Cm[e][tt][3 * td + te] * half[td][md] * half[te][me];
+                    Mt[tt][e][3 * md + me] = s;
+                    Mt[tt][6 + e][3 * md + 3 + me] = s;
+                }
+    for (int i = 0; i < 12; i++) {  /* rows of equal weight */
+        double s = 0.0;
+        for (int tt = 0; tt < 3; tt++)
+            for (int j = 0; j < 12; j++) s += Mt[tt][i][j] * Mt[tt][i][j];
+        s = s > 0.0 ? 1.0 / sqrt(s) : 1.0;
+        for (int tt = 0; tt < 3; tt++)
+            for (int j = 0; j < 12; j++) Mt[tt][i][j] *= s;
+    }
+    /* D on the circle, its Fourier coefficients */
+    double D[G6_K], a[11], b[11], ck[G6_K], sk[G6_K];
+    for (int k = 0; k < G6_K; k++) ck[k] = cos(IKC_TWO_PI * k / G6_K), sk[k] = sin(IKC_TWO_PI * k / G6_K);
+    for (int k = 0; k < G6_K; k++) {
+        double c = ck[k], s = sk[k], L[144];
+        int piv[12];
+        for (int i = 0; i < 12; i++)
+            for (int j = 0; j < 12; j++) L[12 * i + j] = Mt[0][i][j] + c * Mt[1][i][j] + s * Mt[2][i][j];
+        D[k] = g6_lu(12, L, piv);
+    }
+    for (int f = 0; f <= 10; f++) {
+        double sa = 0.0, sb = 0.0;
+        for (int k = 0; k < G6_K; k++) {
+            const int idx = (f * k) % G6_K;
+            sa += D[k] * ck[idx];
+            sb += D[k] * sk[idx];
+        }
+        double w = (f == 0 || 2 * f == G6_K) ? 1.0 / G6_K : 2.0 / G6_K;
+        a[f] = w * sa;
+        b[f] = w * sb;
+    }
+    double big = 0.0, tail = 0.0;
+    for (int f = 0; f <= 8; f++) big = fmax(big, fmax(fabs(a[f]), fabs(b[f])));
+    for (int f = 9; f <= 10; f++) tail = fmax(tail, fmax(fabs(a[f]), fabs(b[f])));
+    if (!(tail <= G6_COEF_CHECK * big)) return -1;
+    double roots[16];
+    /* D's interpolation error: the vanishing coefficients measure it (each of the 17 is as noisy) */
+    const int n = g6_roots(a, b, G6_NOISE * (tail > 1e-16 * big ? tail : 1e-16 * big), roots);
+    if (n < 0) return -1;
+    /* each root: null vector, then the other joints */
+    for (int k = 0; k < n; k++) {
+        const double thc = roots[k] > IKC_PI_F ? roots[k] - IKC_TWO_PI : roots[k];
+        double c = cos(thc), s = sin(thc), L[144], v[12];
+        int piv[12];
+        for (int i = 0; i < 12; i++)
+            for (int j = 0; j < 12; j++) L[12 * i + j] = Mt[0][i][j] + c * Mt[1][i][j] + s * Mt[2][i][j];
+        g6_lu(12, L, piv);
+        for (int i = 0; i < 12; i++) v[i] = g6_probe[i];
+        for (int it = 0; it < 2; it++) {
+            g6_lu_solve(12, L, piv, v);
+            double mx = 0.0;
+            for (int i = 0; i < 12; i++) mx = fmax(mx, fabs(v[i]));
+            if (!(mx > 0.0) || !isfinite(mx)) return -1;
+            for (int i = 0; i < 12; i++) v[i] /= mx;
+        }
+        /* v[3 i + j] = x_d^i x_e^j, i <= 3, j <= 2 */
+        double den[9], num[9];
+        for (int i = 0; i < 9; i++) den[i] = v[i], num[i] = v[i + 3];
+        const double thd = g6_ratio(9, den, num);
+        for (int i = 0; i < 4; i++)
+            for (int j = 0; j < 2; j++) den[2 * i + j] = v[3 * i + j], num[2 * i + j] = v[3 * i + j + 1];
+        const double the = g6_ratio(8, den, num);
+        const double tc[3] = {1.0, c, s}, ud[3] = {1.0, cos(thd), sin(thd)}, ue[3] = {1.0, cos(the), sin(the)};
+        double rhs[14];
+        for (int q = 0; q < 14; q++) {
+            double acc = 0.0;
+            for (int tt = 0; tt < 3; tt++)
+                for (int j = 0; j < 9; j++) acc += G->A[(q * 3 + tt) * 9 + j] * tc[tt] * ud[j / 3] * ue[j % 3];
+            rhs[q] = acc - B[0][q];
+        }
+        /* least squares B' m = rhs through the QR: m = P R^-1 (Q^T rhs)[:nc] */
+        g6_qr_apply(nc, Bp, beta, rhs, 0);
+        double z[8], mab[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (int r = nc - 1; r >= 0; r--) {
+            double acc = rhs[r];
+            for (int c2 = r + 1; c2 < nc; c2++) acc -= Bp[c2][r] * z[c2];
+            z[r] = acc / rdiag[r];
+        }
+        for (int r = 0; r < nc; r++) mab[G->cols[perm[r]]] = z[r];
+        /* Kab = a b^T (rank one): a = (1, c_a, s_a) or (1, d_a, d_a^2) up to scale, likewise b */
+        double K[9] = {1.0, mab[0], mab[1], mab[2], mab[3], mab[4], mab[5], mab[6], mab[7]};
+        double tha, thb;
+        if (G->prism[0] || G->prism[1]) {
+            tha = G->prism[0] ? K[3] : atan2(K[6], K[3]);
+            thb = G->prism[1] ? K[1] : atan2(K[2], K[1]);
+        } else {
+            double av[3], bv[3];
+            for (int r = 0; r < 3; r++) {
+                av[r] = K[3 * r] * K[0] + K[3 * r + 1] * K[1] + K[3 * r + 2] * K[2];
+                bv[r] = K[r] * K[0] + K[3 + r] * K[3] + K[6 + r] * K[6];
+            }
+            tha = atan2(av[2], av[1]);
+            thb = atan2(bv[2], bv[1]);
+        }
+        double th[6] = {tha, thb, thc, thd, the, 0.0};
+        /* th_f from the rotation left over: X_a ... X_e R_f = Gn */
+        double XR[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Xt[3] = {0, 0, 0};
+        for (int j = 0; j < 5; j++) {
+            double Rj[9], tj[3];
+            g6_joint(W + 3 * j, P + 3 * j, G->prism[j], th[j], Rj, tj);
+            g6_compose(XR, Xt, Rj, tj);
+        }
+        double Rf[9];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                Rf[3 * i + j] = XR[i] * R[j] + XR[3 + i] * R[3 + j] + XR[6 + i] * R[6 + j];
+        double Ru[3], cr[3];
+        g6_apply(Rf, NULL, G->u, Ru);
+        const double *u = G->u, *wf = G->w + 15;
+        cr[0] = u[1] * Ru[2] - u[2] * Ru[1];
+        cr[1] = u[2] * Ru[0] - u[0] * Ru[2];
+        cr[2] = u[0] * Ru[1] - u[1] * Ru[0];
+        th[5] = atan2(cr[0] * wf[0] + cr[1] * wf[1] + cr[2] * wf[2], Ru[0] * u[0] + Ru[1] * u[1] + Ru[2] * u[2]);
+        for (int j = 0; j < 6; j++) {
+            double x = th[j];
+            if (G->prism[j]) x *= G->s;
+            if (!isfinite(x)) return -1;
+            Qout[6 * k + G->order[j]] = x;
+        }
+    }
+    return n;
+}
+
+/* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g: every candidate after
+ * G6_NEWTON Newton steps on the true robot, exact ones as plain leaves, far ones empty; a doubtful
+ * target (or a candidate stalled short of exact) one DEFER leaf, for the Python general6. */
+static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E, int *F) {
+    int n = ikc_g6_candidates(G, g, Q);
+    if (n < 0) {
+        for (int j = 0; j < 6; j++) Q[j] = 0.0;
+        E[0] = 0.0;
+        F[0] = IKC_DEFER;
+        return 1;
+    }
+    const double exact = rb->tol * rb->scale;
+    int clean[16];
+    for (int k = 0; k < n; k++) {
+        const double start = ikc_measure(rb, g, Q + 6 * k);
+        /* with all 8 columns of B' the pencil's real roots are all solutions (its 8 spurious roots
+         * are at +-i); with fewer (a prismatic joint's absent products) its null space is larger than
+         * the 6 vectors taken and real spurious roots appear: a far candidate may be one of them */
+        clean[k] = G->ncols == 8 || start <= G6_CLEAN * rb->scale;
+        double e = ikc_newton(rb, g, Q + 6 * k, G6_NEWTON);
+        E[k] = e;
+        F[k] = 0;
+        if (e <= exact) continue;
+        /* a clean root (it started close) that Newton cannot finish: a double root in disguise */
+        if (e != e || (clean[k] && e < G6_STALLED * rb->scale)) {
+            F[0] = IKC_DEFER;
+            return 1;
+        }
+        F[k] = IKC_EMPTY;  /* a spurious root of a prismatic pencil (started far, went nowhere) */
+    }
+    /* two clean roots whose candidates met: a near-double root (Newton took both to one solution, or
+     * the pencil's rounding split one double root); the Python path's re-solve decides */
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++)
+            if (clean[i] && clean[j] && !(F[i] & IKC_EMPTY) && !(F[j] & IKC_EMPTY) &&
+                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE) {
+                F[0] = IKC_DEFER;
+                return 1;
+            }
+    return n;
+}
