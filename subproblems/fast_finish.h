@@ -492,20 +492,16 @@ static int ikc_goal_checked(const ikc_robot *rb, const double *T, double *g) {
 #define IKC_LINE_RANK 1e-5      /* second smallest singular value (size-free) below this: not alone */
 #define IKC_LINE_POINTS 3       /* points of the line where the rank is checked: t = 0, +-2 pi / 3 */
 
-/* The size-free J^T J at q (rows of the target, lengths over the size, prismatic columns times the size)
- * over the m returned joints that are not free (their positions in col), diagonalised by cyclic
- * Jacobi rotations: its eigenvalues ascending in lam[0..m), and with V (m x m, row-major) their unit
- * eigenvectors as columns.  Returns m, or 0 when there are fewer than 2 such joints or they outnumber
- * the target's rows (no isolated direction to show). */
-static int ikc_jtj_eigen(const ikc_robot *rb, const double *q, int *col, double *lam, double *V) {
+/* The size-free J^T J at q (rows of the target, lengths over the size, prismatic columns times the
+ * size) over the m joints that are not free (their positions in col), row-major in S (m x m; room for
+ * dof x dof).  Returns m; *rows is the target's row count. */
+static int ikc_scaled_jtj(const ikc_robot *rb, const double *q, int *col, double *S, int *rows) {
     const int dof = rb->dof;
     double G[12], J[6 * dof];
     ikc_fk_jacobian(rb, q, G, J);
     int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0;
     for (int j = 0; j < dof; j++)
         if (!rb->is_free[j]) col[m++] = j;
-    if (m < 2 || m > r1 - r0) return 0;
-    double S[m][m], U[m][m];
     for (int a = 0; a < m; a++)
         for (int c = 0; c < m; c++) {
             double t = 0.0;
@@ -514,7 +510,25 @@ static int ikc_jtj_eigen(const ikc_robot *rb, const double *q, int *col, double 
                 t += f * J[r * dof + col[a]] * J[r * dof + col[c]];
             }
             double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
-            S[a][c] = t * ua * uc;
+            S[a * m + c] = t * ua * uc;
+        }
+    *rows = r1 - r0;
+    return m;
+}
+
+/* The size-free J^T J at q (rows of the target, lengths over the size, prismatic columns times the size)
+ * over the m returned joints that are not free (their positions in col), diagonalised by cyclic
+ * Jacobi rotations: its eigenvalues ascending in lam[0..m), and with V (m x m, row-major) their unit
+ * eigenvectors as columns.  Returns m, or 0 when there are fewer than 2 such joints or they outnumber
+ * the target's rows (no isolated direction to show). */
+static int ikc_jtj_eigen(const ikc_robot *rb, const double *q, int *col, double *lam, double *V) {
+    double Sf[rb->dof * rb->dof];
+    int rows, m = ikc_scaled_jtj(rb, q, col, Sf, &rows);
+    if (m < 2 || m > rows) return 0;
+    double S[m][m], U[m][m];
+    for (int a = 0; a < m; a++)
+        for (int c = 0; c < m; c++) {
+            S[a][c] = Sf[a * m + c];
             U[a][c] = a == c ? 1.0 : 0.0;
         }
     for (int sweep = 0; sweep < 30; sweep++) {  /* cyclic Jacobi: S -> diagonal, U -> eigenvectors */
@@ -715,12 +729,26 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
  * the others (an interval narrower than the grid: a stretched arm at a wrist lock) get Newton steps
  * from their best representative, as the reference runtime pulls its representatives onto the
  * family.  Count or IKC_PYTHON. */
+static int ikc_any_flag(int n, const int *F, int bit) {
+    for (int k = 0; k < n; k++)
+        if (!(F[k] & IKC_EMPTY) && (F[k] & bit)) return 1;
+    return 0;
+}
+
+static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const double *fr, int limits,
+                                  double *q, double *res, int *ls, int *cont);
+
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
-                            const double *fr, int limits, double *q, double *res, int *ls, int *cont) {
+                            const double *fr, int limits, double *q, double *res, int *ls, int *cont,
+                            int try_alt) {
     const int dof = rb->dof;
     double Q[L * dof], E[L];
     int F[L];
     int n = chain(g, fr, 0.0, Q, E, F);
+    if (try_alt && ikc_any_flag(n, F, IKC_FAMILY)) {  /* a gimbal lock: the alternative chain first */
+        int ka = ikc_settle_alternative(rb, g, fr, limits, q, res, ls, cont);
+        if (ka != IKC_FAMILY_MISS) return ka;
+    }
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
@@ -819,24 +847,17 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
 }
 
 /* Whether any filled leaf of n carries flag bit `bit`. */
-static int ikc_any_flag(int n, const int *F, int bit) {
-    for (int k = 0; k < n; k++)
-        if (!(F[k] & IKC_EMPTY) && (F[k] & bit)) return 1;
-    return 0;
-}
-
 /* A gimbal lock in the chain (a FAMILY leaf) where the plan has an alternative chain: the alternative
  * chain's leaves.  Where they meet no lock (and no degenerate geometry) they are every solution -- a
  * closed-form chain is complete where no step degenerates -- and the lock was no self-motion of the
  * target (a 5-joint arm's O-RRR gimbal, whose waist value the position fixes): their finish, as the
- * reference runtime's with_alternative.  Else IKC_FAMILY_MISS: the caller goes on as before. */
+ * reference runtime's with_alternative.  Else IKC_FAMILY_MISS: the caller goes on as before.  Called by
+ * ikc_settle_chain on the main chain's rep-0 leaves (the chain runs once). */
 static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const double *fr, int limits,
                                   double *q, double *res, int *ls, int *cont) {
-    const int L = rb->leaves, La = rb->leaves_alt, dof = rb->dof;
-    double Q[L * dof], E[L], Qa[La * dof], Ea[La];
-    int F[L], Fa[La];
-    int n = rb->chain(g, fr, 0.0, Q, E, F);
-    if (!ikc_any_flag(n, F, IKC_FAMILY)) return IKC_FAMILY_MISS;
+    const int La = rb->leaves_alt, dof = rb->dof;
+    double Qa[La * dof], Ea[La];
+    int Fa[La];
     int na = rb->chain_alt(g, fr, 0.0, Qa, Ea, Fa);
     int filled = 0;
     for (int k = 0; k < na; k++) filled |= !(Fa[k] & IKC_EMPTY);
@@ -848,14 +869,10 @@ static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const do
 /* The chain, then (where it cannot settle the target) the alternative chain. */
 static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                       double *res, int *ls, int *cont) {
-    if (rb->chain_alt) {
-        int k = ikc_settle_alternative(rb, g, fr, limits, q, res, ls, cont);
-        if (k != IKC_FAMILY_MISS) return k;
-    }
-    int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont);
+    int k = ikc_settle_chain(rb, rb->chain, rb->leaves, g, fr, limits, q, res, ls, cont, rb->chain_alt != 0);
     if (k == IKC_PYTHON && rb->chain_alt) {
         const int why = ikc_why;
-        k = ikc_settle_chain(rb, rb->chain_alt, rb->leaves_alt, g, fr, limits, q, res, ls, cont);
+        k = ikc_settle_chain(rb, rb->chain_alt, rb->leaves_alt, g, fr, limits, q, res, ls, cont, 0);
         ikc_why = k == IKC_PYTHON ? why + IKC_WHY_ALT * ikc_why : 0;
     }
     return k;
@@ -934,24 +951,13 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
  * the size, prismatic columns times the size, free joints left out) by inverse iteration on J^T J:
  * the C form of subproblems.continuation._weakest, for its threshold test only. */
 static double ikc_weakest(const ikc_robot *rb, const double *q) {
-    const int dof = rb->dof;
-    double G[12], J[6 * dof];
-    ikc_fk_jacobian(rb, q, G, J);
-    int r0 = rb->target == 2 ? 3 : 0, r1 = rb->target == 1 ? 3 : 6, m = 0, col[dof];
-    for (int j = 0; j < dof; j++)
-        if (!rb->is_free[j]) col[m++] = j;
+    int col[rb->dof], rows;
+    double Sf[rb->dof * rb->dof];
+    const int m = ikc_scaled_jtj(rb, q, col, Sf, &rows);
     if (m == 0) return INFINITY;
     double JtJ[m][m], x[m];
     for (int a = 0; a < m; a++) {
-        for (int c = 0; c < m; c++) {
-            double s = 0.0;
-            for (int r = r0; r < r1; r++) {
-                double f = r < 3 ? 1.0 / (rb->scale * rb->scale) : 1.0;
-                s += f * J[r * dof + col[a]] * J[r * dof + col[c]];
-            }
-            double ua = rb->revolute[col[a]] ? 1.0 : rb->scale, uc = rb->revolute[col[c]] ? 1.0 : rb->scale;
-            JtJ[a][c] = s * ua * uc;
-        }
+        for (int c = 0; c < m; c++) JtJ[a][c] = Sf[a * m + c];
         x[a] = 1.0 / sqrt((double)m) * (1.0 + 0.1 * a);
     }
     double lambda = INFINITY;

@@ -574,9 +574,13 @@ def _plain_family(flag) -> bool:
     return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
 
 
-def settle_chain(rb: FinishRobot, chain, g, free, limits: bool):
+def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = False):
     dof = rb.dof
     Q, E, F = rb.leaves(chain, g, free, 0.0)
+    if try_alt and _any_flag(F, _fk.FAMILY):  # a gimbal lock: the alternative chain first
+        k = settle_alternative(rb, g, free, limits)
+        if k != FAMILY_MISS:
+            return k
     n = len(Q)
     k = finish(rb, g, Q, E, F, limits)
     if k != FAMILY_MISS:
@@ -667,10 +671,7 @@ def _any_flag(F, bit) -> bool:
 
 def settle_alternative(rb: FinishRobot, g, free, limits: bool):
     """A gimbal lock of the chain where the plan has an alternative chain: the alternative chain's
-    finish where it meets no lock and no degenerate geometry, else FAMILY_MISS."""
-    _, _, F = rb.leaves(rb.chain, g, free, 0.0)
-    if not _any_flag(F, _fk.FAMILY):
-        return FAMILY_MISS
+    finish where it meets no lock and no degenerate geometry, else FAMILY_MISS (ikc_settle_alternative)."""
     Qa, Ea, Fa = rb.leaves(rb.chain_alt, g, free, 0.0)
     if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER):
         return FAMILY_MISS
@@ -680,11 +681,7 @@ def settle_alternative(rb: FinishRobot, g, free, limits: bool):
 
 def settle(rb: FinishRobot, g, free=(), limits: bool = True):
     """Rows ``(q, residual, ls, continuum)`` of one goal as the C finish gives them, or PYTHON."""
-    if rb.chain_alt is not None:
-        k = settle_alternative(rb, g, tuple(free), limits)
-        if k != FAMILY_MISS:
-            return k
-    k = settle_chain(rb, rb.chain, g, tuple(free), limits)
+    k = settle_chain(rb, rb.chain, g, tuple(free), limits, try_alt=rb.chain_alt is not None)
     if k == PYTHON and rb.chain_alt is not None:
         k = settle_chain(rb, rb.chain_alt, g, tuple(free), limits)
     return k
