@@ -657,11 +657,10 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
     const double exact = rb->tol * rb->scale;
     int clean[16];
     for (int k = 0; k < n; k++) {
-        const double start = ikc_measure(rb, g, Q + 6 * k);
         /* with all 8 columns of B' the pencil's real roots are all solutions (its 8 spurious roots
          * are at +-i); with fewer (a prismatic joint's absent products) its null space is larger than
          * the 6 vectors taken and real spurious roots appear: a far candidate may be one of them */
-        clean[k] = G->ncols == 8 || start <= G6_CLEAN * rb->scale;
+        clean[k] = G->ncols == 8 || ikc_measure(rb, g, Q + 6 * k) <= G6_CLEAN * rb->scale;
         double e = ikc_newton(rb, g, Q + 6 * k, G6_NEWTON);
         E[k] = e;
         F[k] = 0;

@@ -117,7 +117,6 @@ _GRID_T = np.array([-1.0, 0.0, 1.0])
 _PHI_T = np.stack([np.ones(3), _GRID_T, _GRID_T**2], axis=1)
 # (1, cos, sin) times (1 + x^2) in powers of x = tan(th / 2): rows t, columns power
 _HALF = np.array([[1.0, 0.0, 1.0], [1.0, 0.0, -1.0], [0.0, 2.0, 0.0]])
-_HALF9 = np.kron(_HALF, _HALF)  # trig product (t*3+u) -> monomial x_d^i x_e^j (i*3+j)
 
 
 class General6Error(SubproblemError):
@@ -356,7 +355,7 @@ class General6:
         x = 0.37  # any value that is not a root: a singular pencil is singular everywhere
         sv = np.linalg.svd(M[:, 0] + x * M[:, 1] + x * x * M[:, 2], compute_uv=False)
         ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(len(Gn)), where=sv[:, 0] > 0)  # 0 / 0: singular
-        return bool(np.median(ratio) < 1e-10)
+        return bool(np.median(ratio) < _tol.G6_SINGULAR_PENCIL)
 
     def _regular_variant(self, arr: _Arrangement, count: int = 8, seed: int = 22) -> _Arrangement:
         """The arrangement, or where a prismatic d or e makes its 12 x 12 pencil singular, the deflated
@@ -731,7 +730,7 @@ class General6:
             ok = err <= EXACT
             b = _pack(_wrap(Qc[ok], self.prism), own[ok], err[ok], 2 * count, self.prism)
             d = np.abs(np.angle(np.exp(1j * (b.Q - Q[:, None, :])))).max(axis=2)
-            hit = np.where(b.valid, d, np.inf).min(axis=1) < _tol.VERIFY_SAME_ANGLE
+            hit = np.where(b.valid, d, np.inf).min(axis=1) < SAME
             generic, special_hits = int(hit[:count].sum()), int(hit[count:].sum())
             rows = int(b.valid[:count].sum())  # generic samples: special ones may hold double roots
             # more exact rows: fewer missed solutions (an order can recover the sampled vector and miss

@@ -467,7 +467,7 @@ def line_inside(rb: FinishRobot, q0, s, t: float, slack: float, slide_slack: flo
     return True
 
 
-def line_in_limits(rb: FinishRobot, q0, s, slack: float = LIMIT_EPS, slide_slack: float = LIMIT_EPS):
+def line_in_limits(rb: FinishRobot, q0, s, slack: float, slide_slack: float):
     """(0, None) when the line q0 + s t, t in [-pi, pi], misses the limits; (1, t) with t the middle of
     its widest in-limit stretch; (-1, None) when undecided."""
     cut = [-PI, PI]

@@ -338,11 +338,12 @@ def test_a_reduced_chain_snaps_a_run_of_concurrent_axes_beyond_the_pair_toleranc
     tolerance (its leaves are carried over by plain Newton; it has no general solver)."""
     from ikcompiler.geometry import snap
 
-    chain = configs.perturbed(_entry(catalogue, "example-robot-data", "human.urdf", "middle_thorax").load(), 1e-3,
-                              seed=7)
+    torso = _entry(catalogue, "example-robot-data", "human.urdf", "middle_thorax").load()
+    chain = configs.perturbed(torso, 1e-3, seed=7)
     assert not any("thoracic_Y snapped to meet at one point" in n for n in snap.snap_chain(chain)[1])
     module = configs.compile_chain(chain).module
-    assert any("middle_thoracic_Y snapped to meet at one point" in n for n in module.PLAN.splitlines()), module.PLAN
+    notes = module.PLAN.splitlines()
+    assert any("middle_thoracic_Y snapped to meet at one point" in n for n in notes), module.PLAN
     for samples, seed, special in ((30, 1, 1.0), (50, 10, 0.0)):
         rep = verify(chain, module, samples=samples, seed=seed, special=special, scalar_checks=3)
         assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()

@@ -30,7 +30,9 @@ ROUNDS = 4  # snapping rounds at most (each round only moves relations within th
 REDUCED_RUN_FACTOR = 2.0
 
 
-def snap_chain(chain: Chain, tol: Tolerance | None = None, run_factor: float = 1.0) -> tuple[Chain, list[str]]:
+def snap_chain(
+    chain: Chain, tol: Tolerance | None = None, run_factor: float = 1.0
+) -> tuple[Chain, list[str]]:
     """The snapped chain and one note per relation that was snapped (empty when nothing moved).
 
     ``run_factor``: a run of three or more concurrent axes is snapped when they miss their common point

@@ -59,9 +59,7 @@ def true_general6(robot):
 
     Built here without the plan's arrangements: a snapped plan (the only caller) has none, and
     ``General6`` chooses them on fixed sample poses of the robot itself, so the order is the one the
-    compiler would record (same twists, home and seed).  A general-6r module's own solver is reused."""
-    if robot.general6 is not None:
-        return robot.general6
+    compiler would record (same twists, home and seed)."""
     if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
         return None
     try:
@@ -178,7 +176,7 @@ def onto_self_motion(robot, TH, owner, cont, goals, limits):
         return TH
     bad[look] = ~(robot.error(_rt.fk_batch(robot.twists, TH[look], robot.home), goals[owner[look]]) <= exact)
     if limits:
-        bad |= _fk.represent(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower, robot.upper, True)[2]
+        bad |= ~_rt.within_limits(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower, robot.upper)
     rows = np.nonzero(cont & ok & bad)[0]
     if not len(rows):
         return TH
@@ -193,7 +191,7 @@ def onto_self_motion(robot, TH, owner, cont, goals, limits):
     e = robot.error(_rt.fk_batch(robot.twists, X, robot.home), g)
     good = e <= exact
     if limits:
-        good &= ~_fk.represent(X[:, ind], robot.joint_types, robot.lower, robot.upper, True)[2]
+        good &= _rt.within_limits(X[:, ind], robot.joint_types, robot.lower, robot.upper)
     good = good.reshape(len(rows), k)
     if not good.any():
         return TH
