@@ -225,20 +225,29 @@ static void g6_qr_apply(int nc, double b[][14], const double *beta, double *x, i
 
 /* ---- the trigonometric polynomial D(phi) ------------------------------------------------------- */
 
-/* D, D' and D'' at phi from coefficients c[0] + sum_k a_k cos k phi + b_k sin k phi (k = 1..8) */
-static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
-    double c1 = cos(phi), s1 = sin(phi), ck = 1.0, sk = 0.0;
-    double v = a[0], d = 0.0, dd = 0.0;
+/* D = a[0] + sum_k a_k cos k phi + b_k sin k phi (k = 1..8) and its first three derivatives at the
+ * angle of cosine c1 and sine s1 */
+static void g6_trig3(const double *a, const double *b, double c1, double s1, double *d) {
+    double ck = 1.0, sk = 0.0;
+    d[0] = a[0], d[1] = d[2] = d[3] = 0.0;
     for (int k = 1; k <= 8; k++) {
         double cn = ck * c1 - sk * s1, sn = sk * c1 + ck * s1;
         ck = cn, sk = sn;
-        v += a[k] * ck + b[k] * sk;
-        d += k * (b[k] * ck - a[k] * sk);
-        dd -= (double)(k * k) * (a[k] * ck + b[k] * sk);
+        double even = a[k] * ck + b[k] * sk, odd = b[k] * ck - a[k] * sk;
+        d[0] += even;
+        d[1] += k * odd;
+        d[2] -= (double)(k * k) * even;
+        d[3] -= (double)(k * k * k) * odd;
     }
-    *f = v;
-    if (df) *df = d;
-    if (ddf) *ddf = dd;
+}
+
+/* D, D' and D'' at phi (g6_trig3 at its cosine and sine) */
+static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
+    double d[4];
+    g6_trig3(a, b, cos(phi), sin(phi), d);
+    *f = d[0];
+    if (df) *df = d[1];
+    if (ddf) *ddf = d[2];
 }
 
 /* a root of D in [lo, hi] where D(lo), D(hi) differ in sign: Newton inside the bracket, else bisection */
@@ -300,20 +309,6 @@ static const double g6_grid_sin[G6_GRID] = {
     -0.7933533402912357, -0.7071067811865477, -0.6087614290087209, -0.5000000000000004, -0.38268343236508956,
     -0.25881904510252157, -0.13052619222005168};
 
-/* D and its first three derivatives at the angle of cosine c1 and sine s1 */
-static void g6_trig3(const double *a, const double *b, double c1, double s1, double *d) {
-    double ck = 1.0, sk = 0.0;
-    d[0] = a[0], d[1] = d[2] = d[3] = 0.0;
-    for (int k = 1; k <= 8; k++) {
-        double cn = ck * c1 - sk * s1, sn = sk * c1 + ck * s1;
-        ck = cn, sk = sn;
-        double even = a[k] * ck + b[k] * sk, odd = b[k] * ck - a[k] * sk;
-        d[0] += even;
-        d[1] += k * odd;
-        d[2] -= (double)(k * k) * even;
-        d[3] -= (double)(k * k * k) * odd;
-    }
-}
 
 /* Real roots of D on [0, 2 pi) into roots (at most 16); -1 when doubtful.
  *
