@@ -1008,16 +1008,28 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
  * converged, moved less than IKC_MAX_MOVE, no two distinct leaves ended on one solution, no corrected
  * leaf near a singular configuration, no least-squares leaf that nearly reaches the target (a pair of
  * solutions may be born there), no self-motion leaf.  Otherwise IKC_PYTHON: the Python continuation
- * takes the target.  Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot). */
+ * takes the target.  Count or IKC_PYTHON (also for a leaf near a degenerate geometry of the snapped robot).
+ *
+ * A reduced chain (fewer joints than its target has DOF: a 5-joint arm for a pose) is solved from a
+ * subset of the equations, and the snapped robot reaches almost no target of the true one: every leaf
+ * misses by about the change in geometry, which says nothing of a fold.  There a near-miss leaf is
+ * judged after its Newton steps on the true robot: one that ends exact is a corrected leaf like an
+ * exact one (moved less than IKC_MAX_MOVE, not near a singular configuration); one that ends
+ * least-squares is a minimum of the residual that no solution lies near while its Jacobian is well
+ * conditioned (a 6 x 5 Jacobian has full rank at such a minimum, unlike a square one, whose
+ * least-squares minima are singular); two near-miss leaves that start at one point (a pair clamped
+ * onto a fold of the snapped chain: the true robot may have two solutions there) hand the target back.
+ * (hextilt_flying_arm_5 of example-robot-data: every target went to Python, 48 ms a pose; docs/calibrated.md) */
 static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                         double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof;
     const double exact = rb->tol * rb->scale, leaf_exact = IKC_SNAPPED_LEAF * rb->scale;
     double Q[L * dof], E[L], Q0[L * dof];
-    int F[L], good[L], any_exact = 0, fold = 0;
+    int F[L], good[L], near[L], any_exact = 0, fold = 0;
+    const int reduced = dof - rb->nfree < (rb->target == 0 ? 6 : 3);
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
-        good[k] = 0;
+        good[k] = near[k] = 0;
         if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
         /* a self-motion of the snapped robot (also a gimbal lock where the plan has an alternative
@@ -1025,14 +1037,22 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
          * true robot leaves it unresolved) is the Python continuation's call (its `family` rows) */
         if (F[k] & IKC_FAMILY) return ikc_hand_back(IKC_WHY_SNAPPED);
         if (!(E[k] <= leaf_exact)) {  /* a least-squares leaf: a near miss may hide a pair of solutions */
-            if (E[k] <= rb->near_singular * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
+            if (E[k] <= rb->near_singular * rb->scale) {
+                if (!reduced) return ikc_hand_back(IKC_WHY_SNAPPED);
+                near[k] = 1;  /* a reduced chain's leaf: judged after its Newton steps (below) */
+            }
         } else {
             good[k] = 1;
         }
         for (int j = 0; j < dof; j++) Q0[k * dof + j] = Q[k * dof + j];
         E[k] = ikc_newton_steps(rb, g, Q + k * dof, rb->polish, 0, NULL);  /* plain steps, as the Python path */
         F[k] = 0;  /* as the Python path: a corrected leaf is a plain candidate */
-        if (good[k]) {
+        if (near[k]) {
+            if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
+            good[k] = E[k] <= exact;
+            if (good[k] && !(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE))
+                return ikc_hand_back(IKC_WHY_SNAPPED);
+        } else if (good[k]) {
             if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
@@ -1049,7 +1069,9 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     if (!any_exact && fold) return ikc_hand_back(IKC_WHY_SNAPPED);
     for (int a = 0; a < n; a++)
         for (int c = a + 1; c < n; c++)
-            if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&
+            if (near[a] && near[c] && ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) <= IKC_SEPARATE)
+                return ikc_hand_back(IKC_WHY_SNAPPED);  /* a clamped pair of a reduced chain */
+            else if (good[a] && good[c] && ikc_row_distance(rb, Q + a * dof, Q + c * dof) <= IKC_SEPARATE &&
                 ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) > IKC_SEPARATE)
                 return ikc_hand_back(IKC_WHY_SNAPPED);  /* a collision: one branch went to the other's */
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);

@@ -206,6 +206,64 @@ def test_a_double_root_of_the_true_arm_is_reached(catalogue):
         assert len(d) and d.min() <= 1e-4, (q, rows[ok])  # a double root: verify's 100 x 1e-6
 
 
+def _hextilt(catalogue):
+    chain = _entry(catalogue, "example-robot-data", "hextilt_flying_arm_5.urdf", "flying_arm_5__gripper").load()
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and len(module.JOINT_NAMES) == 5, "no longer a snapped 5-joint plan: pick another"
+    return chain, module
+
+
+def test_a_reduced_snapped_arm_is_settled_in_c(catalogue):
+    """hextilt_flying_arm_5.urdf: 5 joints for a pose, the wrist snapped to meet (missed by 3.5e-4 of
+    the size).  The snapped robot reaches almost no target of the true one, so every leaf missed by
+    about the change in geometry, less than near_singular times the size, and the C finish handed
+    every target to the Python continuation (median solve 48.8 ms in the session 7 sample).  Now such a
+    leaf is judged after its Newton steps (fast_finish.h ikc_polished): every random pose whose
+    sampled vector is away from a singular configuration is settled in C, and none is missed."""
+    import numpy as np
+
+    from ikcompiler.verify import sample_configurations
+    from subproblems.continuation import NEAR_SINGULAR
+    from subproblems.native import PYTHON
+
+    chain, module = _hextilt(catalogue)
+    Q = sample_configurations(chain, 100, seed=10, special=0.0)
+    native = module._SOLVER.native_chain()
+    if native is not None:  # the C build is tested in tests/test_native.py; here what it settles
+        _, code = native.many(chain.fk_batch(Q), np.zeros((len(Q), 0)), True)
+        weakest = []
+        for q in Q:
+            J = chain.body_jacobian(q)
+            J[:3] /= chain.scale
+            weakest.append(np.linalg.svd(J, compute_uv=False).min())
+        far = np.array(weakest) >= NEAR_SINGULAR
+        assert far.sum() > 50 and not (code[far] == PYTHON).any(), np.nonzero(far & (code == PYTHON))
+    rep = verify(chain, module, samples=100, seed=10, special=0.0, scalar_checks=5)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_gimbal_lock_of_a_reduced_snapped_arm_keeps_both_elbows(catalogue, native):
+    """hextilt_flying_arm_5.urdf at special pose 1 of seed 1, q = (-pi/2, 1.095, pi/2, pi/2, pi/2): q4 =
+    pi/2 locks the snapped wrist (axis 5 on axis 3) in both chains, so the target goes to the reference
+    steps.  Their S2-RR on parallel axes met the snapped wrist centre at the wrong height (the snapped
+    robot cannot reach the true target) and gave one least-squares row, the other elbow: the sampled
+    vector (sigma 2.6e-6, an isolated solution of the true arm) never came back.  The fast chain's
+    leaves, which hold both elbows, now join the candidates (runtime/reference.py _with_leaves)."""
+    import numpy as np
+
+    from ikcompiler.verify import sample_configurations
+
+    chain, module = _hextilt(catalogue)
+    module.NATIVE = native
+    q = sample_configurations(chain, 30, seed=1, special=1.0)[1]
+    assert np.allclose(q[[0, 2, 3, 4]], [-np.pi / 2, np.pi / 2, np.pi / 2, np.pi / 2]), q
+    rows = module.solve(chain.fk(q))
+    assert len(rows) and np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1).min() < 1e-6, rows
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
 def test_snapped_leaves_are_tracked_and_the_c_finish_settles_them(catalogue):
     """puma560_robot.urdf (rtb-data) snaps by 1.8e-9 rad; its closed-form leaves on the snapped arm
     carry ~1e-10 of roundoff.  The continuation judged them against the 1e-12 precision instead of the

@@ -74,21 +74,23 @@ class Solver:
         (TH, owner, continuum)."""
         return reference.correct(self.robot, TH, owner, goals, self.general6, family)
 
-    def reference_chunk(self, goals, Td, init, limits, alternative=None):
+    def reference_chunk(self, goals, Td, init, limits, alternative=None, leaves=None):
         """The reference runtime on targets (chunked so that a search stays within the budget);
-        ``alternative`` marks the targets that also take the plan's alternative chain."""
+        ``alternative`` marks the targets that also take the plan's alternative chain; ``leaves``: a
+        snapped plan's fast-chain leaves of the targets, extra candidates (reference.candidates)."""
         width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
         step = max(1, self.memory_budget // width)
         if len(goals) <= step:
-            return self._reference(goals, Td, init, limits, alternative)
+            return self._reference(goals, Td, init, limits, alternative, leaves)
         return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits,
-                                        None if alternative is None else alternative[i:i + step])
+                                        None if alternative is None else alternative[i:i + step],
+                                        None if leaves is None else tuple(x[i:i + step] for x in leaves))
                         for i in range(0, len(goals), step)])
 
-    def _reference(self, goals, Td, init, limits, alternative=None):
+    def _reference(self, goals, Td, init, limits, alternative=None, leaves=None):
         r = self.robot
-        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct, alternative),
-                                  goals, limits)
+        return reference.complete(r, *reference.candidates(r, goals, Td, init, self.correct, alternative,
+                                                           leaves), goals, limits)
 
     def lock_targets(self, flag):
         """Targets (N,) whose fast-chain leaves met a gimbal lock (FAMILY) where the plan has an
@@ -148,7 +150,11 @@ class Solver:
                                            r.joint_types))
         idx = np.nonzero(defer)[0]
         if len(idx):
-            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx]))
+            # a gimbal lock's fast leaves join the reference steps' candidates (reference._with_leaves)
+            L = Q[idx] @ r.A.T + r.B
+            leaves = (L, lock[idx, None] & _fk.usable(Q[idx], flag[idx]), (flag[idx] & _fk.FAMILY) != 0)
+            _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx],
+                                                      leaves))
         return tuple(parts)
 
     def handed_back(self, goals, Td, init, limits):

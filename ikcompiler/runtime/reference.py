@@ -72,11 +72,13 @@ def true_general6(robot):
         return None
 
 
-def candidates(robot, goals, Td, init, correct, alternative=None):
+def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
     """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum).
 
     ``alternative`` (N,) marks targets that take the plan's alternative chain whatever the chain
-    gives (the fast chain saw a gimbal lock there that the reference step may not flag)."""
+    gives (the fast chain saw a gimbal lock there that the reference step may not flag).  ``leaves``:
+    a snapped plan's fast-chain leaves of these targets, ``(TH (N, L, n), usable (N, L), family
+    (N, L))``, which join the steps' rows (see :func:`_with_leaves`)."""
     N = len(goals)
     if robot.method == "numerical":
         step = robot.steps[0]
@@ -101,6 +103,8 @@ def candidates(robot, goals, Td, init, correct, alternative=None):
                                           robot.couplings, robot.n_groups, init)
     if robot.alt_steps:
         TH, owner, ls, cont = with_alternative(robot, Td, init, TH, owner, ls, cont, alternative)
+    if leaves is not None:
+        TH, owner, ls, cont = _with_leaves(TH, owner, ls, cont, *leaves)
     if cont.any():
         # A self-motion: the representative a step chose may not complete the pose; Newton steps
         # on every joint pull it onto a nearby exact solution of the continuum.
@@ -134,6 +138,23 @@ def with_alternative(robot, Td, init, TH, owner, ls, cont, alternative=None):
     keep = ~settled[owner]
     return (np.concatenate([TH[keep], TH2]), np.concatenate([owner[keep], own2]),
             np.concatenate([ls[keep], ls2]), np.concatenate([cont[keep], cont2]))
+
+
+def _with_leaves(TH, owner, ls, cont, leaf_TH, usable, family):
+    """The steps' candidates joined by a snapped plan's fast-chain leaves (every joint's value, the
+    family ones flagged as representatives).
+
+    A chain with fewer joints than its target has DOF (a 5-joint arm for a pose) solves a subset of the
+    equations, and the snapped robot reaches almost no target of the true one: a step with more
+    equations than unknowns (S2-RR on parallel axes: a point at the wrong height) gives the reference
+    step one least-squares row, the nearest of its branches, where the fast kernels, which solve the
+    consistent part, give every branch.  The dropped branch held the sampled solution
+    (hextilt_flying_arm_5 of example-robot-data at q4 = pi/2, a gimbal lock of its O-RRR: the
+    other elbow's rows alone came back; docs/calibrated.md)."""
+    rows, leaf = np.nonzero(usable)
+    return (np.concatenate([TH, leaf_TH[rows, leaf]]), np.concatenate([owner, rows]),
+            np.concatenate([ls, np.zeros(len(rows), dtype=bool)]),
+            np.concatenate([cont, family[rows, leaf]]))
 
 
 def _no_flags(n):
