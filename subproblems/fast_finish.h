@@ -880,10 +880,43 @@ static int ikc_settle(const ikc_robot *rb, const double *g, const double *fr, in
 
 #define IKC_SEED_ERROR 1.0  /* grid minima missing by more than this (relative) are not seeds */
 
+/* Twin seeds of a polished search row x (error ex) near a singular configuration: two roots of one
+ * branch closer than a grid cell or two give one local minimum along the grid, and there they lie
+ * along the Jacobian's null direction.  An exact row whose weakest singular value is below
+ * IKC_TWIN_SINGULAR writes IKC_TWINS rows (with their errors and flags) offset along the weakest
+ * direction (largest entry 1 in joint units) and Newton-polished; returns how many (0 or IKC_TWINS).
+ * The C form of ikcompiler/runtime/reference.py twin_seeds (TWIN_OFFSETS, TWIN_SINGULAR). */
+#define IKC_TWINS 6
+#define IKC_TWIN_SINGULAR 0.05
+static int ikc_twin_seeds(const ikc_robot *rb, const double *g, const double *x, double ex, double *out,
+                          double *E, int *F) {
+    static const double offsets[IKC_TWINS] = {-0.6, -0.2, -0.05, 0.05, 0.2, 0.6};
+    const int dof = rb->dof;
+    if (!(ex <= rb->tol * rb->scale)) return 0;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, x, col, lam, V);
+    if (m == 0 || !(sqrt(lam[0] > 0.0 ? lam[0] : 0.0) < IKC_TWIN_SINGULAR)) return 0;
+    double big = 0.0;
+    for (int k = 0; k < m; k++)
+        if (fabs(V[k * m]) > big) big = fabs(V[k * m]);
+    if (!(big > 0.0)) return 0;
+    for (int t = 0; t < IKC_TWINS; t++) {
+        double *y = out + t * dof;
+        for (int j = 0; j < dof; j++) y[j] = x[j];
+        for (int k = 0; k < m; k++)
+            y[col[k]] += offsets[t] * V[k * m] / big * (rb->revolute[col[k]] ? 1.0 : rb->scale);
+        E[t] = ikc_newton_steps(rb, g, y, 8, 0, NULL);
+        F[t] = IKC_TANGENT_ROOT;
+    }
+    return IKC_TWINS;
+}
+
 /* The search fallback (the module's _fast_search_candidates): the chain on every grid value of the
  * searched joint(s); the local minima of each leaf's error along the grid (circular; on a plateau its
- * first cell) within IKC_SEED_ERROR of the target get 8 Newton steps on the true robot; then the
- * finish.  1-D and 2-D grids.  Count or IKC_PYTHON. */
+ * first cell) within IKC_SEED_ERROR of the target get 8 Newton steps on the true robot, those near a
+ * singular configuration their twin seeds (ikc_twin_seeds); then the finish.  1-D and 2-D grids.
+ * Count or IKC_PYTHON. */
 static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, int limits, double *q,
                       double *res, int *ls, int *cont) {
     const int L = rb->leaves, dof = rb->dof, G = rb->grid, S = rb->nsearch;
@@ -927,8 +960,9 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
         }
     }
     if (!status) {
-        double C[count > 0 ? count * dof : 1], CE[count > 0 ? count : 1];
-        int CF[count > 0 ? count : 1];
+        const int cap = count > 0 ? count * (1 + IKC_TWINS) : 1;
+        double C[cap * dof], CE[cap];
+        int CF[cap];
         for (int a = 0; a < count; a++) {
             for (int j = 0; j < dof; j++) C[a * dof + j] = Q[(size_t)seed[a] * dof + j];
             CE[a] = ikc_newton_steps(rb, g, C + a * dof, 8, 0, NULL);  /* plain steps, as the Python search */
@@ -936,7 +970,10 @@ static int ikc_search(const ikc_robot *rb, const double *g, const double *fr, in
              * its flat valley up to ~1e-7 apart */
             CF[a] = IKC_TANGENT_ROOT;
         }
-        status = ikc_finish(rb, g, count, C, CE, CF, limits, q, res, ls, cont);
+        int total = count;
+        for (int a = 0; a < count; a++) total += ikc_twin_seeds(rb, g, C + a * dof, CE[a], C + total * dof,
+                                                                CE + total, CF + total);
+        status = ikc_finish(rb, g, total, C, CE, CF, limits, q, res, ls, cont);
         if (status < 0) status = IKC_PYTHON;
     }
     if (status == IKC_PYTHON) ikc_why = IKC_WHY_SEARCH;

@@ -32,7 +32,7 @@ SAMPLE = [
     ("RRRRTT", "modular", 0),  # general-6r 43/50: self-motions, and two solutions sharing th_c
     ("RRRT", "modular", 0),  # closed form 48/50: O-RRR gimbal lock at q2 = pi, now the alternative chain
     ("RRTRR", "modular", 0),  # closed form 46/48 (known gap below)
-    ("RRRRT", "modular", 0),  # 1-D search 48/50 (known gap below)
+    ("RRRRT", "modular", 0),  # 1-D search 48/50: twin roots, now seeded (see below)
 ]
 # ("RRTRRR", "modular", 5) was a known gap (1-D search: 1 of 40 random poses, seed 2, missed); it
 # recovers 40 of 40 since the class II batch solver wraps exactly (subproblems/angles.py; measured
@@ -41,10 +41,11 @@ SAMPLE = [
 KNOWN_GAPS: dict = {
     ("RRTRR", "modular", 0): "closed form at special angles on a self-motion of the whole chain: no exact "
     "representative returned (0 or 1 inexact rows; 2 of 8 scored special poses)",
-    ("RRRRT", "modular", 0): "1-D search: two roots closer than a grid cell near a singular configuration "
-    "(sigma_min 6e-4..2e-2) merge into one; the twin lies along the Jacobian's null direction (2 of 40 "
-    "random poses); a 5-joint chain has no general-6r alternative",
 }
+# ("RRRRT", "modular", 0) was a known gap (1-D search: two roots closer than a grid cell near a singular
+# configuration, sigma_min 6e-4..2e-2, gave one seed; 2 of 40 random poses missed); the search's rows
+# near a singular configuration now seed their twins along the null direction (runtime/reference.py
+# twin_seeds, fast_finish.h ikc_twin_seeds): 40 of 40, C and Python.
 
 
 def _rank(chain) -> int:

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ikcompiler.runtime.reference import SEARCH_NEWTON
+from ikcompiler.runtime.reference import SEARCH_NEWTON, twin_seeds
 from subproblems import fast as _fk
 from subproblems import tolerances as _tol
 
@@ -55,8 +55,10 @@ def search_candidates(robot, goals, init, budget: int):
         owners.append(rep[rows])
     TH, owner = np.concatenate(THs), np.concatenate(owners)
     TH = robot.newton(TH, goals[owner], SEARCH_NEWTON)
+    TH, owner = twin_seeds(robot, TH, owner, goals)
     none = np.zeros(len(TH), dtype=bool)
     return TH, owner, none, none
+
 
 
 def search_width(robot) -> int:

@@ -101,7 +101,7 @@ def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
                 "scale": robot.scale, "target": robot.solve_target}
         TH, owner = _rt.run_search(step, robot.plan_twists, robot.kinds, Td, robot.couplings,
                                    robot.n_groups, init)
-        TH = robot.newton(TH, goals[owner], SEARCH_NEWTON)
+        TH, owner = twin_seeds(robot, robot.newton(TH, goals[owner], SEARCH_NEWTON), owner, goals)
         return TH, owner, *_no_flags(len(TH))
     TH, owner, ls, _, cont = _rt.run_plan(robot.steps, robot.plan_twists, robot.kinds, Td,
                                           robot.couplings, robot.n_groups, init)
@@ -118,6 +118,38 @@ def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
         ls = np.concatenate([ls, np.zeros(len(TH) - len(ls), dtype=bool)])
     return TH, owner, ls, cont
 
+
+# Offsets along the weakest direction (largest entry 1 in joint units) at which a polished search row
+# near a singular configuration seeds its twin: two roots of one branch closer than a grid cell or two
+# give one local minimum of the error along the grid, and near a singular configuration they lie along
+# the Jacobian's null direction (modular RRRRT, seed 0: twins 0.1-0.2 rad apart at sigma 6e-4..2e-2;
+# 2 of 40 random poses missed).  The C search does the same (fast_finish.h ikc_search), the
+# Python one in runtime/fastchain.py and here.
+TWIN_OFFSETS = (-0.6, -0.2, -0.05, 0.05, 0.2, 0.6)
+TWIN_SINGULAR = 0.05  # weakest singular value (size-free Jacobian) below which a row seeds twins
+
+
+def twin_seeds(robot, TH, owner, goals):
+    """The search's polished rows (TH, owner) and, for those exact ones near a singular configuration,
+    Newton-polished seeds along their weakest direction (TWIN_OFFSETS): candidates the finish checks
+    and dedupes like every other."""
+    if not len(TH):
+        return TH, owner
+    exact = robot.error(_rt.fk_batch(robot.twists, np.nan_to_num(TH), robot.home), goals[owner])
+    rows = np.nonzero(np.isfinite(TH).all(axis=1) & (exact <= robot.tol * robot.scale))[0]
+    if not len(rows):
+        return TH, owner
+    vary = list(robot.vary)
+    sv, n = _ct.weakest(TH[rows][:, vary], robot.twists, A=robot.A, b=robot.B, home=robot.home,
+                        kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free, scale=robot.scale)
+    rows, n = rows[sv < TWIN_SINGULAR], n[sv < TWIN_SINGULAR]
+    if not len(rows):
+        return TH, owner
+    Q = TH[rows][:, vary]
+    X = np.concatenate([Q + t * n for t in TWIN_OFFSETS])
+    own = np.tile(owner[rows], len(TWIN_OFFSETS))
+    X = robot.newton(X @ robot.A.T + robot.B, goals[own], SEARCH_NEWTON)
+    return np.concatenate([TH, X]), np.concatenate([owner, own])
 
 def with_alternative(robot, Td, init, TH, owner, ls, cont, alternative=None):
     """The chain's candidates (TH, owner, ls, cont) with the alternative chain's on the targets where
