@@ -31,17 +31,19 @@ SAMPLE = [
     ("TRRRRT", "modular", 0),  # general-6r 44/50: self-motions at special angles, rows now flagged
     ("RRRRTT", "modular", 0),  # general-6r 43/50: self-motions, and two solutions sharing th_c
     ("RRRT", "modular", 0),  # closed form 48/50: O-RRR gimbal lock at q2 = pi, now the alternative chain
-    ("RRTRR", "modular", 0),  # closed form 46/48 (known gap below)
+    ("RRTRR", "modular", 0),  # closed form 46/48: self-motion representatives outside the limits
     ("RRRRT", "modular", 0),  # 1-D search 48/50: twin roots, now seeded (see below)
 ]
 # ("RRTRRR", "modular", 5) was a known gap (1-D search: 1 of 40 random poses, seed 2, missed); it
 # recovers 40 of 40 since the class II batch solver wraps exactly (subproblems/angles.py; measured
 # 2026-12-02: with the former rounding wrap in _class2 alone it misses that pose again; the 1-D search's
 # completeness there hangs on the last bit of a class II row).
-KNOWN_GAPS: dict = {
-    ("RRTRR", "modular", 0): "closed form at special angles on a self-motion of the whole chain: no exact "
-    "representative returned (0 or 1 inexact rows; 2 of 8 scored special poses)",
-}
+KNOWN_GAPS: dict = {}
+# ("RRTRR", "modular", 0) was a known gap (closed form at special angles on a self-motion of the whole
+# chain, a planar 3R with a slide at q4 = 0: the representative's slide outside its limits, no exact
+# representative returned; 3 of 10 special poses): a representative the step flagged least-squares is
+# moved along its family too, and the family is followed with its dominant joint held across its range
+# (runtime/reference.py complete, _along_family): 10 of 10 recovered or flagged.
 # ("RRRRT", "modular", 0) was a known gap (1-D search: two roots closer than a grid cell near a singular
 # configuration, sigma_min 6e-4..2e-2, gave one seed; 2 of 40 random poses missed); the search's rows
 # near a singular configuration now seed their twins along the null direction (runtime/reference.py

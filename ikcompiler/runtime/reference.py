@@ -207,7 +207,9 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
         TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
-        TH = onto_self_motion(robot, TH, owner, cont & ~ls, goals, limits)
+        # a step's ls flag on a representative says only that its last angle 0 missed; Newton may have
+        # pulled it onto the family since (onto_self_motion moves only rows that miss or lie outside)
+        TH = onto_self_motion(robot, TH, owner, cont, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
@@ -245,6 +247,14 @@ def onto_self_motion(robot, TH, owner, cont, goals, limits):
     X = (Q[:, None, :] + SELF_MOTION_OFFSETS[None, :, None] * n[:, None, :]).reshape(-1, len(vary))
     g = goals[np.repeat(owner[rows], k)]
     X = robot.newton(X @ robot.A.T + robot.B, g, SELF_MOTION_NEWTON)
+    # The straight line leaves a curved family within a few steps: also the family's points at the
+    # joint that moves most along it held at values across its range, the others by Newton steps
+    # (modular RRTRR at q4 = 0, a planar 3R with a slide: the representative's slide outside its
+    # limits, no offset along the line reached an exact point inside them; 2 of 8 special poses)
+    X = np.concatenate([X.reshape(len(rows), k, -1), _along_family(robot, Q, n, goals[owner[rows]])], axis=1)
+    k = X.shape[1]
+    X = X.reshape(len(rows) * k, -1)
+    g = goals[np.repeat(owner[rows], k)]
     e = robot.error(_rt.fk_batch(robot.twists, X, robot.home), g)
     good = e <= exact
     if limits:
@@ -257,6 +267,31 @@ def onto_self_motion(robot, TH, owner, cont, goals, limits):
     TH = TH.copy()
     TH[rows[moved]] = X.reshape(len(rows), k, -1)[moved, best[moved]]
     return TH
+
+
+def _along_family(robot, Q, n, goals):
+    """Points of each row's self-motion (rows Q (M, vary), weakest directions n): the joint with the
+    largest entry of n held at len(SELF_MOTION_OFFSETS) values across its range (a revolute joint the
+    circle, a slide its limits, or +- the size), the others moved onto the target by Newton steps, then
+    SELF_MOTION_NEWTON free steps.  (M, len(SELF_MOTION_OFFSETS), n) rows of every joint."""
+    k = len(SELF_MOTION_OFFSETS)
+    held = np.argmax(np.abs(n), axis=1)
+    X = np.repeat(Q[:, None, :], k, axis=1)
+    for j in np.unique(held):
+        sel = np.nonzero(held == j)[0]
+        if robot.vary_kinds[j] == "R":
+            values = SELF_MOTION_OFFSETS
+        else:
+            lo, hi = robot.vary_lower[j], robot.vary_upper[j]
+            lo, hi = (lo if np.isfinite(lo) else -robot.scale), (hi if np.isfinite(hi) else robot.scale)
+            values = np.linspace(lo, hi, k)
+        X[sel, :, j] = values
+        Y = X[sel].reshape(-1, Q.shape[1]) @ robot.A.T + robot.B
+        g = np.repeat(goals[sel], k, axis=0)
+        Y = robot.newton(Y, g, 2 * SELF_MOTION_NEWTON, hold=tuple(sorted(set(robot.free) | {int(j)})))
+        Y = robot.newton(Y, g, SELF_MOTION_NEWTON)
+        X[sel] = Y[:, list(robot.vary)].reshape(len(sel), k, -1)
+    return (X.reshape(-1, Q.shape[1]) @ robot.A.T + robot.B).reshape(len(Q), k, -1)
 
 
 def clamped_onto_limits(robot, TH, owner, goals):
