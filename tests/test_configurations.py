@@ -33,6 +33,8 @@ SAMPLE = [
     ("RRRT", "modular", 0),  # closed form 48/50: O-RRR gimbal lock at q2 = pi, now the alternative chain
     ("RRTRR", "modular", 0),  # closed form 46/48: self-motion representatives outside the limits
     ("RRRRT", "modular", 0),  # 1-D search 48/50: twin roots, now seeded (see below)
+    ("RRRTRT", "modular", 0),  # closed form 42/44: self-motion representatives, now along the family (42 + 8)
+    ("RRTRTR", "modular", 0),  # closed form 49/50 in results/configurations.md; 49 + 1 self-motion now
 ]
 # ("RRTRRR", "modular", 5) was a known gap (1-D search: 1 of 40 random poses, seed 2, missed); it
 # recovers 40 of 40 since the class II batch solver wraps exactly (subproblems/angles.py; measured
