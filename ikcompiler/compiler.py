@@ -203,6 +203,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     Where a 1-D search exists (``search_1d()``), both are measured on sample poses and the 1-D search
     plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
     from ikcompiler import general6_route
+    from ikcompiler.codegen.csource import general6_native_arrangements
     from subproblems import general6
 
     if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
@@ -224,6 +225,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         code="G6R",
         solve=list(range(6)),
         arrangements=list(solver.usable),
+        native=general6_native_arrangements(solver),
         rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",

@@ -39,7 +39,6 @@
 #define G6_STACK 256       /* isolation cells pending at once */
 #define G6_RANK 1e-9       /* |R_last / R_first| of B' below this: doubtful (general6 brank) */
 #define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
-#define G6_STALLED 1e-3    /* a clean candidate missing by less (of the size) after Newton: doubtful */
 #define G6_CLEAN 1e-6      /* prismatic pencils: a candidate missing by less (of the size) before Newton
                             * is a clean root, a farther one may be spurious */
 
@@ -638,17 +637,13 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
     return n;
 }
 
-/* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g: every candidate after
- * G6_NEWTON Newton steps on the true robot, exact ones as plain leaves, far ones empty; a doubtful
- * target (or a candidate stalled short of exact) one DEFER leaf, for the Python general6. */
-static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E, int *F) {
+/* One arrangement's leaves for goal g: every candidate after G6_NEWTON Newton steps on the true robot,
+ * exact ones as plain leaves, far ones empty; their count, or -1 when the target is doubtful under this
+ * arrangement (a candidate stalled short of exact, two candidates that met). */
+static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E,
+                                 int *F) {
     int n = ikc_g6_candidates(G, g, Q);
-    if (n < 0) {
-        for (int j = 0; j < 6; j++) Q[j] = 0.0;
-        E[0] = 0.0;
-        F[0] = IKC_DEFER;
-        return 1;
-    }
+    if (n < 0) return -1;
     const double exact = rb->tol * rb->scale;
     int clean[16];
     for (int k = 0; k < n; k++) {
@@ -660,21 +655,35 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
         E[k] = e;
         F[k] = 0;
         if (e <= exact) continue;
-        /* a clean root (it started close) that Newton cannot finish: a double root in disguise */
-        if (e != e || (clean[k] && e < G6_STALLED * rb->scale)) {
-            F[0] = IKC_DEFER;
-            return 1;
-        }
+        /* a clean root that Newton cannot finish, near or far: a double root in disguise or a null
+         * vector misread beside a close root (dropping the far ones lost 2 of 8 solutions on Jaco
+         * poses with every joint at 0, +-pi/2 or pi) */
+        if (e != e || clean[k]) return -1;
         F[k] = IKC_EMPTY;  /* a spurious root of a prismatic pencil (started far, went nowhere) */
     }
     /* two clean roots whose candidates met: a near-double root (Newton took both to one solution, or
-     * the pencil's rounding split one double root); the Python path's re-solve decides */
+     * the pencil's rounding split one double root) */
     for (int i = 0; i < n; i++)
         for (int j = i + 1; j < n; j++)
             if (clean[i] && clean[j] && !(F[i] & IKC_EMPTY) && !(F[j] & IKC_EMPTY) &&
-                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE) {
-                F[0] = IKC_DEFER;
-                return 1;
-            }
+                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE)
+                return -1;
     return n;
+}
+
+/* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g, trying the module's
+ * arrangements G[0..count-1] in order (general6.py's usable order): a target doubtful under one is
+ * re-solved under the next, and the first that answers it cleanly gives its leaves, the same trust as a
+ * clean first arrangement (general6.py's doubtful-target path, docs/general6.md "Native path").  A
+ * target doubtful under every one is one DEFER leaf, for the Python general6 (rotated copies). */
+static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
+                         int *F) {
+    for (int k = 0; k < count; k++) {
+        int n = g6_arrangement_leaves(rb, G + k, g, Q, E, F);
+        if (n >= 0) return n;
+    }
+    for (int j = 0; j < 6; j++) Q[j] = 0.0;
+    E[0] = 0.0;
+    F[0] = IKC_DEFER;
+    return 1;
 }

@@ -297,7 +297,8 @@ G6_LEADING_OK = 1e-9
 #: (a ratio): the target is doubtful.  general6.h ``G6_RANK`` (|R_last / R_first| of its pivoted QR).
 G6_RANK = 1e-9
 #: A candidate still missing by less than this (of the size) after Newton stalled near a solution (a
-#: double root): its target is doubtful.  general6.h ``G6_STALLED``.
+#: double root): its target is doubtful (general6.py; general6.h treats every clean candidate that
+#: Newton cannot finish as doubtful).
 G6_STALLED = 1e-3
 #: A column of B' whose largest entry over sample targets is below this times B's largest is
 #: structurally absent (a prismatic joint's missing products; a ratio).

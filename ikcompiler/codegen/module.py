@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ikcompiler.codegen.csource import translatable
+from ikcompiler.codegen.csource import general6_plain_pose, translatable
 from ikcompiler.codegen.fastpath import fast_chain_program
 from ikcompiler.codegen.printers import python_source
 from subproblems import tolerances as _tol
@@ -191,7 +191,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     )
     # a general-6r plan has no Python fast chain (FAST_PATH False); its native path is the C
     # elimination (subproblems/general6.h), switched by NATIVE alone
-    general6_native = plan.method == "general-6r" and plan.target == "pose" and not free_idx
+    general6_native = (plan.method == "general-6r" and bool(plan.steps[0].get("native"))
+                       and general6_plain_pose(kinds=chain.joint_types, target=plan.target, A=A, b=b))
     out.append(f"FAST_PATH = {fast is not None}\n")
     out.append(python_source(fast) if fast is not None else "\n\n_fast_chain = None\n")
     native = translatable(fast, target=plan.target, dof=len(output.independent)) or general6_native

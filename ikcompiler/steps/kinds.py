@@ -293,11 +293,13 @@ class NumericalStep(Step):
 @_frozen
 class General6Step(Step):
     """The general 6R elimination (subproblems.general6) on the whole chain, trying the elimination
-    ``arrangements`` in order."""
+    ``arrangements`` in order; ``native``: those the C elimination runs, in the same order
+    (``codegen.csource.general6_native_arrangements``; empty: the module has no C chain)."""
 
     kind: ClassVar[str] = "G6R"
     solve: tuple[int, ...]
     arrangements: tuple[int, ...]
+    native: tuple[int, ...] = ()
 
     @property
     def slots(self) -> int:
