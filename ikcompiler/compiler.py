@@ -213,14 +213,6 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
-    found = search_1d()
-    if found is not None:
-        searched = _search_plan(chain, target, free, geometry, notes, found)
-        module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
-        verdict = general6_route.compare(chain, module, solver, searched.method)
-        notes.append(verdict.note)
-        if verdict.keep_search:
-            return dataclasses.replace(searched, notes=tuple(notes))
     step = General6Step(
         code="G6R",
         solve=list(range(6)),
@@ -232,10 +224,25 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     )
     names = [j.name for j in chain.joints]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
-    notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
     all_names = tuple(j.name for j in chain.joints)
-    return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
-                tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
+
+    def general_plan(extra=()) -> Plan:
+        told = (*notes, *extra, f"general 6R elimination, arrangements in order (later ones for doubtful "
+                f"poses): {tried}")
+        return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
+                    tuple(free), False, 0, geometry, told, 0.0, all_names=all_names)
+
+    found = search_1d()
+    if found is None:
+        return general_plan()
+    # both measured as their modules run (the C chain where it builds, docs/general6.md "When it is used")
+    searched = _search_plan(chain, target, free, geometry, notes, found)
+    module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
+    general = load_module(plan_source(general_plan(), chain, tol=tol), _module_name(chain.name))
+    verdict = general6_route.compare(chain, module, general, searched.method)
+    if verdict.keep_search:
+        return dataclasses.replace(searched, notes=(*notes, verdict.note))
+    return general_plan((verdict.note,))
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):
