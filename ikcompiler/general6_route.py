@@ -61,12 +61,13 @@ def sample_joints(chain, count: int = SAMPLE_POSES, seed: int = SAMPLE_SEED,
     return np.where(snap, pick, Q)
 
 
-def _gap(rows: np.ndarray, q: np.ndarray, chain) -> float:
-    """Smallest joint distance from q to the rows (verify's: revolute modulo 2 pi, prismatic over the
-    size); inf without rows."""
-    if not len(rows):
-        return math.inf
-    return float(joint_distance(rows, q, chain.joint_types, chain.scale).min())
+def _found(rows: np.ndarray, wanted: np.ndarray, chain) -> int:
+    """How many of the rows ``wanted`` (k, n) have one of ``rows`` (m, n) within SAME (verify's joint
+    distance: revolute modulo 2 pi, prismatic over the size); all pairs at once."""
+    if not len(wanted) or not len(rows):
+        return 0
+    d = joint_distance(rows[:, None, :], wanted[None, :, :], chain.joint_types, chain.scale)
+    return int((d.min(axis=0) < SAME).sum())
 
 
 def _cpu(call):
@@ -100,11 +101,11 @@ def compare(chain, search_module, general_module, method: str) -> Verdict:
         for k in range(len(q)):
             s_rows, g_rows = S[k][V[k]], G[k][W[k]]
             n += 1
-            hit += _gap(s_rows, q[k], chain) < SAME
-            g_hit += _gap(g_rows, q[k], chain) < SAME
+            hit += _found(s_rows, q[k:k + 1], chain)
+            g_hit += _found(g_rows, q[k:k + 1], chain)
             total, g_total = total + len(g_rows), g_total + len(s_rows)
-            covered += sum(_gap(s_rows, r, chain) < SAME for r in g_rows)
-            g_covered += sum(_gap(g_rows, r, chain) < SAME for r in s_rows)
+            covered += _found(s_rows, g_rows, chain)
+            g_covered += _found(g_rows, s_rows, chain)
         complete = hit == n and covered == total
         general_complete = g_hit == n and g_covered == g_total
         faster = spent[0] <= spent[1]

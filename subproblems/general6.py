@@ -326,14 +326,18 @@ class General6:
         self.r = np.where(self.prism[:, None], 0.0, (r - self.center) / self._s)
         self.Mn = self._norm(self.home[None])[0]
         self._H = _hat_list(self.w, self.r, self.prism)
-        # arrangements whose eliminated joint c and last joint f are revolute (prismatic at a, b, d, e)
+        # arrangements whose eliminated joint c and last joint f are revolute (prismatic at a, b, d, e);
+        # given the arrangements to use (a generated module), only those are built
+        wanted = None if arrangement is None else {int(k) for k in np.atleast_1d(arrangement)}
         layouts = [(sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
         self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
-                     if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any() else None
-                     for sign, conj in layouts]
+                     if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any()
+                     and (wanted is None or k in wanted) else None
+                     for k, (sign, conj) in enumerate(layouts)]
         if self.prism.any():
-            self._arr = [self._present_columns(a) if a is not None else None for a in self._arr]
-            self._arr = [self._regular_variant(a) if a is not None else None for a in self._arr]
+            Gn = self._probe_targets()  # one draw for every arrangement's structural measurements
+            self._arr = [self._present_columns(a, Gn) if a is not None else None for a in self._arr]
+            self._arr = [self._regular_variant(a, Gn) if a is not None else None for a in self._arr]
         if all(a is None for a in self._arr):
             k = int(np.nonzero(self.prism)[0][0])
             raise General6Error(
@@ -357,16 +361,21 @@ class General6:
         ratio = np.divide(sv[:, -1], sv[:, 0], out=np.zeros(len(Gn)), where=sv[:, 0] > 0)  # 0 / 0: singular
         return bool(np.median(ratio) < _tol.G6_SINGULAR_PENCIL)
 
-    def _regular_variant(self, arr: _Arrangement, count: int = 8, seed: int = 22) -> _Arrangement:
-        """The arrangement, or where a prismatic d or e makes its 12 x 12 pencil singular, the deflated
-        9 x 9 pencil multiplied by that joint (:func:`_deflated`) when that one is regular (measured on
-        random targets, so the choice is the same for every instance of the robot)."""
-        if not (arr.prism[3] or arr.prism[4]):
-            return arr
+    def _probe_targets(self, count: int = 8, seed: int = 21):
+        """Normalised goals Gn (count, 4, 4) of random joint vectors (fixed seed): what the structural
+        choices of a prismatic robot's arrangements are measured on, the same for every instance."""
         rng = np.random.default_rng(seed)
         Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
         Q[:, self.prism] /= math.pi
-        Gn = self._fk_norm(Q) @ _inv(self.Mn)
+        return self._fk_norm(Q) @ _inv(self.Mn)
+
+    def _regular_variant(self, arr: _Arrangement, Gn) -> _Arrangement:
+        """The arrangement, or where a prismatic d or e makes its 12 x 12 pencil singular, the deflated
+        9 x 9 pencil multiplied by that joint (:func:`_deflated`) when that one is regular (measured on
+        the probe targets Gn, so the choice is the same for every instance of the robot)."""
+        if not (arr.prism[3] or arr.prism[4]):
+            return arr
+        count = len(Gn)
         if not self._singular(arr, Gn):
             return arr
         for swap in (False, True):
@@ -383,13 +392,10 @@ class General6:
                 return variant
         return arr
 
-    def _present_columns(self, arr: _Arrangement, count: int = 8, seed: int = 21):
-        """The arrangement with B's structurally zero columns dropped (measured on random targets), or
-        None when an entry the back-substitution reads (a alone, b alone) is among them."""
-        rng = np.random.default_rng(seed)
-        Q = rng.uniform(-math.pi, math.pi, size=(count, 6))
-        Q[:, self.prism] /= math.pi
-        Gn = self._fk_norm(Q) @ _inv(self.Mn)
+    def _present_columns(self, arr: _Arrangement, Gn):
+        """The arrangement with B's structurally zero columns dropped (measured on the probe targets
+        Gn), or None when an entry the back-substitution reads (a alone, b alone) is among them."""
+        count = len(Gn)
         Gn = Gn if arr.sign > 0 else _inv(Gn)
         y = np.einsum("nij,j->ni", Gn[:, :3, :3], arr.r[5]) + Gn[:, :3, 3]
         m = Gn[:, :3, :3] @ arr.w[5]
@@ -815,14 +821,15 @@ def _null_vectors(M, y):
 
 
 def _twins(own, th_c):
-    """Candidates (K,) with another root of the same target within TWIN of theirs: an eigenvalue of
-    geometric multiplicity two, two solutions that share th_c (a modular arm's special poses: RRRRTT
-    at q2 = pi has two solutions differing only in q1, q3, q6)."""
+    """Candidates (K,) with an earlier root of the same target within TWIN of theirs (in th_c order):
+    an eigenvalue of geometric multiplicity two, two solutions that share th_c (a modular arm's
+    special poses: RRRRTT at q2 = pi has two solutions differing only in q1, q3, q6).  One of each
+    pair is marked: its null space gives both solutions (reading both members did the work twice)."""
     order = np.lexsort((th_c, own))
     o, t = own[order], th_c[order]
     close = (o[1:] == o[:-1]) & (np.abs(t[1:] - t[:-1]) < TWIN)
     out = np.zeros(len(own), dtype=bool)
-    out[order[1:][close]] = out[order[:-1][close]] = True
+    out[order[1:][close]] = True
     return out
 
 
