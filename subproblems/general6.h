@@ -91,18 +91,20 @@ static void g6_compose(double *R, double *t, const double *R2, const double *t2)
     for (int k = 0; k < 3; k++) t[k] = tn[k];
 }
 
+/* y = R x + t (t NULL: R x); fast_kernels.h's ikc_mat_vec */
 static void g6_apply(const double *R, const double *t, const double *x, double *y) {
-    for (int i = 0; i < 3; i++) y[i] = R[3 * i] * x[0] + R[3 * i + 1] * x[1] + R[3 * i + 2] * x[2] + (t ? t[i] : 0.0);
+    ikc_mat_vec(R, x, y);
+    if (t)
+        for (int i = 0; i < 3; i++) y[i] += t[i];
 }
 
+/* the fourteen quantities p, l, p.p, p.l, p x l, (p.p) l - 2 (p.l) p (general6.py _fourteen) */
 static void g6_fourteen(const double *p, const double *l, double *q) {
-    double pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2], pl = p[0] * l[0] + p[1] * l[1] + p[2] * l[2];
+    const double pp = ikc_dot(p, p), pl = ikc_dot(p, l);
     for (int k = 0; k < 3; k++) q[k] = p[k], q[3 + k] = l[k];
     q[6] = pp;
     q[7] = pl;
-    q[8] = p[1] * l[2] - p[2] * l[1];
-    q[9] = p[2] * l[0] - p[0] * l[2];
-    q[10] = p[0] * l[1] - p[1] * l[0];
+    ikc_cross(p, l, q + 8);
     for (int k = 0; k < 3; k++) q[11 + k] = pp * l[k] - 2.0 * pl * p[k];
 }
 
@@ -240,21 +242,14 @@ static void g6_trig3(const double *a, const double *b, double c1, double s1, dou
     }
 }
 
-/* D, D' and D'' at phi (g6_trig3 at its cosine and sine) */
-static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
-    double d[4];
-    g6_trig3(a, b, cos(phi), sin(phi), d);
-    *f = d[0];
-    if (df) *df = d[1];
-    if (ddf) *ddf = d[2];
-}
-
-/* a root of D in [lo, hi] where D(lo), D(hi) differ in sign: Newton inside the bracket, else bisection */
-static double g6_refine(const double *a, const double *b, double lo, double hi, double flo) {
+/* A zero of D (order 0) or of D' (order 1) in [lo, hi], where that derivative changes sign (its
+ * value at lo is flo) and is monotone: Newton on it inside the bracket, bisection where a step leaves. */
+static double g6_bracket(const double *a, const double *b, double lo, double hi, double flo, int order) {
     double x = 0.5 * (lo + hi);
     for (int it = 0; it < 80; it++) {
-        double f, df;
-        g6_trig(a, b, x, &f, &df, NULL);
+        double d[4];
+        g6_trig3(a, b, cos(x), sin(x), d);
+        const double f = d[order], df = d[order + 1];
         if (f == 0.0) return x;
         if ((f < 0.0) == (flo < 0.0)) lo = x, flo = f;
         else hi = x;
@@ -266,22 +261,25 @@ static double g6_refine(const double *a, const double *b, double lo, double hi, 
     return x;
 }
 
-/* a zero of D' in [lo, hi] where D' changes sign and is monotone: Newton on D' inside the bracket */
+/* D, D' and D'' at phi (g6_trig3 at its cosine and sine) */
+static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
+    double d[4];
+    g6_trig3(a, b, cos(phi), sin(phi), d);
+    *f = d[0];
+    if (df) *df = d[1];
+    if (ddf) *ddf = d[2];
+}
+
+/* a root of D in [lo, hi] where D(lo) = flo and D(hi) differ in sign */
+static double g6_refine(const double *a, const double *b, double lo, double hi, double flo) {
+    return g6_bracket(a, b, lo, hi, flo, 0);
+}
+
+/* a zero of D' in [lo, hi] where D' changes sign and is monotone */
 static double g6_extremum(const double *a, const double *b, double lo, double hi) {
-    double f, dlo, x = 0.5 * (lo + hi);
+    double f, dlo;
     g6_trig(a, b, lo, &f, &dlo, NULL);
-    for (int it = 0; it < 80; it++) {
-        double d, dd;
-        g6_trig(a, b, x, &f, &d, &dd);
-        if (d == 0.0) return x;
-        if ((d < 0.0) == (dlo < 0.0)) lo = x, dlo = d;
-        else hi = x;
-        double next = dd != 0.0 ? x - d / dd : 0.5 * (lo + hi);
-        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        if (fabs(next - x) <= 4e-16 * (1.0 + fabs(x)) || hi - lo <= 4e-16 * (1.0 + fabs(x))) return next;
-        x = next;
-    }
-    return x;
+    return g6_bracket(a, b, lo, hi, dlo, 1);
 }
 
 /* cos and sin of the first isolation grid, 2 pi i / G6_GRID (printed by Python's math) */
@@ -623,10 +621,8 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         double Ru[3], cr[3];
         g6_apply(Rf, NULL, G->u, Ru);
         const double *u = G->u, *wf = G->w + 15;
-        cr[0] = u[1] * Ru[2] - u[2] * Ru[1];
-        cr[1] = u[2] * Ru[0] - u[0] * Ru[2];
-        cr[2] = u[0] * Ru[1] - u[1] * Ru[0];
-        th[5] = atan2(cr[0] * wf[0] + cr[1] * wf[1] + cr[2] * wf[2], Ru[0] * u[0] + Ru[1] * u[1] + Ru[2] * u[2]);
+        ikc_cross(u, Ru, cr);
+        th[5] = atan2(ikc_dot(cr, wf), ikc_dot(Ru, u));
         for (int j = 0; j < 6; j++) {
             double x = th[j];
             if (G->prism[j]) x *= G->s;
