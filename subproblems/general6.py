@@ -352,6 +352,18 @@ class General6:
             self.usable = [int(k) for k in np.atleast_1d(arrangement)]
         self.arrangement = self.usable[0]
 
+    def _adjacent_prismatic(self) -> str:
+        """The known gap, named (docs/general6.md "Known gaps"): where every arrangement with revolute
+        c and f puts prismatic joints at both d and e (adjacent prismatic joints in the middle, RRTTRR,
+        RTTRRR, RRRTTR), those joints and why; else ''."""
+        pairs = {tuple(sorted((a.order[3] + 1, a.order[4] + 1))) for a in self._arr if a is not None}
+        if not pairs or not all(a.prism[3] and a.prism[4] for a in self._arr if a is not None):
+            return ""
+        named = " / ".join(f"joints {i} and {j}" for i, j in sorted(pairs))
+        return (f"{named} are adjacent prismatic joints that every joint order with revolute eliminated "
+                "and last joints puts at positions d and e, where the 12 x 12 pencil is singular for "
+                "every value (no deflation covers two there; a known gap); ")
+
     def _singular(self, arr: _Arrangement, Gn) -> bool:
         """Whether the arrangement's pencil is singular for every x (median over the targets Gn)."""
         _, _, C, _ = self._pencil(arr, Gn)
@@ -728,7 +740,7 @@ class General6:
                 continue
             if self._singular(arr, Gn[:count]):
                 kind = "9 x 9 deflated" if arr.deflate is not None else "12 x 12"
-                why.append(f"order {arr.order} ({arr.conj} moved ahead): the {kind} pencil is singular")
+                why.append(f"order {_joints(arr)} ({arr.conj} moved ahead): the {kind} pencil is singular")
                 continue
             Qc, own, doubt = self._candidates(arr, Gn)
             Qc, err = self._newton(Qc, Tn[own])
@@ -743,16 +755,21 @@ class General6:
             # others: on a RRRRTT arm the inverse order returned 6 of 10); then fewer doubtful samples,
             # which go down the costly re-solve path
             found.append((-(generic + special_hits), -rows, int(doubt.sum()), k, generic))
-            why.append(f"order {arr.order} ({arr.conj} moved ahead): recovered {generic} of {count} generic "
+            why.append(f"order {_joints(arr)} ({arr.conj} moved ahead): recovered {generic} of {count} generic "
                        f"and {special_hits} of {count} special-angle samples, {rows} generic rows, "
                        f"{int(doubt.sum())} doubtful")
         if not found or max(f[4] for f in found) < count // 2:
             raise General6Error(
-                "general6: the elimination degenerates on this geometry (" + "; ".join(why) + "); "
-                "the compiler falls back to its search"
+                "general6: " + self._adjacent_prismatic() + "the elimination degenerates on this geometry ("
+                + "; ".join(why) + "); the compiler falls back to its search"
             )
         self.why = tuple(why)
         return [f[3] for f in sorted(found)]
+
+
+def _joints(arr) -> str:
+    """An arrangement's joint order as 1-based joint numbers (the messages' and the notes' count)."""
+    return "(joints " + ", ".join(str(j + 1) for j in arr.order) + ")"
 
 
 def _leading_ok(L):

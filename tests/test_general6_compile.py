@@ -238,3 +238,16 @@ def test_prismatic_joints_on_both_sides_keep_the_search_with_a_note():
     assert plan.method != "general-6r"
     refused = [n for n in plan.notes if "general 6R elimination not used" in n]
     assert refused and "pencil is singular" in refused[0], plan.notes
+    assert "joints 3 and 4 are adjacent prismatic joints" in refused[0], refused[0]
+
+
+@pytest.mark.parametrize("kinds, joints", [("RTTRRR", "2 and 3"), ("RRRTTR", "4 and 5")])
+def test_adjacent_prismatic_joints_are_refused_by_name(kinds, joints):
+    """The known gap (adjacent prismatic joints at d and e of every usable order) is a typed refusal
+    (General6Error) that names the joints."""
+    from ikcompiler.configs import modular_chain
+    from subproblems import general6 as g6
+
+    chain = modular_chain(kinds, 0, "general")
+    with pytest.raises(g6.General6Error, match=f"joints {joints} are adjacent prismatic joints"):
+        g6.General6(chain.twists, chain.home, chain.scale)
