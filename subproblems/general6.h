@@ -46,7 +46,7 @@ typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
     int conj;         /* the first conj joints have their axes mapped by the target */
     int order[6];     /* original joint index at positions a..f */
-    int prism[6];     /* prismatic, in arrangement order (only a, b can be) */
+    int prism[6];     /* prismatic, in arrangement order (a, b, d, e can be; c and f are revolute) */
     int ncols;        /* columns of B' present */
     int cols[8];
     double w[18], r[18];  /* axes in arrangement order, normalised coordinates */
@@ -414,15 +414,25 @@ static int g6_roots(const double *a, const double *b, double noise, double *root
 
 static const double g6_probe[12] = {0.31, -0.77, 0.52, 0.13, -0.48, 0.91, -0.26, 0.67, -0.84, 0.39, 0.58, -0.19};
 
-/* th = 2 atan2(num, den) from the pair of largest magnitude */
-static double g6_ratio(int n, const double *den, const double *num) {
+/* A joint from consecutive monomials (num = its variable times den): th = 2 atan2(num, den) from the
+ * pair of largest magnitude (the half-angle tangent, valid at th = pi), or for a prismatic joint (its
+ * monomials are powers of the displacement itself) num / den from the pair of largest den
+ * (general6.py _read_ratio) */
+static double g6_ratio(int n, const double *den, const double *num, int prism) {
     int best = 0;
     double m = -1.0;
     for (int k = 0; k < n; k++) {
-        double s = den[k] * den[k] + num[k] * num[k];
+        double s = prism ? fabs(den[k]) : den[k] * den[k] + num[k] * num[k];
         if (s > m) m = s, best = k;
     }
-    return 2.0 * atan2(num[best], den[best]);
+    return prism ? num[best] / den[best] : 2.0 * atan2(num[best], den[best]);
+}
+
+/* (1, cos th, sin th) of a revolute joint, (1, d, d^2) of a prismatic one (general6.py _basis) */
+static void g6_basis(double th, int prism, double *u) {
+    u[0] = 1.0;
+    u[1] = prism ? th : cos(th);
+    u[2] = prism ? th * th : sin(th);
 }
 
 /* Candidates of goal g (12 entries, robot units) in the original joint order, prismatic values in
@@ -497,8 +507,11 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         for (int q = 0; q < 14; q++) s += Nl[e][q] * B[0][q];
         Cm[e][0][0] -= s;
     }
-    /* (1, c, s) times (1 + x^2) in powers of x: 1 -> (1, 0, 1), c -> (1, 0, -1), s -> (0, 2, 0) */
+    /* (1, c, s) times (1 + x^2) in powers of x: 1 -> (1, 0, 1), c -> (1, 0, -1), s -> (0, 2, 0); a
+     * prismatic d or e has its basis (1, d, d^2) already in monomials: the identity */
     static const double half[3][3] = {{1.0, 0.0, 1.0}, {1.0, 0.0, -1.0}, {0.0, 2.0, 0.0}};
+    static const double same[3][3] = {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+    const double (*hd)[3] = G->prism[3] ? same : half, (*he)[3] = G->prism[4] ? same : half;
     double Mt[3][12][12];
     for (int tt = 0; tt < 3; tt++)
         for (int i = 0; i < 12; i++)
@@ -510,7 +523,7 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
                     double s = 0.0;
                     for (int td = 0; td < 3; td++)
                         for (int te = 0; te < 3; te++)
-                            s += Cm[e][tt][3 * td + te] * half[td][md] * half[te][me];
+                            s += Cm[e][tt][3 * td + te] * hd[td][md] * he[te][me];
                     Mt[tt][e][3 * md + me] = s;
                     Mt[tt][6 + e][3 * md + 3 + me] = s;
                 }
@@ -570,11 +583,14 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         /* v[3 i + j] = x_d^i x_e^j, i <= 3, j <= 2 */
         double den[9], num[9];
         for (int i = 0; i < 9; i++) den[i] = v[i], num[i] = v[i + 3];
-        const double thd = g6_ratio(9, den, num);
+        const double thd = g6_ratio(9, den, num, G->prism[3]);
         for (int i = 0; i < 4; i++)
             for (int j = 0; j < 2; j++) den[2 * i + j] = v[3 * i + j], num[2 * i + j] = v[3 * i + j + 1];
-        const double the = g6_ratio(8, den, num);
-        const double tc[3] = {1.0, c, s}, ud[3] = {1.0, cos(thd), sin(thd)}, ue[3] = {1.0, cos(the), sin(the)};
+        const double the = g6_ratio(8, den, num, G->prism[4]);
+        const double tc[3] = {1.0, c, s};
+        double ud[3], ue[3];
+        g6_basis(thd, G->prism[3], ud);
+        g6_basis(the, G->prism[4], ue);
         double rhs[14];
         for (int q = 0; q < 14; q++) {
             double acc = 0.0;

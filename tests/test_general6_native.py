@@ -104,18 +104,21 @@ def test_random_arms_same_sets_as_python(seed):
     assert back <= HANDED_BACK * len(T), back
 
 
-def test_prismatic_at_d_or_e_stays_python():
-    """An arm whose preferred arrangement puts a prismatic joint at d or e (RTRRRR here: general6.py
-    chose its joint 2 at d) has no C chain: general6.h covers prismatic joints at a, b only; and its
-    module says so (NATIVE False: one rule, csource.general6_native_arrangements)."""
-    module = compile_robot(_prismatic_chain("RTRRRR", 1))
+def test_deflated_pencil_stays_python():
+    """An arm whose preferred arrangement needs the deflated 9 x 9 pencil (a prismatic joint on each
+    side of the split: TRTRRR here) has no C chain, and its module says so (NATIVE False: one rule,
+    csource.general6_native_arrangements)."""
+    module = compile_robot(_prismatic_chain("TRTRRR", 1))
+    assert module.METHOD == "general-6r"
     arr = module._GENERAL6._arr[module._GENERAL6.usable[0]]
-    assert any(arr.prism[2:]) and module._SOLVER.native_chain() is None
+    assert arr.deflate is not None and module._SOLVER.native_chain() is None
     assert module.NATIVE is False
 
 
-@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "TTRRRR", "RRRRTT"])
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "TTRRRR", "RRRRTT", "RTRRRR", "RRTRRR", "RRRTRR"])
 def test_prismatic_same_sets_as_python(kinds):
+    """Prismatic joints at a, b (TRRRRR ...) and at d or e (RTRRRR: general6.py prefers its joint 2 at
+    d; RRTRRR, RRRTRR): the C's rows are the Python general6's."""
     chain = _prismatic_chain(kinds, 1)
     module, nc = _module(kinds, chain)
     prism = np.array([k == "T" for k in kinds])

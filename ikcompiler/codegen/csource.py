@@ -137,11 +137,12 @@ def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target,
 
 def general6_native_arrangements(solver) -> list[int]:
     """The arrangements of ``solver`` (a :class:`subproblems.general6.General6`) that the C elimination
-    runs, in its usable order: those with the 12 x 12 pencil and prismatic joints at a, b only
-    (general6.h's coverage); none when the preferred one is not among them (its rows are the
-    reference's first answer).  The one rule for a general-6r module's C (``NATIVE``)."""
+    runs, in its usable order: those with the 12 x 12 pencil (general6.h's coverage: prismatic
+    joints at a, b, d or e; not the deflated 9 x 9 pencil of a
+    prismatic joint on each side of the split); none when the preferred one is not among them (its
+    rows are the reference's first answer).  The one rule for a general-6r module's C (``NATIVE``)."""
     def covered(arr) -> bool:
-        return not any(arr.prism[2:]) and arr.deflate is None
+        return not (arr.prism[2] or arr.prism[5] or arr.swap) and arr.deflate is None
 
     arrangements = [k for k in solver.usable if covered(solver._arr[k])]
     return arrangements if arrangements and arrangements[0] == solver.usable[0] else []
