@@ -121,7 +121,8 @@ def main(argv=None) -> int:
 
     load = os.getloadavg()
     lines = ["# General-6r native path: hand-back and route", "",
-             f"Command: `python benchmarks/general6_fallback.py --poses {args.poses}`. Machine: shared, 2 cores, "
+             f"Command: `python benchmarks/general6_fallback.py --poses {args.poses}`. "
+             "Machine: shared, 2 cores, "
              f"load average at start {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}.", ""]
     lines += jaco_section(args.poses, log)
     lines += route_section(log)

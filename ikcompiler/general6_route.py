@@ -101,7 +101,8 @@ def compare(chain, search_module, general_module, method: str) -> Verdict:
         n += len(q)
         hit += sum(_found(S[k][V[k]], q[k:k + 1], chain) for k in range(len(q)))
         if hit < n:  # the search missed a sampled vector: general-6r, whatever its numbers
-            numbers = (f"on {n} sampled poses (seed {SAMPLE_SEED}, {SPECIAL_SHARE:.0%} of the values special) "
+            numbers = (f"on {n} sampled poses (seed {SAMPLE_SEED}, {SPECIAL_SHARE:.0%} of the values "
+                       "special) "
                        f"the {method} recovered {hit}/{n} sampled joint vectors, {spent[0] / n * 1e3:.3f} "
                        "ms/pose (process CPU, solve_batch; general-6r not timed)")
             return Verdict(False, f"general 6R elimination chosen over the {method} (incomplete on the "

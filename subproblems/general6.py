@@ -755,7 +755,8 @@ class General6:
             # others: on a RRRRTT arm the inverse order returned 6 of 10); then fewer doubtful samples,
             # which go down the costly re-solve path
             found.append((-(generic + special_hits), -rows, int(doubt.sum()), k, generic))
-            why.append(f"order {_joints(arr)} ({arr.conj} moved ahead): recovered {generic} of {count} generic "
+            why.append(f"order {_joints(arr)} ({arr.conj} moved ahead): recovered {generic} of {count} "
+                       "generic "
                        f"and {special_hits} of {count} special-angle samples, {rows} generic rows, "
                        f"{int(doubt.sum())} doubtful")
         if not found or max(f[4] for f in found) < count // 2:
