@@ -15,7 +15,8 @@ from ikcompiler.compiler import compile_plan, compile_robot
 from ikcompiler.errors import RobotInputError
 from ikcompiler.model import Chain, Coupling, Joint
 from ikcompiler.model.fold import fold_slides
-from ikcompiler.verify import verify
+from ikcompiler.verify import sample_configurations, verify
+from subproblems import native
 from subproblems.screw import revolute_twist
 
 URDF = Path(__file__).parent / "data" / "folded_slides.urdf"
@@ -199,7 +200,8 @@ def _spec_chain() -> Chain:
     )
     home = np.eye(4)
     home[:3, 3] = [0.5, 0.1, 0.2]
-    couplings = (Coupling("s1", "m", 2.0, 0.1), Coupling("s2", "m", -0.5, 0.0), Coupling("r3", "r1", 0.5, 0.2))
+    couplings = (Coupling("s1", "m", 2.0, 0.1), Coupling("s2", "m", -0.5, 0.0),
+                 Coupling("r3", "r1", 0.5, 0.2))
     return Chain("spec", joints, home, couplings)
 
 
@@ -219,3 +221,53 @@ def test_empty_intersection_of_limits_raises_naming_the_joints():
     chain = Chain("bad", joints, np.eye(4), (Coupling("b", "a", 1.0, 0.0),))
     with pytest.raises(RobotInputError, match="'a'.*no value"):
         fold_slides(chain)
+
+
+def _gantry() -> Chain:
+    """A gantry (x, y, a telescoping z of two slides: z2 = 2 z1 + 0.05) with a spherical wrist: after the
+    fold TTTRRR, whose plan (S2-TTT at the wrist centre, O-RRR) has fast kernels and a C translation."""
+    c = np.array([0.3, 0.1, 0.2])
+    joints = (
+        Joint("x", "T", [1, 0, 0, 0, 0, 0], -1.0, 1.0),
+        Joint("y", "T", [0, 1, 0, 0, 0, 0], -1.0, 1.0),
+        Joint("z1", "T", [0, 0, -1, 0, 0, 0], 0.0, 0.4),
+        Joint("z2", "T", [0, 0, -1, 0, 0, 0], 0.0, 1.0),
+        Joint("yaw", "R", revolute_twist([0, 0, 1], c), -3.0, 3.0),
+        Joint("pitch", "R", revolute_twist([0, 1, 0], c), -3.0, 3.0),
+        Joint("roll", "R", revolute_twist([1, 0, 0], c), -3.0, 3.0),
+    )
+    home = np.eye(4)
+    home[:3, 3] = c + [0.05, 0.0, -0.1]
+    return Chain("gantry", joints, home, (Coupling("z2", "z1", 2.0, 0.05),))
+
+
+def test_folded_gantry_has_a_c_chain_and_verifies():
+    chain = _gantry()
+    assert fold_slides(chain).speed[2] == pytest.approx(3.0, abs=1e-15)
+    module = compile_robot(chain)
+    assert module.METHOD == "closed-form" and module.NATIVE
+    report = verify(chain, module, samples=200, seed=19)
+    # the spherical wrist's gimbal lock (pitch = +-pi/2 among the special angles) is a true self-motion
+    assert report.ok and report.recovered == report.poses - report.self_motion, report
+
+
+@pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+def test_folded_chain_in_c_gives_the_python_rows():
+    chain = _gantry()
+    module = compile_robot(chain)
+    assert module._native_chain() is not None
+    # random poses only: at the gimbal lock the C and the Python return different representatives
+    Q = sample_configurations(chain, 100, 23, 0.0, (module.LOWER, module.UPPER))
+    Ts = chain.fk_batch(Q)
+    S_c, v_c = module.solve_batch(Ts)
+    module.NATIVE = False
+    try:
+        S_py, v_py = module.solve_batch(Ts)
+    finally:
+        module.NATIVE = True
+    assert (v_c.sum(axis=1) == v_py.sum(axis=1)).all()
+    for i in range(len(Q)):
+        a, b = S_c[i][v_c[i]], S_py[i][v_py[i]]
+        assert np.abs(a[:, None, :] - b[None, :, :]).max(axis=2).min(axis=1).max() <= 1e-9
+        assert np.abs(a - Q[i]).max(axis=1).min() <= 1e-9
+    assert np.abs(module.fk(Q[0]) - chain.fk(Q[0])).max() <= 1e-15

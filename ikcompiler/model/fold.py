@@ -11,7 +11,7 @@ which is ONE slide of unit direction ``u = d / |d|`` and value ``s = |d| q`` fol
 translation ``E = Trans(c0)``.  E is carried past the later joints (``E exp(xi th) = exp(Ad_E xi th) E``)
 into the home pose, as the loader does for an external master (``inputs/urdf.py``).  The folded chain
 has the same forward kinematics and fewer unknowns: stretch's four telescoping slides (three mimicking
-the first) become one, and O-RRR then S1-TT solve it in closed form.
+the first) become one, and the chain TTRRR has a closed form (S2-TTR at the wrist point, then O-RR).
 
 The value solved for is ``s``, not ``q``: the slide keeps a unit direction, so every subproblem, the plan
 runtime, the fast chain and its C see an ordinary prismatic joint, and the generated module converts at
@@ -56,7 +56,8 @@ class SlideFold:
     def note(self) -> str:
         u = ", ".join(f"{x:.6g}" for x in self.direction)
         return (f"folded slides: {', '.join(self.members)} follow {self.master!r} and commute: one slide "
-                f"{self.joint!r} along ({u}) moving {self.speed:.6g} x {self.master} (docs/design.md section 2)")
+                f"{self.joint!r} along ({u}) moving {self.speed:.6g} x {self.master} "
+                "(docs/design.md section 2)")
 
 
 @dataclass(frozen=True)
@@ -126,8 +127,9 @@ def fold_slides(chain: Chain) -> FoldedChain:
         if not new[0] <= new[1]:
             names = ", ".join(chain.joints[i].name for i in run)
             raise RobotInputError(
-                f"the limits of the slides {names} (all driven by {chain.joints[k].name!r}) leave it no value "
-                f"in common", source=chain.source or chain.name, where=f"joint {chain.joints[k].name!r}")
+                f"the limits of the slides {names} (all driven by {chain.joints[k].name!r}) leave it "
+                "no value in common", source=chain.source or chain.name,
+                where=f"joint {chain.joints[k].name!r}")
         limits[k] = new
 
     first = {run[0]: run for run in runs}

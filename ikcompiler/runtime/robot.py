@@ -55,7 +55,7 @@ class Robot:
     fast_chain: Any  # the module's _fast_chain or None
     target_error: type
     free_error: type
-    speed: Any = None  # None, or (n,): the chain solves for speed * q (folded slides, docs/design.md 2)
+    speed: Any = None  # None or (n,): solved value = speed * q (folded slides, docs/design.md section 2)
 
     @classmethod
     def from_namespace(cls, ns: dict) -> Robot:
