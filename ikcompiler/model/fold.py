@@ -97,7 +97,7 @@ def _master_interval(chain: Chain, members: list[int], master_of) -> tuple[float
         _, a, b = master_of[i]
         j = chain.joints[i]
         if a == 0.0:
-            continue  # a constant member: its value b is checked by the caller's message only
+            continue  # a member the master does not move: its limits say nothing about the master
         ends = sorted(((j.lower - b) / a, (j.upper - b) / a))
         lo, hi = max(lo, ends[0]), min(hi, ends[1])
     return lo, hi
@@ -135,7 +135,7 @@ def fold_slides(chain: Chain) -> FoldedChain:
     first = {run[0]: run for run in runs}
     inside = {i for run in runs for i in run}
     speed = {k: 1.0 for k in chain.independent}
-    folds, plan = [], []  # plan: (joint index or run, its speed)
+    folds, plan = [], []  # plan: ([joints], unit direction of the fold or None, speed) in chain order
     for i in range(chain.n):
         if i in first:
             run = first[i]
