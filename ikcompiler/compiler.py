@@ -22,6 +22,7 @@ from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.facts import configurations, record_step_facts
 from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
+from ikcompiler.model.fold import fold_slides
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
@@ -72,7 +73,11 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             )
     dof_needed = 6 if target == "pose" else 3
     unknown = chain.dof - len(free)
-    notes = []
+    # runs of mimicking slides become one slide each: the plan is made on the folded chain, whose
+    # joint names are the original independent ones (docs/design.md section 2, "Folded slides")
+    folding = fold_slides(chain)
+    chain = folding.chain
+    notes = list(folding.notes)
     if target == "orientation":
         sliding = [
             j.name
@@ -285,7 +290,8 @@ def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> st
     from ikcompiler import __version__
 
     tol = tol or Tolerance()
-    solved = with_tool_roll(chain) if plan.virtual else chain
+    folding = fold_slides(chain)  # as compile_plan did: the plan's joints are the folded chain's
+    solved = with_tool_roll(folding.chain) if plan.virtual else folding.chain
     return generate(
         plan,
         solved,
@@ -293,7 +299,8 @@ def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> st
         version=__version__,
         scale=chain.scale,
         tol=tol.exact,
-        output=chain,
+        output=folding.chain,
+        speed=folding.speed if folding.folded else None,
     )
 
 

@@ -72,6 +72,10 @@ INPUT_UNIT_NOTE = 1e-12
 #: URDF mimic joints: a multiplier within this of +-1 can stand for its master; a follower's limits
 #: contain the master's when they do to this.
 INPUT_MIMIC = 1e-12
+#: Folded slides (``ikcompiler/model/fold.py``): a run of slides driven by one master whose summed
+#: direction ``sum a_i v_i`` (multipliers times unit vectors, absolute) is shorter than this cancels out
+#: and is not folded (the master would move nothing there).
+FOLD_SPEED = 1e-9
 
 # -------------------------------------------------------------------------- class I (S1-*), _class1.py
 

@@ -263,7 +263,7 @@ def data_key(namespace) -> str:
     """A hash of the data a module's C is printed from and of the code that prints it."""
     code = _generator_code()
     snapped = namespace["_PLAN_TWISTS"] is not namespace["_TWISTS"]
-    data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [snapped])
+    data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [_plain(namespace.get("_SPEED")), snapped])
     return hashlib.sha256((code + "\0" + data).encode()).hexdigest()[:24]
 
 
@@ -310,7 +310,8 @@ def module_c_source(ns) -> str | None:
 
     if ns["METHOD"] == "general-6r":
         return general6_c_source(
-            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns.get("_LOWER", ns["LOWER"]),
+            upper=ns.get("_UPPER", ns["UPPER"]),
             target=ns["TARGET"],
             scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
             home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
@@ -325,7 +326,8 @@ def module_c_source(ns) -> str | None:
         near = near_singular(np.asarray(ns["_PLAN_TWISTS"], float), np.asarray(ns["_TWISTS"], float),
                              ns["SCALE"])
     return chain_c_source(
-        program, alternative=alternative, kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+        program, alternative=alternative, kinds=ns["JOINT_TYPES"], lower=ns.get("_LOWER", ns["LOWER"]),
+        upper=ns.get("_UPPER", ns["UPPER"]),
         free=list(ns["_FREE"]), target=ns["TARGET"], scale=ns["SCALE"], tol=ns["TOLERANCE"],
         slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"], home=np.asarray(ns["_HOME"], float), A=ns["_A"],
         b=ns["_B"], search=len(ns["_SEARCH"]), grid=ns["_GRID"], polish=ns["_POLISH"], near_singular=near)
