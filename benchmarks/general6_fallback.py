@@ -44,10 +44,7 @@ def _first_only(module, chain):
     """A NativeChain of the module's C with its first arrangement alone (to count its hand-backs)."""
     ns = vars(module)
     solver = g6.General6(chain.twists, chain.home, chain.scale, arrangement=[module._GENERAL6.usable[0]])
-    src = csource.general6_c_source(
-        solver, kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"], target=ns["TARGET"],
-        scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
-        home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
+    src = csource.module_c_source(ns, general6=solver)
     return native.bind(src, dof=6, slots=ns["MAX_SOLUTIONS"], nfree=0, target="pose")
 
 

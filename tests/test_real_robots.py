@@ -55,6 +55,14 @@ def _params():
     return out
 
 
+def _special_and_random(chain, module):
+    """The bar's two verifications: 30 poses at special angles, 200 random ones."""
+    return [
+        verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5),
+        verify(chain, module, samples=200, seed=2, special=0.0, scalar_checks=5),
+    ]
+
+
 @pytest.mark.parametrize("package,name,tip", _params())
 def test_real_chain_compiles_and_verifies(catalogue, package, name, tip):
     entry = _entry(catalogue, package, name, tip)
@@ -62,10 +70,7 @@ def test_real_chain_compiles_and_verifies(catalogue, package, name, tip):
     compiled = configs.compile_chain(chain)
     module = compiled.module
     assert list(module.JOINT_NAMES) == list(chain.independent_names)
-    reports = [
-        verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5),
-        verify(chain, module, samples=200, seed=2, special=0.0, scalar_checks=5),
-    ]
+    reports = _special_and_random(chain, module)
     for rep in reports:
         text = f"{entry.ident} ({module.METHOD}, free {compiled.free}): {rep.text()}"
         assert rep.wrong == 0 and rep.batch_mismatch == 0, text
@@ -86,10 +91,7 @@ def test_stretch_folded_slides_are_solved_in_closed_form(catalogue, eps):
     module = configs.compile_chain(chain).module
     assert module.METHOD == "closed-form"
     assert list(module.JOINT_NAMES) == list(chain.independent_names)
-    reports = [
-        verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5),
-        verify(chain, module, samples=200, seed=2, special=0.0, scalar_checks=5),
-    ]
+    reports = _special_and_random(chain, module)
     for rep in reports:
         text = f"{entry.ident} eps {eps:g}: {rep.text()}"
         assert rep.wrong == 0 and rep.batch_mismatch == 0 and rep.ok, text

@@ -304,15 +304,16 @@ def _store(path, text: str) -> None:
         pass  # an unwritable cache costs a reprint next time, nothing else
 
 
-def module_c_source(ns) -> str | None:
-    """The C of the module with globals ``ns``, printed now (:func:`native_source` caches it)."""
+def module_c_source(ns, general6=None) -> str | None:
+    """The C of the module with globals ``ns``, printed now (:func:`native_source` caches it).
+    ``general6``: for a general-6r module, another :class:`subproblems.general6.General6` of its robot
+    to print instead of the module's own (the tests and benchmarks print one arrangement alone)."""
     from ikcompiler.codegen.fastpath import ChainData, build_program
 
     if ns["METHOD"] == "general-6r":
         return general6_c_source(
-            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns.get("_LOWER", ns["LOWER"]),
-            upper=ns.get("_UPPER", ns["UPPER"]),
-            target=ns["TARGET"],
+            ns["_GENERAL6"] if general6 is None else general6, kinds=ns["JOINT_TYPES"],
+            lower=ns.get("_LOWER", ns["LOWER"]), upper=ns.get("_UPPER", ns["UPPER"]), target=ns["TARGET"],
             scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
             home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
     program = build_program(ChainData.from_module(ns))
