@@ -205,14 +205,19 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     from ikcompiler import general6_route
     from subproblems import general6
 
-    if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
+    if not USE_GENERAL6 or target != "pose" or chain.couplings or len(chain.joint_types) - len(free) != 6:
+        return None
+    solved = free_end_split(chain, free)
+    if solved is None:
+        notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
+                     "solved twists depend on its value (free joints at the chain's ends keep them fixed)")
         return None
     try:
-        solver = general6.General6(chain.twists, chain.home, chain.scale)
+        solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
-    found = search_1d()
+    found = search_1d() if not free else None  # the route's measurement runs free of free joints
     if found is not None:
         searched = _search_plan(chain, target, free, geometry, notes, found)
         module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
@@ -228,12 +233,27 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     )
-    names = [j.name for j in chain.joints]
+    names = [chain.joints[j].name for j in solved]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
+    if free:
+        notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} at the "
+                     "chain's ends move the target, not the six twists")
     notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
     all_names = tuple(j.name for j in chain.joints)
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                 tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
+
+
+def free_end_split(chain: Chain, free) -> list[int] | None:
+    """The joints the general 6R elimination solves when ``free`` joints are given: every other joint,
+    provided the free ones sit before or after all of them (then ``P X(q) S M = T`` is a 6R problem of
+    fixed twists with the target ``P^-1 T M^-1 S^-1 M``: runtime.reference.general6_rows); None when a
+    free joint lies between solved ones (the solved twists after it would turn with its value)."""
+    fixed = {chain.index(f) for f in free}
+    solved = [j for j in range(len(chain.joints)) if j not in fixed]
+    if solved and solved[-1] - solved[0] + 1 != len(solved):
+        return None
+    return solved
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):

@@ -151,7 +151,10 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
     if plan.method == "general-6r":
         out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
-        out.append(f"_GENERAL6 = _g6.General6(_TWISTS, _HOME, {_num(scale)}, arrangement="
+        fixed = {chain.index(f) for f in plan.free}
+        solved = [j for j in range(len(chain.joints)) if j not in fixed]
+        twists = "_TWISTS" if not fixed else f"_TWISTS[{solved!r}]"  # free joints at the ends: moved target
+        out.append(f"_GENERAL6 = _g6.General6({twists}, _HOME, {_num(scale)}, arrangement="
                    f"{_literal(list(plan.steps[0]['arrangements']))})\n")
     else:
         out.append("_GENERAL6 = None  # the general 6R elimination: not this plan's method\n")

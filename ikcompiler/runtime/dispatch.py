@@ -62,7 +62,8 @@ class Solver:
         (subproblems/general6.h, switched by NATIVE); the Python general6 stays the reference for the
         targets the C hands back."""
         r = self.robot
-        return r.method == "general-6r" and r.general6 is not None
+        # free joints move the target (reference.general6_rows), which the C elimination does not do
+        return r.method == "general-6r" and r.general6 is not None and not r.free_joints
 
     def general6(self):
         if not self._general6:

@@ -72,6 +72,29 @@ def true_general6(robot):
         return None
 
 
+def general6_rows(robot, goals, init):
+    """The general 6R elimination's exact rows of N targets: (TH (M, chain joints), owner (M,)).
+
+    Free joints sit at the ends of the chain (the compiler takes general-6r only then:
+    ``compiler.free_end_split``): with ``P`` the product of the free joints before the six solved ones
+    and ``S`` of those after, ``P X(q) S M = T`` is the 6R problem ``X(q) M = P^-1 T M^-1 S^-1 M`` of a
+    robot whose twists do not depend on the free values (docs/design.md section 5, "General 6R")."""
+    if not robot.free:
+        return robot.general6.rows(goals)
+    free = [robot.independent[pos] for pos in robot.free]
+    solved = [j for j in range(len(robot.kinds)) if j not in free]
+    before = [j for j in free if j < solved[0]]
+    after = [j for j in free if j > solved[-1]]
+    N = len(goals)
+    P = _rt.fk_batch(robot.twists[before], init[:, before]) if before else np.broadcast_to(np.eye(4), (N, 4, 4))
+    S = _rt.fk_batch(robot.twists[after], init[:, after]) if after else np.broadcast_to(np.eye(4), (N, 4, 4))
+    sub = _rt.inverse_transform(P) @ goals @ robot.home_inv @ _rt.inverse_transform(S) @ robot.home
+    Q, owner = robot.general6.rows(sub)
+    TH = np.array(init[owner], dtype=float)
+    TH[:, solved] = Q
+    return TH, owner
+
+
 def candidates(robot, goals, Td, init, correct, alternative=None):
     """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum).
 
@@ -87,7 +110,7 @@ def candidates(robot, goals, Td, init, correct, alternative=None):
         TH = robot.newton(TH, goals[owner], step["iters"])
         return TH, owner, *_no_flags(len(TH))
     if robot.method == "general-6r":
-        TH, owner = robot.general6.rows(goals)
+        TH, owner = general6_rows(robot, goals, init)
         # isolated points of the elimination; those on a self-motion are flagged as its representatives
         return TH, owner, np.zeros(len(TH), dtype=bool), selfmotion.flags(robot, TH, goals[owner])
     if robot.search:
