@@ -19,7 +19,7 @@ import numpy as np
 from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
-from ikcompiler.geometry.facts import configurations, record_step_facts
+from ikcompiler.geometry.facts import conditioned_rank, configurations, record_step_facts
 from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
 from ikcompiler.plan import Plan
@@ -62,7 +62,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             f"position + direction target: a virtual joint {VIRTUAL_ROLL} about the tool z axis makes it "
             "a pose target; its value is dropped from every solution"
         )
-        return dataclasses.replace(plan, target=target, virtual=True, notes=plan.notes + (note,))
+        return dataclasses.replace(plan, target=target, virtual=True,
+                                   notes=plan.notes + (note,) + near_redundant_notes(chain, target, free))
     free = tuple(free)
     for f in free:
         if f not in chain.independent_names:
@@ -94,6 +95,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             f"{unknown} joints for a {dof_needed}-DOF {target} target: solved from a sufficient subset of "
             "the equations; every solution is checked against the whole target"
         )
+    if VIRTUAL_ROLL not in chain.independent_names:  # the position+direction call judges the real chain
+        notes += near_redundant_notes(chain, target, free)
     true_chain = chain
     # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
     chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
@@ -242,6 +245,21 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     all_names = tuple(j.name for j in chain.joints)
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                 tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
+
+
+def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:
+    """The plan note of a near-redundant chain (geometry.facts.conditioned_rank at the snap tolerance
+    below its solved joints; docs/design.md section 5, "Near-redundant chains"), or ()."""
+    from subproblems.tolerances import NEAR_REDUNDANT
+
+    unknown = chain.dof - len(free)
+    rank = conditioned_rank(chain, target, free)
+    if rank >= unknown:
+        return ()
+    return (f"near-redundant: {rank} of the Jacobian's {unknown} singular values exceed {NEAR_REDUNDANT:g} at "
+            "every sampled configuration (a redundant chain within the snap tolerance); rows whose own "
+            "smallest singular value is below it are flagged continuum: representatives of the snapped "
+            "chain's self-motion, not a complete set of the true robot's isolated solutions",)
 
 
 def free_end_split(chain: Chain, free) -> list[int] | None:

@@ -223,3 +223,42 @@ def test_prismatic_joints_on_both_sides_keep_the_search_with_a_note():
     assert plan.method != "general-6r"
     refused = [n for n in plan.notes if "general 6R elimination not used" in n]
     assert refused and "pencil is singular" in refused[0], plan.notes
+
+
+def _random_7r(seed: int) -> Chain:
+    rng = np.random.default_rng(seed)
+    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)),
+                         -math.pi, math.pi) for i in range(7))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    return Chain(f"random-7r-{seed}", joints, home)
+
+
+@pytest.mark.parametrize("free", ["j1", "j7"])
+def test_a_free_joint_at_either_end_leaves_a_general_6r_problem(free):
+    # P X(q) S M = T: a free first (P) or last (S) joint moves the target, not the six solved twists
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=(free,))
+    assert module.METHOD == "general-6r" and module.FREE_JOINTS == (free,)
+    Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(25, 7))
+    T = chain.fk_batch(Q)
+    k = chain.independent_names.index(free)
+    S, V = module.solve_batch(T, Q[:, k])
+    for n in range(len(Q)):
+        rows = S[n][V[n]]
+        assert np.all(rows[:, k] == Q[n, k])  # the free value as given
+        d = np.abs(np.angle(np.exp(1j * (rows - Q[n])))).max(axis=1)
+        assert d.min() < 1e-6, n
+        G = chain.fk_batch(rows)
+        assert np.linalg.norm(G[:, :3, 3] - T[n, :3, 3], axis=1).max() <= 1e-12 * chain.scale
+        assert np.linalg.norm(G[:, :3, :3] - T[n, :3, :3], axis=(1, 2)).max() <= 1e-12
+        assert len(module.solve(T[n], Q[n, k])) == V[n].sum()
+    report = verify(chain, module, samples=30, seed=5)
+    assert report.ok and report.recovered + report.self_motion == report.poses, report.text()
+
+
+def test_a_free_joint_between_solved_ones_keeps_the_search_with_a_note():
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=("j4",))
+    assert module.METHOD != "general-6r"
+    assert "a free joint between solved joints" in module.PLAN

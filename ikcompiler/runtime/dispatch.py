@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ikcompiler.runtime import fastchain, reference, selection, targets
+from ikcompiler.runtime import fastchain, reference, selection, selfmotion, targets
 from ikcompiler.runtime.robot import Robot
 from subproblems import fast as _fk
 
@@ -165,6 +165,13 @@ class Solver:
     def rows(self, T, free, limits, exact_only=False):
         """(q, residual, ls, continuum) of one target, exact rows first; with ``exact_only`` just the
         exact rows' q (``solve``'s answer)."""
+        found = self._rows(T, free, limits, exact_only)
+        if exact_only or not self.robot.near_redundant:
+            return found
+        q, res, ls, cont = found
+        return q, res, ls, cont | selfmotion.near_redundant(self.robot, q)
+
+    def _rows(self, T, free, limits, exact_only=False):
         r = self.robot
         native = self.native_chain()
         if native is not None:
@@ -205,14 +212,21 @@ class Solver:
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
         done = self._native_batch(Ts, free, limits)
-        if done is not None:
-            return done
-        goals, Td, reasons = targets.check_targets(self.robot, Ts)
-        init = targets.initial_values(self.robot, len(goals), free)
-        parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
-                                                           init[i:i + chunk], limits), reasons[i:i + chunk])
-                 for i in range(0, len(goals), chunk)]
-        return _joined(parts) if parts else self._empty()
+        if done is None:
+            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            init = targets.initial_values(self.robot, len(goals), free)
+            parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
+                                                               init[i:i + chunk], limits),
+                                             reasons[i:i + chunk])
+                     for i in range(0, len(goals), chunk)]
+            done = _joined(parts) if parts else self._empty()
+        if self.robot.near_redundant:
+            Q, valid, ls, res, cont = done
+            n, k = np.nonzero(valid)
+            cont = cont.copy()
+            cont[n, k] |= selfmotion.near_redundant(self.robot, Q[n, k])
+            done = (Q, valid, ls, res, cont)
+        return done
 
     def _native_batch(self, Ts, free, limits):
         """solve_batch_info on the C chain (it checks the targets itself), or None when there is none or

@@ -55,6 +55,7 @@ class Robot:
     fast_chain: Any  # the module's _fast_chain or None
     target_error: type
     free_error: type
+    near_redundant: bool = False  # within the snap tolerance of a redundant chain (selfmotion.near_redundant)
 
     @classmethod
     def from_namespace(cls, ns: dict) -> Robot:
@@ -71,6 +72,7 @@ class Robot:
             steps=ns["_STEPS"], alt_steps=ns["_ALT_STEPS"], general6=ns.get("_GENERAL6"),
             fast_chain=ns.get("_fast_chain"),
             target_error=ns["InvalidTargetError"], free_error=ns["InvalidFreeValueError"],
+            near_redundant=bool(ns.get("_NEAR_REDUNDANT", False)),
         )
 
     def finish_kwargs(self, limits) -> dict:

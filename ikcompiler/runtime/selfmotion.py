@@ -67,3 +67,22 @@ def flags(robot, TH, goals) -> np.ndarray:
         err = robot.error(fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
         out[cand[rows]] = np.isfinite(err) & (err <= robot.tol * robot.scale)
     return out
+
+
+def near_redundant(robot, Q) -> np.ndarray:
+    """(M,) True where row Q[m] (JOINT_NAMES order) of a near-redundant robot is a representative of the
+    snapped chain's self-motion: the size-free Jacobian of its solved joints has a singular value below
+    ``tolerances.NEAR_REDUNDANT`` (docs/design.md section 5, "Near-redundant chains").  There a target
+    judged exact at the structural tolerance fixes the joints only to EXACT / sigma > 1e-6 rad, so the
+    true robot's isolated solutions cannot be told from the snapped chain's continuum."""
+    from subproblems import select
+
+    if not len(Q):
+        return np.zeros(0, dtype=bool)
+    target = "pose" if robot.target == "position+direction" else robot.target
+    J = select.jacobian(Q, twists=robot.twists, A=robot.A, b=robot.B, home=robot.home, scale=robot.scale,
+                        target=target)
+    solved = [k for k in range(J.shape[2]) if k not in robot.free]
+    s = np.linalg.svd(J[:, :, solved], compute_uv=False)
+    rows = min(J.shape[1], len(solved))
+    return (s[:, rows - 1] if rows else np.zeros(len(Q))) < _tol.NEAR_REDUNDANT
