@@ -273,6 +273,7 @@ def _left_out_lines(args) -> list[str]:
 def write(rows: list[Row], cat, started: float, args, done: bool) -> None:
     flags = " --no-perturb" if args.no_perturb else " --perturb-only" if args.perturb_only else ""
     flags += " --external-mimic" if args.external_mimic else ""
+    flags += f" --eps {args.eps}" if args.eps != ",".join(f"{e:g}" for e in EPS) else ""
     flags += " --sample" if args.sample else ""
     flags += f" --budget {args.budget:g}" if args.budget else ""
     if args.out != OUT:
@@ -386,6 +387,8 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--out", type=Path, default=OUT, help=f"results file (default {OUT.relative_to(ROOT)})")
     ap.add_argument("--memory-gb", type=float, default=8.0, help="address-space limit of the run")
+    ap.add_argument("--eps", default=",".join(f"{e:g}" for e in EPS),
+                    help="perturbations of the second pass, comma-separated (default 1e-06,0.001)")
     ap.add_argument("--sample", action="store_true", help="the fixed sample of sample_work (< 40 min)")
     ap.add_argument("--budget", type=float, default=0.0, help="wall minutes for the run (0: none)")
     args = ap.parse_args(argv)
@@ -401,7 +404,7 @@ def main(argv=None) -> int:
     work = [] if args.perturb_only else [(e, 0.0) for e in entries]
     if not args.no_perturb:
         arms = [e for e in entries if _is_arm(e)]
-        work += [(e, eps) for eps in EPS for e in arms]
+        work += [(e, eps) for eps in (float(x) for x in args.eps.split(",")) for e in arms]
     # most telling first, so that a cut-off run has covered the most: arms (an arm or limb chain of 5 or
     # more joints) of 5-6 joints, then those of 7 (a free joint: up to three compiles, often a search),
     # then every other chain (fingers, legs, heads, wheels), each group in file order

@@ -75,11 +75,16 @@ class Solver:
         (TH, owner, continuum)."""
         return reference.correct(self.robot, TH, owner, goals, self.general6, family)
 
+    def search_chunk(self) -> int:
+        """Targets a search (or the reference runtime) works on at a time: its grid instances, at
+        ``fastchain.BYTES_PER_INSTANCE`` each, within ``memory_budget``."""
+        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
+        return max(1, self.memory_budget // width)
+
     def reference_chunk(self, goals, Td, init, limits, alternative=None):
         """The reference runtime on targets (chunked so that a search stays within the budget);
         ``alternative`` marks the targets that also take the plan's alternative chain."""
-        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
-        step = max(1, self.memory_budget // width)
+        step = self.search_chunk()
         if len(goals) <= step:
             return self._reference(goals, Td, init, limits, alternative)
         return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits,
@@ -125,8 +130,14 @@ class Solver:
         if not self.fast_path():
             return self.reference_chunk(goals, Td, init, limits)
         if r.search:
-            return reference.complete(r, *fastchain.search_candidates(r, goals, init, self.memory_budget),
-                                      goals, limits)
+            # the whole search (grid, seeds, Newton, finish) on chunks of search_chunk() targets: its
+            # grid instances stay within the memory budget and its seeds with them
+            step = self.search_chunk()
+            return _joined([reference.complete(r, *fastchain.search_candidates(r, goals[i:i + step],
+                                                                               init[i:i + step],
+                                                                               self.memory_budget),
+                                               goals[i:i + step], limits)
+                            for i in range(0, len(goals), step)])
         Q, err, flag = fastchain.leaves(r, goals, init)
         if not r.polish:
             return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
