@@ -197,7 +197,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     )
     # a general-6r plan has no Python fast chain (FAST_PATH False); its native path is the C
     # elimination (subproblems/general6.h), switched by NATIVE alone
-    general6_native = plan.method == "general-6r" and plan.target == "pose" and not free_idx
+    # (free joints at the ends: the C of the six solved joints on moved targets, runtime/freeends.py)
+    general6_native = plan.method == "general-6r" and plan.target == "pose"
     out.append(f"FAST_PATH = {fast is not None}\n")
     out.append(python_source(fast) if fast is not None else "\n\n_fast_chain = None\n")
     native = translatable(fast, target=plan.target, dof=len(output.independent)) or general6_native

@@ -36,6 +36,7 @@ class Solver:
         self.memory_budget = memory_budget
         self._native = []  # [NativeChain] or [None] once bound
         self._general6 = []  # the true robot's general 6R solver, for doubtful snapped targets
+        self._free_ends = []  # [NativeFreeEnds or None] once bound
 
     # -- the paths -------------------------------------------------------------------------------
 
@@ -64,6 +65,18 @@ class Solver:
         r = self.robot
         # free joints move the target (reference.general6_rows), which the C elimination does not do
         return r.method == "general-6r" and r.general6 is not None and not r.free_joints
+
+    def free_ends_native(self):
+        """A general-6r module with free end joints: the C elimination of its six solved joints on the
+        moved targets (runtime.freeends), or None (another method, NATIVE off, no C build)."""
+        r = self.robot
+        if r.method != "general-6r" or not r.free_joints or r.general6 is None or not self._ns.get("NATIVE"):
+            return None
+        if not self._free_ends:
+            from ikcompiler.runtime.freeends import NativeFreeEnds
+
+            self._free_ends.append(NativeFreeEnds.bind(r))
+        return self._free_ends[0]
 
     def general6(self):
         if not self._general6:
@@ -184,6 +197,10 @@ class Solver:
 
     def _rows(self, T, free, limits, exact_only=False):
         r = self.robot
+        if self.free_ends_native() is not None:
+            goals, Td, init = self._one_target(T, free)
+            parts = self._free_ends_batch(goals, Td, init, np.array([""], dtype=object), limits)
+            return _unpack(parts, exact_only)
         native = self.native_chain()
         if native is not None:
             found = native.exact(T, free, limits) if exact_only else native.one(T, free, limits)
@@ -222,7 +239,13 @@ class Solver:
         targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
-        done = self._native_batch(Ts, free, limits)
+        done = None
+        if self.free_ends_native() is not None:
+            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            init = targets.initial_values(self.robot, len(goals), free)
+            done = self._free_ends_batch(goals, Td, init, reasons, limits)
+        else:
+            done = self._native_batch(Ts, free, limits)
         if done is None:
             goals, Td, reasons = targets.check_targets(self.robot, Ts)
             init = targets.initial_values(self.robot, len(goals), free)
@@ -235,7 +258,9 @@ class Solver:
             Q, valid, ls, res, cont = done
             n, k = np.nonzero(valid)
             cont = cont.copy()
-            cont[n, k] |= selfmotion.near_redundant(self.robot, Q[n, k])
+            for i in range(0, len(n), NATIVE_CHUNK):  # in chunks: a Jacobian of every row at once is big
+                rows = n[i:i + NATIVE_CHUNK], k[i:i + NATIVE_CHUNK]
+                cont[rows] |= selfmotion.near_redundant(self.robot, Q[rows])
             done = (Q, valid, ls, res, cont)
         return done
 
@@ -264,6 +289,21 @@ class Solver:
                 done = self.handed_back(goals, Td, init[i + sub], limits)
                 _scatter(part, sub, targets.without_invalid(done, reasons))
             parts.append(part)
+        return _joined(parts) if parts else self._empty()
+
+    def _free_ends_batch(self, goals, Td, init, reasons, limits):
+        """solve_batch_info of checked goals on the C elimination of the six solved joints; the targets
+        it cannot settle on the Python path (reference.general6_rows)."""
+        fe = self.free_ends_native()
+        parts = []
+        for i in range(0, len(goals), NATIVE_CHUNK):
+            sl = slice(i, i + NATIVE_CHUNK)
+            part, redo = fe.many(goals[sl], init[sl], limits)
+            idx = np.nonzero(redo & (reasons[sl] == ""))[0]
+            for j in range(0, len(idx), CHUNK):
+                sub = idx[j:j + CHUNK] + i
+                _scatter(part, sub - i, self.python_chunk(goals[sub], Td[sub], init[sub], limits))
+            parts.append(targets.without_invalid(part, reasons[sl]))
         return _joined(parts) if parts else self._empty()
 
     def _empty(self):

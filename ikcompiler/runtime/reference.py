@@ -74,25 +74,15 @@ def true_general6(robot):
 
 def general6_rows(robot, goals, init):
     """The general 6R elimination's exact rows of N targets: (TH (M, chain joints), owner (M,)).
-
-    Free joints sit at the ends of the chain (the compiler takes general-6r only then:
-    ``compiler.free_end_split``): with ``P`` the product of the free joints before the six solved ones
-    and ``S`` of those after, ``P X(q) S M = T`` is the 6R problem ``X(q) M = P^-1 T M^-1 S^-1 M`` of a
-    robot whose twists do not depend on the free values (docs/design.md section 5, "General 6R")."""
+    Free joints sit at the chain's ends (the compiler takes general-6r only then): they move the
+    target of the six solved joints (runtime.freeends; docs/design.md section 5, "General 6R")."""
     if not robot.free:
         return robot.general6.rows(goals)
-    free = [robot.independent[pos] for pos in robot.free]
-    solved = [j for j in range(len(robot.kinds)) if j not in free]
-    before = [j for j in free if j < solved[0]]
-    after = [j for j in free if j > solved[-1]]
-    N = len(goals)
-    P = _rt.fk_batch(robot.twists[before], init[:, before]) if before else np.broadcast_to(np.eye(4), (N, 4, 4))
-    S = _rt.fk_batch(robot.twists[after], init[:, after]) if after else np.broadcast_to(np.eye(4), (N, 4, 4))
-    sub = _rt.inverse_transform(P) @ goals @ robot.home_inv @ _rt.inverse_transform(S) @ robot.home
-    Q, owner = robot.general6.rows(sub)
-    TH = np.array(init[owner], dtype=float)
-    TH[:, solved] = Q
-    return TH, owner
+    from ikcompiler.runtime.freeends import FreeEnds
+
+    split = FreeEnds(robot)
+    Q, owner = robot.general6.rows(split.targets(goals, init))
+    return split.rows(Q, init[owner]), owner
 
 
 def candidates(robot, goals, Td, init, correct, alternative=None):
