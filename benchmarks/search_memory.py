@@ -113,6 +113,10 @@ def main(argv=None) -> int:
                     help="batch sizes for the pendulum's C 2-D search")
     ap.add_argument("--pendulum-python-batches", default="5000,20000",
                     help="batch sizes for the pendulum's Python 2-D search (NATIVE off)")
+    ap.add_argument("--robots", default=",".join(ROBOTS.values()),
+                    help=f"which robots, comma-separated (default all: {','.join(ROBOTS.values())})")
+    ap.add_argument("--out", type=Path, default=OUT, help="results file (the default also updates "
+                    "the marked section of benchmarks/results/configurations.md)")
     ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one:
@@ -120,7 +124,10 @@ def main(argv=None) -> int:
         print(json.dumps(measure(args.one[0], int(args.one[1]))))
         return 0
     rows = []
+    chosen = args.robots.split(",")
     for name, kind in ROBOTS.items():
+        if kind not in chosen:
+            continue
         sizes = {"modular": args.batches, "random6r": args.search2_batches, "pendulum": args.pendulum_batches,
                  "pendulum-python": args.pendulum_python_batches}[kind]
         for n in (int(x) for x in sizes.split(",")):
@@ -131,7 +138,10 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     head = (f"Command: `nice python benchmarks/search_memory.py --batches {args.batches} --search2-batches "
             f"{args.search2_batches} --pendulum-batches {args.pendulum_batches} --pendulum-python-batches "
-            f"{args.pendulum_python_batches}`; {when}, commit {_commit()}, "
+            f"{args.pendulum_python_batches}"
+            f"{' --robots ' + args.robots if args.robots != ','.join(ROBOTS.values()) else ''}"
+            f"{' --out ' + str(args.out.resolve().relative_to(ROOT)) if args.out.resolve() != OUT.resolve() else ''}`; "
+            f"{when}, commit {_commit()}, "
             f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh"
             " "
             f"process (compile, then solve_batch); goal {GOAL_MB:.0f} MB for 100,000 poses; worst peak "
@@ -143,14 +153,14 @@ def main(argv=None) -> int:
             "joint values.  pybullet's pendulum5 is a real 2-D search robot: its C search runs 100,000 poses, "
             "its Python search (NATIVE off) 5,000 and 20,000 for the slope.")
     body = table(rows)
-    OUT.write_text("\n".join(["# solve_batch memory of search plans", "", head, "", *body]) + "\n")
-    if CONFIGS.exists():
+    args.out.write_text("\n".join(["# solve_batch memory of search plans", "", head, "", *body]) + "\n")
+    if CONFIGS.exists() and args.out.resolve() == OUT.resolve():
         text = CONFIGS.read_text()
         if MARK_BEGIN in text:
             text = text[:text.index(MARK_BEGIN)].rstrip() + "\n"
         section = ["", MARK_BEGIN, "## solve_batch memory of search plans", "", head, "", *body, MARK_END]
         CONFIGS.write_text(text.rstrip() + "\n" + "\n".join(section) + "\n")
-    print(f"wrote {OUT}", file=sys.stderr)
+    print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
 
