@@ -190,10 +190,30 @@ class Solver:
         """(q, residual, ls, continuum) of one target, exact rows first; with ``exact_only`` just the
         exact rows' q (``solve``'s answer)."""
         found = self._rows(T, free, limits, exact_only)
-        if exact_only or not self.robot.near_redundant:
+        if exact_only or not self.flags_rows():
             return found
         q, res, ls, cont = found
-        return q, res, ls, cont | selfmotion.near_redundant(self.robot, q)
+        goals = targets.check_targets(self.robot, np.asarray(T, dtype=float)[None])[0]
+        return q, res, ls, cont | self.row_flags(q, ~ls, np.repeat(goals, len(q), axis=0))
+
+    def flags_rows(self) -> bool:
+        """Whether returned rows get continuum flags here: a near-redundant robot's rows, and a search
+        plan's rows on a self-motion (the grid's seeds are isolated points, as the general 6R's rows)."""
+        return self.robot.near_redundant or bool(self.robot.search)
+
+    def row_flags(self, Q, exact, goals) -> np.ndarray:
+        """(M,) continuum flags of returned rows Q (M, JOINT_NAMES) with their goals (M, 4, 4):
+        selfmotion.near_redundant on a near-redundant robot; on a search plan selfmotion.flags of the
+        exact rows (Jacobian rank-deficient and the family goes on through the row)."""
+        r = self.robot
+        out = np.zeros(len(Q), dtype=bool)
+        if r.near_redundant:
+            out |= selfmotion.near_redundant(r, Q)
+        if r.search:
+            idx = np.nonzero(exact & ~out)[0]
+            full = np.concatenate([Q[idx], np.zeros((len(idx), len(r.vary) - Q.shape[1]))], axis=1)
+            out[idx] = selfmotion.flags(r, full @ r.A.T + r.B, goals[idx])
+        return out
 
     def _rows(self, T, free, limits, exact_only=False):
         r = self.robot
@@ -254,13 +274,14 @@ class Solver:
                                              reasons[i:i + chunk])
                      for i in range(0, len(goals), chunk)]
             done = _joined(parts) if parts else self._empty()
-        if self.robot.near_redundant:
+        if self.flags_rows():
             Q, valid, ls, res, cont = done
+            goals = targets.check_targets(self.robot, Ts)[0]
             n, k = np.nonzero(valid)
             cont = cont.copy()
             for i in range(0, len(n), NATIVE_CHUNK):  # in chunks: a Jacobian of every row at once is big
                 rows = n[i:i + NATIVE_CHUNK], k[i:i + NATIVE_CHUNK]
-                cont[rows] |= selfmotion.near_redundant(self.robot, Q[rows])
+                cont[rows] |= self.row_flags(Q[rows], ~ls[rows], goals[rows[0]])
             done = (Q, valid, ls, res, cont)
         return done
 
