@@ -88,6 +88,10 @@ def _run(kind: str, batch: int) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+def _out_flag(args) -> str:
+    return "" if args.out.resolve() == OUT.resolve() else f" --out {args.out.resolve().relative_to(ROOT)}"
+
+
 def _commit() -> str:
     cmd = ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]
     return subprocess.run(cmd, capture_output=True, text=True).stdout.strip() or "?"
@@ -140,7 +144,7 @@ def main(argv=None) -> int:
             f"{args.search2_batches} --pendulum-batches {args.pendulum_batches} --pendulum-python-batches "
             f"{args.pendulum_python_batches}"
             f"{' --robots ' + args.robots if args.robots != ','.join(ROBOTS.values()) else ''}"
-            f"{' --out ' + str(args.out.resolve().relative_to(ROOT)) if args.out.resolve() != OUT.resolve() else ''}`; "
+            f"{_out_flag(args)}`; "
             f"{when}, commit {_commit()}, "
             f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh"
             " "
@@ -149,9 +153,9 @@ def main(argv=None) -> int:
             "poses (hours): its peak is flat in the batch size because the runtime works in chunks of "
             "runtime.dispatch.MEMORY_BUDGET (256 MB) of search instances (`Solver.search_chunk` targets at a "
             "time through the whole search, grid to finish: tests/test_runtime.py checks the chunk sizes); "
-            "what grows with the batch is the output, 100,000 x 16 slots x 6 joints x 8 bytes = 77 MB for the "
-            "joint values.  pybullet's pendulum5 is a real 2-D search robot: its C search runs 100,000 poses, "
-            "its Python search (NATIVE off) 5,000 and 20,000 for the slope.")
+            "what grows with the batch is the output, 100,000 x 16 slots x 6 joints x 8 bytes = 77 MB for "
+            "the joint values.  pybullet's pendulum5 is a real 2-D search robot (its C search by default; "
+            "NATIVE off: the Python search); the peak at two batch sizes gives the slope per pose.")
     body = table(rows)
     args.out.write_text("\n".join(["# solve_batch memory of search plans", "", head, "", *body]) + "\n")
     if CONFIGS.exists() and args.out.resolve() == OUT.resolve():

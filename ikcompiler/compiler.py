@@ -239,8 +239,8 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     names = [chain.joints[j].name for j in solved]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
     if free:
-        notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} at the "
-                     "chain's ends move the target, not the six twists")
+        notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} "
+                     "at the chain's ends move the target, not the six twists")
     notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
     all_names = tuple(j.name for j in chain.joints)
     return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
@@ -256,8 +256,8 @@ def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:
     rank = conditioned_rank(chain, target, free)
     if rank >= unknown:
         return ()
-    return (f"near-redundant: {rank} of the Jacobian's {unknown} singular values exceed {NEAR_REDUNDANT:g} at "
-            "every sampled configuration (a redundant chain within the snap tolerance); rows whose own "
+    return (f"near-redundant: {rank} of the Jacobian's {unknown} singular values exceed {NEAR_REDUNDANT:g} "
+            "at every sampled configuration (a redundant chain within the snap tolerance); rows whose own "
             "smallest singular value is below it are flagged continuum: representatives of the snapped "
             "chain's self-motion, not a complete set of the true robot's isolated solutions",)
 
