@@ -259,6 +259,10 @@ class Solver:
         targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
+        return self._batch(Ts, free, limits, chunk, flags=True)
+
+    def _batch(self, Ts, free, limits, chunk=CHUNK, flags=True):
+        """solve_batch_info; ``flags`` False skips the continuum flags set here (solve_batch drops them)."""
         done = None
         if self.free_ends_native() is not None:
             goals, Td, reasons = targets.check_targets(self.robot, Ts)
@@ -274,7 +278,7 @@ class Solver:
                                              reasons[i:i + chunk])
                      for i in range(0, len(goals), chunk)]
             done = _joined(parts) if parts else self._empty()
-        if self.flags_rows():
+        if flags and self.flags_rows():
             Q, valid, ls, res, cont = done
             goals = targets.check_targets(self.robot, Ts)[0]
             n, k = np.nonzero(valid)
@@ -334,7 +338,7 @@ class Solver:
 
     def solve_batch(self, Ts, *free, limits=True):
         """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
-        Q, valid, ls, _, _ = self.solve_batch_info(Ts, *free, limits=limits)
+        Q, valid, ls, _, _ = self._batch(Ts, free, limits, flags=False)
         return Q, valid & ~ls
 
     # -- the public API of one target -------------------------------------------------------------
