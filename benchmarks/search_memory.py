@@ -2,6 +2,7 @@
 in 2 GB).
 
     nice python benchmarks/search_memory.py [--batches 1000,100000] [--search2-batches 100,400]
+        [--pendulum-batches 1000,100000] [--pendulum-python-batches 5000,20000]
 
 Each measurement runs in a fresh process: peak RSS (``resource.getrusage`` ``ru_maxrss``) after
 compiling, and after ``solve_batch`` of the batch (random joint vectors inside the limits, fixed seed,
@@ -35,7 +36,10 @@ GOAL_MB = 2048.0
 ROBOTS = {
     "modular RRRRT (seed 0)": "modular",
     "general 6R (random_6r_chain(4)), general6 off": "random6r",
+    "pybullet pendulum5 (C search)": "pendulum",
+    "pybullet pendulum5, NATIVE off (Python search)": "pendulum-python",
 }
+PENDULUM = "pybullet_data/pendulum5.urdf:link4"  # a real 2-D search robot (redundant: rows flagged)
 MARK_BEGIN = "<!-- search_memory.py: begin -->"
 MARK_END = "<!-- search_memory.py: end -->"
 
@@ -45,6 +49,11 @@ def _chain(kind: str):
 
     if kind == "modular":
         return configs.modular_chain("RRRRT", seed=0, geometry="modular"), {}
+    if kind.startswith("pendulum"):
+        from ikcompiler import robotdb
+
+        entry = next(e for e in robotdb.discover().chains if e.ident.endswith(PENDULUM))
+        return entry.load(), {"NATIVE": kind == "pendulum"}
     compiler.USE_GENERAL6 = False
     return configs.random_6r_chain(4), {}
 
@@ -54,8 +63,10 @@ def measure(kind: str, batch: int) -> dict:
     from ikcompiler import configs
     from ikcompiler.verify import sample_configurations
 
-    chain, _ = _chain(kind)
+    chain, switches = _chain(kind)
     module = configs.compile_chain(chain).module
+    for name, value in switches.items():
+        setattr(module, name, value)
     Q = sample_configurations(chain, min(batch, 2000), seed=3, special=0.0)
     T = chain.fk_batch(Q)
     Ts = np.concatenate([T] * (-(-batch // len(T))))[:batch]
@@ -75,6 +86,10 @@ def _run(kind: str, batch: int) -> dict:
     if res.returncode != 0:
         return {"batch": batch, "error": (res.stderr.strip().splitlines() or ["failed"])[-1]}
     return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def _out_flag(args) -> str:
+    return "" if args.out.resolve() == OUT.resolve() else f" --out {args.out.resolve().relative_to(ROOT)}"
 
 
 def _commit() -> str:
@@ -98,6 +113,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--batches", default="1000,100000", help="batch sizes for the 1-D search robot")
     ap.add_argument("--search2-batches", default="100,400", help="batch sizes for the 2-D search robot")
+    ap.add_argument("--pendulum-batches", default="1000,100000",
+                    help="batch sizes for the pendulum's C 2-D search")
+    ap.add_argument("--pendulum-python-batches", default="5000,20000",
+                    help="batch sizes for the pendulum's Python 2-D search (NATIVE off)")
+    ap.add_argument("--robots", default=",".join(ROBOTS.values()),
+                    help=f"which robots, comma-separated (default all: {','.join(ROBOTS.values())})")
+    ap.add_argument("--out", type=Path, default=OUT, help="results file (the default also updates "
+                    "the marked section of benchmarks/results/configurations.md)")
     ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one:
@@ -105,8 +128,12 @@ def main(argv=None) -> int:
         print(json.dumps(measure(args.one[0], int(args.one[1]))))
         return 0
     rows = []
+    chosen = args.robots.split(",")
     for name, kind in ROBOTS.items():
-        sizes = args.batches if kind == "modular" else args.search2_batches
+        if kind not in chosen:
+            continue
+        sizes = {"modular": args.batches, "random6r": args.search2_batches, "pendulum": args.pendulum_batches,
+                 "pendulum-python": args.pendulum_python_batches}[kind]
         for n in (int(x) for x in sizes.split(",")):
             r = _run(kind, n)
             print(name, r, file=sys.stderr, flush=True)
@@ -114,23 +141,30 @@ def main(argv=None) -> int:
     worst = max((r["rss_peak_mb"] for _, r in rows if "rss_peak_mb" in r), default=float("nan"))
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     head = (f"Command: `nice python benchmarks/search_memory.py --batches {args.batches} --search2-batches "
-            f"{args.search2_batches}`; {when}, commit {_commit()}, "
+            f"{args.search2_batches} --pendulum-batches {args.pendulum_batches} --pendulum-python-batches "
+            f"{args.pendulum_python_batches}"
+            f"{' --robots ' + args.robots if args.robots != ','.join(ROBOTS.values()) else ''}"
+            f"{_out_flag(args)}`; "
+            f"{when}, commit {_commit()}, "
             f"Python {platform.python_version()}, 2-core machine shared with other jobs.  Peak RSS of a fresh"
             " "
             f"process (compile, then solve_batch); goal {GOAL_MB:.0f} MB for 100,000 poses; worst peak "
             f"measured {worst:.0f} MB.  The 2-D search (a few hundred ms a pose here) is not run on 100,000 "
             "poses (hours): its peak is flat in the batch size because the runtime works in chunks of "
-            "runtime.dispatch.MEMORY_BUDGET (256 MB) of search instances; what grows with the batch is the "
-            "output, 100,000 x 16 slots x 6 joints x 8 bytes = 77 MB for the joint values.")
+            "runtime.dispatch.MEMORY_BUDGET (256 MB) of search instances (`Solver.search_chunk` targets at a "
+            "time through the whole search, grid to finish: tests/test_runtime.py checks the chunk sizes); "
+            "what grows with the batch is the output, 100,000 x 16 slots x 6 joints x 8 bytes = 77 MB for "
+            "the joint values.  pybullet's pendulum5 is a real 2-D search robot (its C search by default; "
+            "NATIVE off: the Python search); the peak at two batch sizes gives the slope per pose.")
     body = table(rows)
-    OUT.write_text("\n".join(["# solve_batch memory of search plans", "", head, "", *body]) + "\n")
-    if CONFIGS.exists():
+    args.out.write_text("\n".join(["# solve_batch memory of search plans", "", head, "", *body]) + "\n")
+    if CONFIGS.exists() and args.out.resolve() == OUT.resolve():
         text = CONFIGS.read_text()
         if MARK_BEGIN in text:
             text = text[:text.index(MARK_BEGIN)].rstrip() + "\n"
         section = ["", MARK_BEGIN, "## solve_batch memory of search plans", "", head, "", *body, MARK_END]
         CONFIGS.write_text(text.rstrip() + "\n" + "\n".join(section) + "\n")
-    print(f"wrote {OUT}", file=sys.stderr)
+    print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
-from ikcompiler.geometry.facts import configurations, record_step_facts
+from ikcompiler.geometry.facts import conditioned_rank, configurations, record_step_facts
 from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
 from ikcompiler.model.fold import fold_slides
@@ -63,7 +63,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             f"position + direction target: a virtual joint {VIRTUAL_ROLL} about the tool z axis makes it "
             "a pose target; its value is dropped from every solution"
         )
-        return dataclasses.replace(plan, target=target, virtual=True, notes=plan.notes + (note,))
+        return dataclasses.replace(plan, target=target, virtual=True,
+                                   notes=plan.notes + (note,) + near_redundant_notes(chain, target, free))
     free = tuple(free)
     for f in free:
         if f not in chain.independent_names:
@@ -99,6 +100,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             f"{unknown} joints for a {dof_needed}-DOF {target} target: solved from a sufficient subset of "
             "the equations; every solution is checked against the whole target"
         )
+    if VIRTUAL_ROLL not in chain.independent_names:  # the position+direction call judges the real chain
+        notes += near_redundant_notes(chain, target, free)
     true_chain = chain
     # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
     chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
@@ -211,10 +214,15 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     from ikcompiler.codegen.csource import general6_native_arrangements
     from subproblems import general6
 
-    if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
+    if not USE_GENERAL6 or target != "pose" or chain.couplings or len(chain.joint_types) - len(free) != 6:
+        return None
+    solved = free_end_split(chain, free)
+    if solved is None:
+        notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
+                     "solved twists depend on its value (free joints at the chain's ends keep them fixed)")
         return None
     try:
-        solver = general6.General6(chain.twists, chain.home, chain.scale)
+        solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
@@ -227,8 +235,11 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     )
-    names = [j.name for j in chain.joints]
+    names = [chain.joints[j].name for j in solved]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
+    if free:
+        notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} "
+                     "at the chain's ends move the target, not the six twists")
     all_names = tuple(j.name for j in chain.joints)
 
     def general_plan(extra=()) -> Plan:
@@ -237,7 +248,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                     tuple(free), False, 0, geometry, told, 0.0, all_names=all_names)
 
-    found = search_1d()
+    found = search_1d() if not free else None  # the route's measurement runs free of free joints
     if found is None:
         return general_plan()
     # both measured as their modules run (the C chain where it builds, docs/general6.md "When it is used")
@@ -248,6 +259,33 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     if verdict.keep_search:
         return dataclasses.replace(searched, notes=(*notes, verdict.note))
     return general_plan((verdict.note,))
+
+
+def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:
+    """The plan note of a near-redundant chain (geometry.facts.conditioned_rank at the snap tolerance
+    below its solved joints; docs/design.md section 5, "Near-redundant chains"), or ()."""
+    from subproblems.tolerances import NEAR_REDUNDANT
+
+    unknown = chain.dof - len(free)
+    rank = conditioned_rank(chain, target, free)
+    if rank >= unknown:
+        return ()
+    return (f"near-redundant: {rank} of the Jacobian's {unknown} singular values exceed {NEAR_REDUNDANT:g} "
+            "at every sampled configuration (a redundant chain within the snap tolerance); rows whose own "
+            "smallest singular value is below it are flagged continuum: representatives of the snapped "
+            "chain's self-motion, not a complete set of the true robot's isolated solutions",)
+
+
+def free_end_split(chain: Chain, free) -> list[int] | None:
+    """The joints the general 6R elimination solves when ``free`` joints are given: every other joint,
+    provided the free ones sit before or after all of them (then ``P X(q) S M = T`` is a 6R problem of
+    fixed twists with the target ``P^-1 T M^-1 S^-1 M``: runtime.reference.general6_rows); None when a
+    free joint lies between solved ones (the solved twists after it would turn with its value)."""
+    fixed = {chain.index(f) for f in free}
+    solved = [j for j in range(len(chain.joints)) if j not in fixed]
+    if solved and solved[-1] - solved[0] + 1 != len(solved):
+        return None
+    return solved
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):

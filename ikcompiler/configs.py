@@ -147,19 +147,22 @@ def free_candidates(chain: Chain) -> list[tuple[str, ...]]:
 def compile_chain(chain: Chain, **options) -> Compiled:
     """Compile ``chain`` for the target its joint count allows: a full pose (up to 6 independent joints;
     fewer are solved from a sufficient subset of the equations and checked against the whole pose),
-    with free joints beyond 6 (the first choice of :func:`free_candidates` that compiles closed form,
-    else the first)."""
-    from ikcompiler.compiler import compile_robot
+    with free joints beyond 6: the first choice of :func:`free_candidates` that compiles closed form,
+    else the first that takes the complete general 6R elimination (free joints at the chain's ends),
+    else the first."""
+    from ikcompiler.compiler import GENERAL6, compile_robot
 
     t0 = time.perf_counter()
-    first = None
+    first = general = None
     for free in free_candidates(chain):
         module = compile_robot(chain, target="pose", free=free, **options)
         if first is None:
             first = (module, free)
         if module.METHOD == "closed-form":
             return Compiled(module, "pose", free, time.perf_counter() - t0)
-    module, free = first
+        if module.METHOD == GENERAL6 and general is None:
+            general = (module, free)
+    module, free = general or first
     return Compiled(module, "pose", free, time.perf_counter() - t0)
 
 

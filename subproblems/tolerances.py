@@ -273,6 +273,12 @@ VERIFY_SAME_ANGLE = 1e-6
 VERIFY_SAME_LENGTH = 1e-6
 #: verify: a sampled vector whose normalised Jacobian has a singular value below this is singular.
 VERIFY_SINGULAR = 1e-7
+#: A chain whose size-free Jacobian (tool origin velocity over the size, angular velocity) has fewer
+#: singular values above this than it has unknowns, at every sampled configuration, is *near-redundant*:
+#: within the snap tolerance of a redundant chain (docs/design.md section 5, "Near-redundant chains").
+#: Its rows whose own smallest singular value is below it are flagged representatives of the snapped
+#: chain's self-motion.  The snap tolerance itself: the same closeness, judged on the Jacobian.
+NEAR_REDUNDANT = SNAP
 #: verify: an exact row whose relative error exceeds this is wrong (the structural tolerance).
 VERIFY_WRONG = EXACT
 #: The S2-RR step's two axes are parallel when ``|w1 x w2|`` is at most this in every sampled

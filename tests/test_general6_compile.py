@@ -252,3 +252,52 @@ def test_adjacent_prismatic_joints_are_refused_by_name(kinds, joints):
     chain = modular_chain(kinds, 0, "general")
     with pytest.raises(g6.General6Error, match=f"joints {joints} are adjacent prismatic joints"):
         g6.General6(chain.twists, chain.home, chain.scale)
+
+
+def _random_7r(seed: int) -> Chain:
+    rng = np.random.default_rng(seed)
+    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)),
+                         -math.pi, math.pi) for i in range(7))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    return Chain(f"random-7r-{seed}", joints, home)
+
+
+@pytest.mark.parametrize("free", ["j1", "j7"])
+def test_a_free_joint_at_either_end_leaves_a_general_6r_problem(free):
+    # P X(q) S M = T: a free first (P) or last (S) joint moves the target, not the six solved twists
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=(free,))
+    assert module.METHOD == "general-6r" and module.FREE_JOINTS == (free,)
+    Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(25, 7))
+    T = chain.fk_batch(Q)
+    k = chain.independent_names.index(free)
+    S, V = module.solve_batch(T, Q[:, k])
+    for n in range(len(Q)):
+        rows = S[n][V[n]]
+        assert np.all(rows[:, k] == Q[n, k])  # the free value as given
+        d = np.abs(np.angle(np.exp(1j * (rows - Q[n])))).max(axis=1)
+        assert d.min() < 1e-6, n
+        G = chain.fk_batch(rows)
+        assert np.linalg.norm(G[:, :3, 3] - T[n, :3, 3], axis=1).max() <= 1e-12 * chain.scale
+        assert np.linalg.norm(G[:, :3, :3] - T[n, :3, :3], axis=(1, 2)).max() <= 1e-12
+        assert len(module.solve(T[n], Q[n, k])) == V[n].sum()
+    report = verify(chain, module, samples=30, seed=5)
+    assert report.ok and report.recovered + report.self_motion == report.poses, report.text()
+    # the C elimination of the six solved joints on moved targets (runtime/freeends.py) and the Python
+    # reference give the same rows
+    assert module.NATIVE and module._SOLVER.free_ends_native() is not None
+    module.NATIVE = False
+    S2, V2 = module.solve_batch(T, Q[:, k])
+    np.testing.assert_array_equal(V.sum(axis=1), V2.sum(axis=1))
+    for n in range(len(Q)):
+        a, b = S[n][V[n]], S2[n][V2[n]]
+        gap = np.abs(np.angle(np.exp(1j * (a[:, None, :] - b[None, :, :])))).max(axis=2)
+        assert gap.min(axis=1).max() < 1e-9, n
+
+
+def test_a_free_joint_between_solved_ones_keeps_the_search_with_a_note():
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=("j4",))
+    assert module.METHOD != "general-6r"
+    assert "a free joint between solved joints" in module.PLAN

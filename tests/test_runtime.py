@@ -124,6 +124,15 @@ def test_search_memory_budget_chunks_without_changing_rows(monkeypatch):
     width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(solver.robot)
     big = module.solve_batch_info(Ts)
     solver.memory_budget = 2 * width  # two targets a pass
+    seen = []  # targets each stage of the search is given at once: the whole search runs in chunks
+    search, complete = fastchain.search_candidates, reference.complete
+    monkeypatch.setattr(fastchain, "search_candidates",
+                        lambda r, goals, *a: seen.append(("search", len(goals))) or search(r, goals, *a))
+    monkeypatch.setattr(reference, "complete",
+                        lambda r, TH, owner, ls, cont, goals, *a: seen.append(("finish", len(goals)))
+                        or complete(r, TH, owner, ls, cont, goals, *a))
     small = module.solve_batch_info(Ts)
     for a, b in zip(big, small):
         np.testing.assert_array_equal(a, b)
+    assert {stage for stage, _ in seen} == {"search", "finish"}
+    assert max(n for _, n in seen) == 2 and sum(n for stage, n in seen if stage == "search") == len(Ts)

@@ -68,3 +68,25 @@ def record_step_facts(steps, twists, kinds, scale: float) -> list:
         axes = step_axes(step, twists, kinds, scale, th)
         out.append(step if axes is None else dataclasses.replace(step, axes=axes))
     return out
+
+
+def conditioned_rank(chain, target: str, free=(), tol: float = tol.NEAR_REDUNDANT) -> int:
+    """The largest number of singular values above ``tol`` of the size-free Jacobian of the chain's
+    solved joints (its independent joints but ``free``; rows the ``target`` constrains) over the
+    sampled :func:`configurations`.  Below the number of solved joints the chain is *near-redundant*
+    (``tol`` the snap tolerance; docs/design.md section 5): 0 where it is redundant exactly.
+
+    >>> from ikcompiler import configs
+    >>> conditioned_rank(configs.modular_chain("RRR", seed=2), "position")
+    3
+    """
+    from subproblems import select
+
+    A, b = chain.coupling_matrix()
+    kinds = "".join(chain.joints[i].kind for i in chain.independent)
+    Q = configurations(kinds, chain.scale)
+    J = select.jacobian(Q, twists=chain.twists, A=A, b=b, home=chain.home, scale=chain.scale,
+                        target="pose" if target == "position+direction" else target)
+    keep = [k for k, name in enumerate(chain.independent_names) if name not in set(free)]
+    s = np.linalg.svd(J[:, :, keep], compute_uv=False)
+    return int((s > tol).sum(axis=1).max()) if len(keep) else 0

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ikcompiler.runtime import fastchain, reference, selection, targets
+from ikcompiler.runtime import fastchain, reference, selection, selfmotion, targets
 from ikcompiler.runtime.robot import Robot
 from subproblems import fast as _fk
 
@@ -36,6 +36,7 @@ class Solver:
         self.memory_budget = memory_budget
         self._native = []  # [NativeChain] or [None] once bound
         self._general6 = []  # the true robot's general 6R solver, for doubtful snapped targets
+        self._free_ends = []  # [NativeFreeEnds or None] once bound
 
     # -- the paths -------------------------------------------------------------------------------
 
@@ -62,7 +63,20 @@ class Solver:
         (subproblems/general6.h, switched by NATIVE); the Python general6 stays the reference for the
         targets the C hands back."""
         r = self.robot
-        return r.method == "general-6r" and r.general6 is not None
+        # free joints move the target (reference.general6_rows), which the C elimination does not do
+        return r.method == "general-6r" and r.general6 is not None and not r.free_joints
+
+    def free_ends_native(self):
+        """A general-6r module with free end joints: the C elimination of its six solved joints on the
+        moved targets (runtime.freeends), or None (another method, NATIVE off, no C build)."""
+        r = self.robot
+        if r.method != "general-6r" or not r.free_joints or r.general6 is None or not self._ns.get("NATIVE"):
+            return None
+        if not self._free_ends:
+            from ikcompiler.runtime.freeends import NativeFreeEnds
+
+            self._free_ends.append(NativeFreeEnds.bind(r))
+        return self._free_ends[0]
 
     def general6(self):
         if not self._general6:
@@ -74,12 +88,17 @@ class Solver:
         (TH, owner, continuum)."""
         return reference.correct(self.robot, TH, owner, goals, self.general6, family)
 
+    def search_chunk(self) -> int:
+        """Targets a search (or the reference runtime) works on at a time: its grid instances, at
+        ``fastchain.BYTES_PER_INSTANCE`` each, within ``memory_budget``."""
+        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
+        return max(1, self.memory_budget // width)
+
     def reference_chunk(self, goals, Td, init, limits, alternative=None, leaves=None):
         """The reference runtime on targets (chunked so that a search stays within the budget);
         ``alternative`` marks the targets that also take the plan's alternative chain; ``leaves``: a
         snapped plan's fast-chain leaves of the targets, extra candidates (reference.candidates)."""
-        width = fastchain.BYTES_PER_INSTANCE * fastchain.search_width(self.robot)
-        step = max(1, self.memory_budget // width)
+        step = self.search_chunk()
         if len(goals) <= step:
             return self._reference(goals, Td, init, limits, alternative, leaves)
         return _joined([self._reference(goals[i:i + step], Td[i:i + step], init[i:i + step], limits,
@@ -126,8 +145,14 @@ class Solver:
         if not self.fast_path():
             return self.reference_chunk(goals, Td, init, limits)
         if r.search:
-            return reference.complete(r, *fastchain.search_candidates(r, goals, init, self.memory_budget),
-                                      goals, limits)
+            # the whole search (grid, seeds, Newton, finish) on chunks of search_chunk() targets: its
+            # grid instances stay within the memory budget and its seeds with them
+            step = self.search_chunk()
+            return _joined([reference.complete(r, *fastchain.search_candidates(r, goals[i:i + step],
+                                                                               init[i:i + step],
+                                                                               self.memory_budget),
+                                               goals[i:i + step], limits)
+                            for i in range(0, len(goals), step)])
         Q, err, flag = fastchain.leaves(r, goals, init)
         if not r.polish:
             return self.settle_leaves(goals, Td, init, limits, Q, err, flag)
@@ -170,7 +195,38 @@ class Solver:
     def rows(self, T, free, limits, exact_only=False):
         """(q, residual, ls, continuum) of one target, exact rows first; with ``exact_only`` just the
         exact rows' q (``solve``'s answer)."""
+        found = self._rows(T, free, limits, exact_only)
+        if exact_only or not self.flags_rows():
+            return found
+        q, res, ls, cont = found
+        goals = targets.check_targets(self.robot, np.asarray(T, dtype=float)[None])[0]
+        return q, res, ls, cont | self.row_flags(q, ~ls, np.repeat(goals, len(q), axis=0))
+
+    def flags_rows(self) -> bool:
+        """Whether returned rows get continuum flags here: a near-redundant robot's rows, and a search
+        plan's rows on a self-motion (the grid's seeds are isolated points, as the general 6R's rows)."""
+        return self.robot.near_redundant or bool(self.robot.search)
+
+    def row_flags(self, Q, exact, goals) -> np.ndarray:
+        """(M,) continuum flags of returned rows Q (M, JOINT_NAMES) with their goals (M, 4, 4):
+        selfmotion.near_redundant on a near-redundant robot; on a search plan selfmotion.flags of the
+        exact rows (Jacobian rank-deficient and the family goes on through the row)."""
         r = self.robot
+        out = np.zeros(len(Q), dtype=bool)
+        if r.near_redundant:
+            out |= selfmotion.near_redundant(r, Q)
+        if r.search:
+            idx = np.nonzero(exact & ~out)[0]
+            full = np.concatenate([Q[idx], np.zeros((len(idx), len(r.vary) - Q.shape[1]))], axis=1)
+            out[idx] = selfmotion.flags(r, full @ r.A.T + r.B, goals[idx])
+        return out
+
+    def _rows(self, T, free, limits, exact_only=False):
+        r = self.robot
+        if self.free_ends_native() is not None:
+            goals, Td, init = self._one_target(T, free)
+            parts = self._free_ends_batch(goals, Td, init, np.array([""], dtype=object), limits)
+            return _unpack(parts, exact_only)
         native = self.native_chain()
         if native is not None:
             found = native.exact(T, free, limits) if exact_only else native.one(T, free, limits)
@@ -209,20 +265,37 @@ class Solver:
         targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
-        Q, *rest = self._solved_batch_info(Ts, *self._free_in(free), limits=limits, chunk=chunk)
+        Q, *rest = self._batch(Ts, self._free_in(free), limits, chunk, flags=True)
         return (self._out(Q), *rest)
 
-    def _solved_batch_info(self, Ts, *free, limits=True, chunk=CHUNK):
-        """solve_batch_info in the values the chain solves for (see :meth:`_out`)."""
-        done = self._native_batch(Ts, free, limits)
-        if done is not None:
-            return done
-        goals, Td, reasons = targets.check_targets(self.robot, Ts)
-        init = targets.initial_values(self.robot, len(goals), free)
-        parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
-                                                           init[i:i + chunk], limits), reasons[i:i + chunk])
-                 for i in range(0, len(goals), chunk)]
-        return _joined(parts) if parts else self._empty()
+    def _batch(self, Ts, free, limits, chunk=CHUNK, flags=True):
+        """solve_batch_info in the values the chain solves for (see :meth:`_out`); ``flags`` False skips
+        the continuum flags set here (solve_batch drops them)."""
+        done = None
+        if self.free_ends_native() is not None:
+            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            init = targets.initial_values(self.robot, len(goals), free)
+            done = self._free_ends_batch(goals, Td, init, reasons, limits)
+        else:
+            done = self._native_batch(Ts, free, limits)
+        if done is None:
+            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            init = targets.initial_values(self.robot, len(goals), free)
+            parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
+                                                               init[i:i + chunk], limits),
+                                             reasons[i:i + chunk])
+                     for i in range(0, len(goals), chunk)]
+            done = _joined(parts) if parts else self._empty()
+        if flags and self.flags_rows():
+            Q, valid, ls, res, cont = done
+            goals = targets.check_targets(self.robot, Ts)[0]
+            n, k = np.nonzero(valid)
+            cont = cont.copy()
+            for i in range(0, len(n), NATIVE_CHUNK):  # in chunks: a Jacobian of every row at once is big
+                rows = n[i:i + NATIVE_CHUNK], k[i:i + NATIVE_CHUNK]
+                cont[rows] |= self.row_flags(Q[rows], ~ls[rows], goals[rows[0]])
+            done = (Q, valid, ls, res, cont)
+        return done
 
     def _native_batch(self, Ts, free, limits):
         """solve_batch_info on the C chain (it checks the targets itself), or None when there is none or
@@ -251,6 +324,21 @@ class Solver:
             parts.append(part)
         return _joined(parts) if parts else self._empty()
 
+    def _free_ends_batch(self, goals, Td, init, reasons, limits):
+        """solve_batch_info of checked goals on the C elimination of the six solved joints; the targets
+        it cannot settle on the Python path (reference.general6_rows)."""
+        fe = self.free_ends_native()
+        parts = []
+        for i in range(0, len(goals), NATIVE_CHUNK):
+            sl = slice(i, i + NATIVE_CHUNK)
+            part, redo = fe.many(goals[sl], init[sl], limits)
+            idx = np.nonzero(redo & (reasons[sl] == ""))[0]
+            for j in range(0, len(idx), CHUNK):
+                sub = idx[j:j + CHUNK] + i
+                _scatter(part, sub - i, self.python_chunk(goals[sub], Td[sub], init[sub], limits))
+            parts.append(targets.without_invalid(part, reasons[sl]))
+        return _joined(parts) if parts else self._empty()
+
     def _empty(self):
         n, K = len(self.robot.joint_names), self.robot.slots
         empty = np.zeros((0, K), bool)
@@ -258,8 +346,8 @@ class Solver:
 
     def solve_batch(self, Ts, *free, limits=True):
         """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
-        Q, valid, ls, _, _ = self.solve_batch_info(Ts, *free, limits=limits)
-        return Q, valid & ~ls
+        Q, valid, ls, _, _ = self._batch(Ts, self._free_in(free), limits, flags=False)
+        return self._out(Q), valid & ~ls
 
     # -- the public API of one target -------------------------------------------------------------
 

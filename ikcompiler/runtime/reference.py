@@ -76,6 +76,19 @@ def true_general6(robot):
         return None
 
 
+def general6_rows(robot, goals, init):
+    """The general 6R elimination's exact rows of N targets: (TH (M, chain joints), owner (M,)).
+    Free joints sit at the chain's ends (the compiler takes general-6r only then): they move the
+    target of the six solved joints (runtime.freeends; docs/design.md section 5, "General 6R")."""
+    if not robot.free:
+        return robot.general6.rows(goals)
+    from ikcompiler.runtime.freeends import FreeEnds
+
+    split = FreeEnds(robot)
+    Q, owner = robot.general6.rows(split.targets(goals, init))
+    return split.rows(Q, init[owner]), owner
+
+
 def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
     """Candidate joint vectors of the reference runtime: (TH, owner, ls, continuum).
 
@@ -93,7 +106,7 @@ def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
         TH = robot.newton(TH, goals[owner], step["iters"])
         return TH, owner, *_no_flags(len(TH))
     if robot.method == "general-6r":
-        TH, owner = robot.general6.rows(goals)
+        TH, owner = general6_rows(robot, goals, init)
         # isolated points of the elimination; those on a self-motion are flagged as its representatives
         return TH, owner, np.zeros(len(TH), dtype=bool), selfmotion.flags(robot, TH, goals[owner])
     if robot.search:

@@ -55,6 +55,7 @@ class Robot:
     fast_chain: Any  # the module's _fast_chain or None
     target_error: type
     free_error: type
+    near_redundant: bool = False  # within the snap tolerance of a redundant chain (selfmotion.near_redundant)
     speed: Any = None  # None or (n,): solved value = speed * q (folded slides, docs/design.md section 2)
 
     @classmethod
@@ -73,6 +74,7 @@ class Robot:
             steps=ns["_STEPS"], alt_steps=ns["_ALT_STEPS"], general6=ns.get("_GENERAL6"),
             fast_chain=ns.get("_fast_chain"),
             target_error=ns["InvalidTargetError"], free_error=ns["InvalidFreeValueError"],
+            near_redundant=bool(ns.get("_NEAR_REDUNDANT", False)),
             speed=None if ns.get("_SPEED") is None else np.asarray(ns["_SPEED"], dtype=float),
         )
 

@@ -43,6 +43,14 @@ def flags(robot, TH, goals, exact_only: bool = False) -> np.ndarray:
     _, J = _newton.tool_jacobian(robot.twists, TH, robot.home, robot.A)
     J = J.copy()
     J[:, :3] /= robot.scale
+    moving = [k for k in range(J.shape[2]) if k not in robot.free]  # free joints hold their given values
+    if len(moving) < J.shape[2]:
+        full = np.zeros((len(TH), J.shape[2], len(moving)))
+        full[:, moving, np.arange(len(moving))] = 1.0  # the moving joints' columns back to every joint
+        J = J[:, :, moving]
+        A = robot.A @ full[0]
+    else:
+        A = robot.A
     # |det J| = prod(sigma) <= sigma_min |J|_F^5: rows whose determinant rules out a small sigma_min
     # skip the SVD (about 20 us a pose of the general 6R's 225 us otherwise)
     if J.shape[1] == J.shape[2]:
@@ -59,14 +67,33 @@ def flags(robot, TH, goals, exact_only: bool = False) -> np.ndarray:
         return out
     n = Vh[low, -1, :]  # null direction in the independent joints
     k = np.argmax(np.abs(n), axis=1)
-    prismatic = np.array([kind == "T" for kind in robot.vary_kinds])
+    prismatic = np.array([robot.vary_kinds[j] == "T" for j in moving])
     move = np.where(prismatic[k], STEP * robot.scale, STEP)
     n = n * (move / n[np.arange(len(cand)), k])[:, None]  # joint k moves by exactly STEP
-    start = TH[cand] + n @ robot.A.T
+    start = TH[cand] + n @ A.T
     for held in np.unique(k):
         rows = np.nonzero(k == held)[0]
-        hold = sorted(set(robot.free) | {int(held)})
+        hold = sorted(set(robot.free) | {moving[int(held)]})
         Q = robot.newton(start[rows], goals[cand[rows]], NEWTON_STEPS, hold=hold)
         err = robot.error(fk_batch(robot.twists, Q, robot.home), goals[cand[rows]])
         out[cand[rows]] = np.isfinite(err) & (err <= robot.tol * robot.scale)
     return out
+
+
+def near_redundant(robot, Q) -> np.ndarray:
+    """(M,) True where row Q[m] (JOINT_NAMES order) of a near-redundant robot is a representative of the
+    snapped chain's self-motion: the size-free Jacobian of its solved joints has a singular value below
+    ``tolerances.NEAR_REDUNDANT`` (docs/design.md section 5, "Near-redundant chains").  There a target
+    judged exact at the structural tolerance fixes the joints only to EXACT / sigma > 1e-6 rad, so the
+    true robot's isolated solutions cannot be told from the snapped chain's continuum."""
+    from subproblems import select
+
+    if not len(Q):
+        return np.zeros(0, dtype=bool)
+    target = "pose" if robot.target == "position+direction" else robot.target
+    J = select.jacobian(Q, twists=robot.twists, A=robot.A, b=robot.B, home=robot.home, scale=robot.scale,
+                        target=target)
+    solved = [k for k in range(J.shape[2]) if k not in robot.free]
+    s = np.linalg.svd(J[:, :, solved], compute_uv=False)
+    rows = min(J.shape[1], len(solved))
+    return (s[:, rows - 1] if rows else np.zeros(len(Q))) < _tol.NEAR_REDUNDANT

@@ -1,0 +1,106 @@
+"""General-6r modules whose free joints sit at the chain's ends (docs/design.md section 5, "General 6R").
+
+With ``P`` the motion of the free joints before the six solved ones and ``S`` of those after, the pose
+equation ``P X(q) S M = T`` is the 6R problem ``X(q) M = P^-1 T M^-1 S^-1 M`` of fixed twists: the free
+values move the target, not the robot.  :class:`FreeEnds` maps targets to that problem and its rows
+back (the free values inserted); :class:`NativeFreeEnds` runs the C elimination of the six solved
+joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from subproblems import fast as _fk
+from subproblems import plan_runtime as _rt
+
+
+class FreeEnds:
+    """The split of a general-6r robot with free joints: solved joints and the free ones around them."""
+
+    def __init__(self, robot):
+        self.robot = robot
+        free = [robot.independent[pos] for pos in robot.free]
+        self.solved = [j for j in range(len(robot.kinds)) if j not in free]
+        self.before = [j for j in free if j < self.solved[0]]
+        self.after = [j for j in free if j > self.solved[-1]]
+
+    def targets(self, goals, init) -> np.ndarray:
+        """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init."""
+        r, N = self.robot, len(goals)
+        eye = np.broadcast_to(np.eye(4), (N, 4, 4))
+        P = _rt.fk_batch(r.twists[self.before], init[:, self.before]) if self.before else eye
+        S = _rt.fk_batch(r.twists[self.after], init[:, self.after]) if self.after else eye
+        return _rt.inverse_transform(P) @ goals @ r.home_inv @ _rt.inverse_transform(S) @ r.home
+
+    def rows(self, Q, init_rows) -> np.ndarray:
+        """Rows of every chain joint: the solved joints' values Q (M, 6), the free ones from init_rows."""
+        TH = np.array(init_rows, dtype=float)
+        TH[:, self.solved] = Q
+        return TH
+
+
+class NativeFreeEnds:
+    """The C elimination of the six solved joints (``csource.general6_c_source`` on them) behind
+    :class:`FreeEnds`.  A target goes to the Python path when the C hands it back, when a free value is
+    not returned as given (outside its limits, or not its representative in (-pi, pi]), or when a row
+    the C calls exact misses the precision on the whole robot (the moved target's error is the whole
+    robot's up to the right factor ``M^-1 S M``)."""
+
+    def __init__(self, robot, native):
+        self.split = FreeEnds(robot)
+        self.robot = robot
+        self.native = native
+        pos = [robot.independent.index(j) for j in self.split.solved]  # JOINT_NAMES positions
+        self.positions = pos
+
+    @classmethod
+    def bind(cls, robot):
+        """The C build for ``robot`` (a general-6r module with free end joints), or None."""
+        from ikcompiler.codegen.csource import general6_c_source
+        from subproblems import native
+
+        split = FreeEnds(robot)
+        if robot.general6 is None or len(split.solved) != 6 or robot.couplings:
+            return None
+        pos = [robot.independent.index(j) for j in split.solved]
+        source = general6_c_source(robot.general6, kinds="".join(robot.joint_types[p] for p in pos),
+                                   lower=robot.lower[pos], upper=robot.upper[pos], target="pose",
+                                   scale=robot.scale, tol=robot.tol, slots=robot.slots,
+                                   twists=robot.twists[split.solved], home=robot.home, A=np.eye(6),
+                                   b=np.zeros(6))
+        chain = source and native.bind(source, dof=6, slots=robot.slots, nfree=0, target="pose")
+        return cls(robot, chain) if chain is not None else None
+
+    def _as_given(self, init, limits) -> np.ndarray:
+        """(N,) whether every free value comes back as given: its own representative, inside its limits."""
+        r = self.robot
+        cols = [r.independent[pos] for pos in r.free]
+        kinds = "".join(r.joint_types[pos] for pos in r.free)
+        lower, upper = r.lower[list(r.free)], r.upper[list(r.free)]
+        F = init[:, cols]
+        rep, _, outside = _fk.represent(F, kinds, lower, upper, limits)
+        return (rep == F).all(axis=1) & ~outside
+
+    def many(self, goals, init, limits: bool):
+        """(Q, valid, ls, residual, continuum) of N checked goals in JOINT_NAMES order, and (N,) True for
+        the targets the Python path must take over."""
+        from subproblems.native import PYTHON
+
+        r = self.robot
+        N = len(goals)
+        (Q6, valid, ls, res, cont), code = self.native.many(self.split.targets(goals, init),
+                                                            np.zeros((N, 0)), limits)
+        Q = np.zeros(Q6.shape[:2] + (len(r.joint_names),))
+        Q[:, :, self.positions] = Q6
+        for pos in r.free:
+            Q[:, :, pos] = init[:, r.independent[pos], None]
+        n, k = np.nonzero(valid & ~ls)
+        full = Q[n, k] @ r.A.T + r.B
+        err = r.error(_rt.fk_batch(r.twists, full, r.home), goals[n])
+        redo = (code == PYTHON) | ~self._as_given(init, limits)
+        redo[n[~(err <= r.tol * r.scale)]] = True
+        res = res.copy()
+        res[n, k] = err  # the whole robot's error (the C measured the moved target's)
+        Q[~valid] = 0.0
+        return (Q, valid, ls, res, cont), redo
