@@ -1,5 +1,5 @@
 """The true robot's general 6R solver for a chain of seven revolute joints with one free joint: the free
-joint's value folded into the chain (docs/design.md section 5, "Snapped plans").
+joint's value folded into the chain (docs/design.md section 5, "Snapping").
 
 A snapped plan asks the true robot's general 6R solver about its doubtful targets (the continuation's
 rescued ones, ``reference.correct``).  With a free joint the six solved joints form a 6R chain only once
@@ -24,8 +24,12 @@ KEEP = 8  # solvers kept, by free value (a batch at one free value, or a few, bu
 
 def eligible(robot) -> bool:
     """Seven revolute joints, one of them free, no couplings, a pose target."""
-    return (robot.kinds == "R" * 7 and len(robot.free_joints) == 1 and robot.solve_target == "pose"
-            and not robot.couplings)
+    return (
+        robot.kinds == "R" * 7
+        and len(robot.free_joints) == 1
+        and robot.solve_target == "pose"
+        and not robot.couplings
+    )
 
 
 class FoldedGeneral6:
