@@ -113,6 +113,39 @@ def test_urdf_limits_continuous_and_normalised_axis(tmp_path):
     assert any("normalised" in note for note in chain.notes)
 
 
+ROTOR = """<?xml version="1.0"?>
+<robot name="rotor">
+  <link name="base"/><link name="rotor"/>
+  <joint name="rotor_joint" type="revolute"><parent link="base"/><child link="rotor"/>
+    <origin xyz="0.13 0.22 0.023"/><axis xyz="0 0 1"/>
+    <limit lower="-1e+16" upper="1e+16" effort="0" velocity="0"/></joint>
+</robot>
+"""
+
+
+def test_revolute_limits_beyond_any_angle_read_as_continuous(tmp_path):
+    """A revolute joint limited to +-1e16 rad (a quadrotor's rotor, example-robot-data's iris.urdf, as
+    Gazebo writes "unbounded") loads as a continuous joint with a note.  Read literally, the compiler's
+    trials and verify sampled values near 1e15 rad, where a double holds no angle: the plan fell to a
+    1-D search and 30 of 230 poses were recovered (real_robots.py --left-out, session 8)."""
+    from ikcompiler import configs
+    from ikcompiler.inputs import urdf as urdf_input
+    from ikcompiler.verify import verify
+
+    path = tmp_path / "rotor.urdf"
+    path.write_text(ROTOR)
+    chain = load_robot(path)
+    assert (chain.joints[0].lower, chain.joints[0].upper) == (-math.pi, math.pi)
+    assert any("unbounded marker" in n and "rotor_joint" in n for n in chain.notes), chain.notes
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "closed-form", module.PLAN
+    rep = verify(chain, module, samples=200, seed=3, special=0.25)
+    assert rep.ok and rep.recovered == rep.poses, rep.text()
+    # a wide but real range is kept as written
+    path.write_text(ROTOR.replace("1e+16", repr(urdf_input.UNBOUNDED_ANGLE)))
+    assert load_robot(path).joints[0].upper == urdf_input.UNBOUNDED_ANGLE
+
+
 TREE = """<?xml version="1.0"?>
 <robot name="hand">
   <link name="palm"/><link name="a1"/><link name="a2"/><link name="b1"/><link name="b2"/><link name="c"/>

@@ -11,7 +11,9 @@ Mapping (docs/design.md section 2):
 - a revolute/continuous joint gives ``w = R a`` (its axis ``a``, normalised, in the base frame) through
   the joint frame's origin; a prismatic joint gives ``v = R a``; fixed joints only move the frames;
 - limits come from ``<limit>``; a continuous joint gets (-pi, pi] (the IK wraps angles there); a
-  revolute joint without ``<limit>`` gets (-pi, pi] and a prismatic one no bounds, each with a note;
+  revolute joint without ``<limit>``, or with a limit beyond +-2^12 rad (an "unbounded" marker such as
+  Gazebo's 1e16: :data:`UNBOUNDED_ANGLE`), gets (-pi, pi] and a prismatic one without ``<limit>`` no
+  bounds, each with a note;
 - ``<mimic joint= multiplier= offset=>`` becomes a :class:`Coupling`.  A master outside the chain (a
   gripper's finger pad chain whose joints all follow ``finger_joint``) becomes the chain's independent
   joint under its own name: see :func:`_external_masters`;
@@ -256,6 +258,14 @@ def load_urdf(path: Path | str, *, base: str | None = None, tip: str | None = No
     )
 
 
+# A revolute limit beyond this many radians is an "unbounded" marker, not a stop: past 2^12 rad a
+# double resolves an angle to no better than the contract's 1e-12 (docs/design.md section 10), so no
+# joint value there is a valid command.  Files write such markers for spinning joints (Gazebo's
+# +-1e16 on a rotor, +-999999 on a mobile base's virtual yaw); read literally they made every sampled
+# value meaningless (a value of 1e15 rad holds no angle) and a 2 pi alias list astronomically long.
+UNBOUNDED_ANGLE = 2.0**12
+
+
 def _limits(j, kind: str, notes: list[str]) -> tuple[float, float]:
     if j.type == "continuous":
         return -math.pi, math.pi
@@ -266,7 +276,14 @@ def _limits(j, kind: str, notes: list[str]) -> tuple[float, float]:
             return -math.pi, math.pi
         notes.append(f"joint {j.name!r} has no <limit lower upper>: unbounded")
         return -math.inf, math.inf
-    return float(lim.lower), float(lim.upper)
+    lower, upper = float(lim.lower), float(lim.upper)
+    if kind == "R" and max(abs(lower), abs(upper)) > UNBOUNDED_ANGLE:
+        notes.append(
+            f"joint {j.name!r} has limits [{lower:g}, {upper:g}] rad, beyond +-{UNBOUNDED_ANGLE:g} rad: an "
+            "unbounded marker, read as a continuous joint, (-pi, pi]"
+        )
+        return -math.pi, math.pi
+    return lower, upper
 
 
 def _default_tip(base: str, children: dict[str, list], src: str) -> str:

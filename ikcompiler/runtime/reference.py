@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ikcompiler.runtime import selfmotion
+from ikcompiler.runtime import freefold, selfmotion
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
@@ -36,6 +36,9 @@ def correct(robot, TH, owner, goals, general6, family):
     representatives of a self-motion of the snapped robot.  Returns (TH, owner, continuum): the
     representatives of a self-motion among the rows are those the true robot leaves unresolved."""
     report = {}
+    held = np.asarray(TH)  # the free joints' values of each target, before the rows change
+    order = np.argsort(owner, kind="stable")
+    held_owner = np.asarray(owner)[order]
     TH, owner = _ct.correct(TH, goals[owner], owner, twists0=robot.plan_twists, twists1=robot.twists,
                             home=robot.home, A=robot.A, b=robot.B, independent=robot.vary,
                             kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free,
@@ -49,7 +52,11 @@ def correct(robot, TH, owner, goals, general6, family):
     doubt = report["uncertain"]
     solver = general6() if len(doubt) else None
     if solver is not None:
-        TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
+        if robot.free_joints:  # folded at each target's free value, held in its rows (freefold.py)
+            first = np.searchsorted(held_owner, doubt)
+            TH2, own2 = solver.rows(goals[doubt], held[order[first], solver.column])
+        else:
+            TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
         own2 = np.asarray(doubt)[own2]
         TH, owner = np.concatenate([TH, TH2]), np.concatenate([owner, own2])
         # the elimination's rows on a self-motion are its representatives, as on a general-6r plan
@@ -59,16 +66,19 @@ def correct(robot, TH, owner, goals, general6, family):
 
 def true_general6(robot):
     """The true robot's general 6R solver (subproblems.general6), or None when the robot is no plain
-    6R pose chain or the package has no general solver.
+    6R pose chain (nor a 7R one with one free joint: freefold.FoldedGeneral6) or the package has no
+    general solver.
 
     Built here without the plan's arrangements: a snapped plan (the only caller) has none, and
     ``General6`` chooses them on fixed sample poses of the robot itself, so the order is the one the
     compiler would record (same twists, home and seed)."""
-    if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
-        return None
     try:
         from subproblems import general6
     except ImportError:
+        return None
+    if freefold.eligible(robot):  # a 7-joint arm with one free joint
+        return freefold.FoldedGeneral6(robot)
+    if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
         return None
     try:
         return general6.General6(robot.twists, robot.home, robot.scale)
