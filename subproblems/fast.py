@@ -514,7 +514,7 @@ def goal_entries(T, target: str):
 # becomes pi; both change the row, so its error is measured again before it counts as exact.
 LIMIT_EPS = tolerances.LIMIT_SLACK
 PI_SNAP = tolerances.PI_SNAP
-INSIDE, ADJUSTED, OUTSIDE = 0, 1, 2
+INSIDE, ADJUSTED, OUTSIDE, CLAMPED = 0, 1, 2, 3  # CLAMPED: only where the caller asks which were
 
 
 def wrap_pi(x: float) -> float:
@@ -528,21 +528,26 @@ def wrap_pi(x: float) -> float:
     return math.pi if x <= -math.pi + PI_SNAP else x
 
 
-def represent_one(q, revolute, bounds, limits: bool):
+def represent_one(q, revolute, bounds, limits: bool, clamped=None):
     """Joint values q as returned, and their status: INSIDE, ADJUSTED (a value snapped or clamped:
-    measure the row again) or OUTSIDE (no representative inside the limits).
+    measure the row again) or OUTSIDE (no representative inside the limits).  Given a list
+    ``clamped``, it marks the joints clamped onto a limit and a clamp is CLAMPED (the C finish's
+    ``ikc_represent``, subproblems/settle.py: the other joints then need Newton steps).
 
     >>> represent_one([2.625], [True], [(-3.665, 1.152)], True)[0][0] == 2.625 - 2 * math.pi
     True
     """
     out, status = [], INSIDE
     two_pi = 2 * math.pi
-    for x, rev, (lo, hi) in zip(q, revolute, bounds):
+    clamp_status = ADJUSTED if clamped is None else CLAMPED
+    for j, (x, rev, (lo, hi)) in enumerate(zip(q, revolute, bounds)):
+        if clamped is not None:
+            clamped[j] = False
         if rev:
             if not -math.pi < x <= math.pi:
                 x = wrap(x)
             if x <= -math.pi + PI_SNAP:
-                if x != -math.pi:  # pi itself is an alias; a value beside it is moved
+                if x != -math.pi and status == INSIDE:  # pi itself is an alias; a value beside it is moved
                     status = ADJUSTED
                 x = math.pi
         if limits and not lo <= x <= hi:
@@ -554,7 +559,9 @@ def represent_one(q, revolute, bounds, limits: bool):
             else:
                 for c in choices:
                     if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS:
-                        x, status = min(max(c, lo), hi), ADJUSTED
+                        x, status = min(max(c, lo), hi), clamp_status
+                        if clamped is not None:
+                            clamped[j] = True
                         break
                 else:
                     return out, OUTSIDE
