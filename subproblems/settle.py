@@ -81,10 +81,11 @@ class FinishRobot:
             chain=ns["_fast_chain"], chain_alt=chain_alt)
 
     def leaves(self, chain, goal, free, rep):
-        """(Q rows, errors, flags) of a chain at representative rep."""
+        """(Q rows, errors, flags) of a chain at representative rep; an S2-RR lock (LOCK) is a candidate
+        self-motion (FAMILY too), kept only where its representatives are a line (ikc_lock_leaves)."""
         found = chain(_fk.SCALAR, goal, free, rep)
         return ([list(leaf[:-2]) for leaf in found], [leaf[-2] for leaf in found],
-                [leaf[-1] for leaf in found])
+                [leaf[-1] | _fk.FAMILY if leaf[-1] & _fk.LOCK else leaf[-1] for leaf in found])
 
 
 # -- forward kinematics, error and Newton steps (ikc_fk_jacobian, ikc_pose_error, ikc_newton_steps) --
@@ -286,6 +287,8 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
         err[k] = E[k]
         if flag & _fk.DEFER or err[k] != err[k]:
             return PYTHON
+        if flag & _fk.LOCK:  # settled by settle_chain's line test (its leaves read FAMILY there)
+            return FAMILY_MISS if flag & _fk.FAMILY else PYTHON
         w = list(Q[k])
         if exact_tol < err[k] < near:
             err[k] = newton_steps(rb, g, w, 15)
@@ -622,9 +625,9 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     for r, _rep in _reps():
         Q2, E2, F2 = kept[r]
         for j in range(n):
-            if not F[j] & _fk.FAMILY or F[j] & _fk.EMPTY or not F2[j] & _fk.FAMILY \
+            if not F[j] & _fk.FAMILY or F[j] & (_fk.EMPTY | _fk.LOCK) or not F2[j] & _fk.FAMILY \
                     or F2[j] & (_fk.DEFER | _fk.EMPTY):
-                continue
+                continue  # a lock is settled by its line alone (below)
             if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
                 continue
             row, e = Q2[j], E2[j]
@@ -638,7 +641,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     for j in range(n):
         if not F[j] & _fk.FAMILY or F[j] & (_fk.DEFER | _fk.EMPTY):
             continue
-        if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
+        lock = F[j] & _fk.LOCK  # exact or not, a lock needs its line
+        if not lock and E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
             continue
         if j in verdict:
             found, t = verdict[j]
@@ -656,8 +660,10 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                     if exact_tol < e3 < near:
                         e3 = newton_steps(rb, g, row3, 15)
             if e3 <= exact_tol and row_inside(rb, row3):
-                Q[j], E[j], F[j] = list(row3), e3, F3[j]
+                Q[j], E[j], F[j] = list(row3), e3, F3[j] & ~_fk.LOCK
                 continue
+        if lock:
+            return PYTHON  # no line: the rest of the chain may fix the angle
         e = newton_steps(rb, g, B[j], 60)
         if e <= exact_tol and (not limits or row_inside(rb, B[j])):
             Q[j], E[j] = list(B[j]), e
@@ -673,7 +679,7 @@ def settle_alternative(rb: FinishRobot, g, free, limits: bool):
     """A gimbal lock of the chain where the plan has an alternative chain: the alternative chain's
     finish where it meets no lock and no degenerate geometry, else FAMILY_MISS (ikc_settle_alternative)."""
     Qa, Ea, Fa = rb.leaves(rb.chain_alt, g, free, 0.0)
-    if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER):
+    if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER | _fk.LOCK):
         return FAMILY_MISS
     k = finish(rb, g, Qa, Ea, Fa, limits)
     return PYTHON if k == FAMILY_MISS else k

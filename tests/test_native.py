@@ -479,7 +479,7 @@ def test_alternative_chain_settles_in_c():
     q = np.array([0.7009, 0.0, -1.6688, math.pi])
     T = module.fk(q)
     leaves = module._fast_chain(fast.SCALAR, fast.goal_entries(T, module.TARGET), ())
-    assert any(leaf[-1] & fast.DEFER for leaf in leaves)
+    assert any(leaf[-1] & fast.HAND_BACK for leaf in leaves)
     found = module._native_chain().one(T, (), True)
     assert found is not None
     rows, _ = _exact_rows(module, T, found)

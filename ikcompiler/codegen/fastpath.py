@@ -262,6 +262,13 @@ class _Emitter:
                 G_u[i] = sofar
         return G_u, sofar
 
+    def lock_rep(self):
+        """The representative of an S2-RR angle its geometry leaves free (``fast.LOCK``): ``rep``
+        itself, outside the count of :meth:`rep`, so the other steps' families keep their factors.
+        Where a lock and the first family meet in one target they move together, and the finish's
+        line test (a null space of one direction) hands the target back (docs/design.md section 6)."""
+        return ir.Name("rep")
+
     def rep(self, length: float = math.pi):
         """The representative for the next step that can meet a self-motion: ``rep`` times 1, -2, 3,
         -4, ... for the first, second, ... such step, so that one sweep of ``rep`` moves two families
