@@ -73,7 +73,8 @@ def _null_slopes(module, q):
         d = np.zeros(len(q))
         d[j] = h
         T1 = np.asarray(module.fk(q + d))
-        J.append(np.concatenate([(T1[:3, 3] - T0[:3, 3]) / module.SCALE, (T1[:3, :3] - T0[:3, :3]).ravel()]) / h)
+        dT = T1 - T0
+        J.append(np.concatenate([dT[:3, 3] / module.SCALE, dT[:3, :3].ravel()]) / h)
     n = np.linalg.svd(np.array(J).T)[2][-1]
     s = n / n[np.argmax(np.abs(n))]
     return np.round(s) if np.abs(s - np.round(s)).max() <= 1e-4 else None
