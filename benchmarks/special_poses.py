@@ -111,7 +111,7 @@ def time_robot(name: str) -> dict:
 
 
 REASONS = {0: "settled", 1: "defer", 2: "nan", 3: "clamped", 4: "reps", 5: "family", 6: "rotation",
-           7: "search", 8: "snapped"}  # subproblems/fast_finish.h IKC_WHY_*
+           7: "search", 8: "snapped", 9: "lock"}  # subproblems/fast_finish.h IKC_WHY_*
 
 
 def causes_robot(name: str) -> dict:

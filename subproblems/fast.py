@@ -21,6 +21,10 @@ forward kinematics.  The bits:
   (:mod:`subproblems.plan_runtime`), which classifies it properly.
 * :data:`EMPTY` (8): no candidate in this slot (only from :func:`reference`, whose solvers fill a
   variable number of slots); the caller drops the leaf.
+* :data:`LOCK` (16): a joint of an S2-RR step left free by its geometry (the point on the joint's
+  axis): the slot holds the representative ``rep`` for it.  The rest of the chain may fix that joint
+  or leave a self-motion; the Python paths defer such a leaf as :data:`DEFER`, the C finish settles it
+  only where its representatives lie on a straight-line self-motion (docs/design.md section 6).
 
 Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 
@@ -50,7 +54,8 @@ from subproblems import tolerances
 from subproblems.angles import wrap, wrap_array
 from subproblems.screw import cross_tuple as cross  # on 3-tuples, as the helpers below
 
-TANGENT_ROOT, FAMILY, DEFER, EMPTY = 1, 2, 4, 8
+TANGENT_ROOT, FAMILY, DEFER, EMPTY, LOCK = 1, 2, 4, 8, 16
+HAND_BACK = DEFER | LOCK  # leaves the Python paths send to the reference runtime
 NEAR = tolerances.FAST_DEGENERATE  # tolerances in subproblems/tolerances.py (docs/design.md section 10)
 # Relative (squared) distance from a double root below which two roots are one tangent root: there
 # roundoff splits the root by up to sqrt(eps), so the reference path polishes and merges them.
@@ -279,12 +284,13 @@ def point_r(m, w, r, p, q):
     return angle_about(m, w, sub(p, r), sub(q, r), dot(p, p) + dot(q, q) + dot(r, r)),
 
 
-def point_rr_meet(m, w1, r1, w2, r2, p, q):
+def point_rr_meet(m, w1, r1, w2, r2, p, q, rep=0.0):
     """S2-RR, axes meeting: ``exp(w1 t1) exp(w2 t2)(p) = q`` (Paden-Kahan 2).
 
     With ``c`` the meeting point, the middle point ``z = exp(w2 t2)(p) - c = exp(-w1 t1)(q) - c`` keeps
     its components along ``w2`` (from ``p``) and along ``w1`` (from ``q``); its length fixes the
-    component across both.  A tangent instance (the two ``z`` nearly equal) defers.
+    component across both.  Parallel axes defer; an angle left free (a point on its axis) is ``rep``,
+    flagged :data:`LOCK`.
     """
     k = dot(w1, w2)
     n = cross(w1, w2)
@@ -310,18 +316,26 @@ def point_rr_meet(m, w1, r1, w2, r2, p, q):
             alpha * w1[1] + beta * w2[1] + g * n[1],
             alpha * w1[2] + beta * w2[2] + g * n[2],
         )
-        t2, f2 = angle_about(m, w2, u, z, size2)
-        t1, f1 = angle_about(m, w1, z, v, size2)
+        t2, f2 = _locked(m, *angle_about(m, w2, u, z, size2), rep)
+        t1, f1 = _locked(m, *angle_about(m, w1, z, v, size2), rep)
         out.append((t1, t2, degenerate | f1 | f2))
     return tuple(out)
 
 
-def point_rr_parallel(m, w1, r1, w2, r2, p, q):
+def _locked(m, th, flag, rep):
+    """An S2-RR angle that its geometry leaves free (:func:`angle_about` defers: the point on the axis)
+    as the representative ``rep``, flagged :data:`LOCK`."""
+    lock = flag != 0
+    return m.where(lock, rep + 0.0 * th, th), m.where(lock, LOCK, flag)
+
+
+def point_rr_parallel(m, w1, r1, w2, r2, p, q, rep=0.0):
     """S2-RR, parallel axes (``w2 = +-w1``): ``exp(w1 t1) exp(w2 t2)(p) = q`` (a planar 2R arm).
 
     The middle point ``z = exp(w2 t2)(p)`` keeps its height along the axes (from ``p``), its distance
     to axis 2 (from ``p``) and its distance to axis 1 (from ``q``): two circles in the plane across
-    the axes meet in at most two points.  Coincident axes and tangent circles defer.
+    the axes meet in at most two points.  Coincident axes defer; an angle left free (a point on its
+    axis) is ``rep``, flagged :data:`LOCK`.
     """
     w0, w1_, w2_ = w1
     # e: from axis 2 to axis 1, across the axes; u2: p from axis 2, across; v1: q from axis 1, across
@@ -347,8 +361,8 @@ def point_rr_parallel(m, w1, r1, w2, r2, p, q):
     out = []
     for s in (y, -y):
         z = (x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2)  # middle point from axis 2, across
-        t2, g2 = angle_about(m, w2, (a0, a1, a2), z, size2)
-        t1, g1 = angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2), size2)
+        t2, g2 = _locked(m, *angle_about(m, w2, (a0, a1, a2), z, size2), rep)
+        t1, g1 = _locked(m, *angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2), size2), rep)
         out.append((t1, t2, degenerate | g1 | g2))
     return tuple(out)
 
@@ -537,7 +551,7 @@ def goal_entries(T, target: str):
 # becomes pi; both change the row, so its error is measured again before it counts as exact.
 LIMIT_EPS = tolerances.LIMIT_SLACK
 PI_SNAP = tolerances.PI_SNAP
-INSIDE, ADJUSTED, OUTSIDE = 0, 1, 2
+INSIDE, ADJUSTED, OUTSIDE, CLAMPED = 0, 1, 2, 3  # CLAMPED: only where the caller asks which were
 
 
 def wrap_pi(x: float) -> float:
@@ -551,21 +565,26 @@ def wrap_pi(x: float) -> float:
     return math.pi if x <= -math.pi + PI_SNAP else x
 
 
-def represent_one(q, revolute, bounds, limits: bool):
+def represent_one(q, revolute, bounds, limits: bool, clamped=None):
     """Joint values q as returned, and their status: INSIDE, ADJUSTED (a value snapped or clamped:
-    measure the row again) or OUTSIDE (no representative inside the limits).
+    measure the row again) or OUTSIDE (no representative inside the limits).  Given a list
+    ``clamped``, it marks the joints clamped onto a limit and a clamp is CLAMPED (the C finish's
+    ``ikc_represent``, subproblems/settle.py: the other joints then need Newton steps).
 
     >>> represent_one([2.625], [True], [(-3.665, 1.152)], True)[0][0] == 2.625 - 2 * math.pi
     True
     """
     out, status = [], INSIDE
     two_pi = 2 * math.pi
-    for x, rev, (lo, hi) in zip(q, revolute, bounds):
+    clamp_status = ADJUSTED if clamped is None else CLAMPED
+    for j, (x, rev, (lo, hi)) in enumerate(zip(q, revolute, bounds)):
+        if clamped is not None:
+            clamped[j] = False
         if rev:
             if not -math.pi < x <= math.pi:
                 x = wrap(x)
             if x <= -math.pi + PI_SNAP:
-                if x != -math.pi:  # pi itself is an alias; a value beside it is moved
+                if x != -math.pi and status == INSIDE:  # pi itself is an alias; a value beside it is moved
                     status = ADJUSTED
                 x = math.pi
         if limits and not lo <= x <= hi:
@@ -577,7 +596,9 @@ def represent_one(q, revolute, bounds, limits: bool):
             else:
                 for c in choices:
                     if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS:
-                        x, status = min(max(c, lo), hi), ADJUSTED
+                        x, status = min(max(c, lo), hi), clamp_status
+                        if clamped is not None:
+                            clamped[j] = True
                         break
                 else:
                     return out, OUTSIDE
@@ -652,7 +673,7 @@ def finish_one(leaves, *, kinds, lower, upper, limits, scale, tol, slots):
         err, flag = leaf[-2], leaf[-1]
         if flag & EMPTY:
             continue
-        if flag & DEFER or exact_tol < err < near or err != err:
+        if flag & HAND_BACK or exact_tol < err < near or err != err:
             return None
         if flag & TANGENT_ROOT:
             same = SPLIT_ROOT  # two copies of one double root: merge them below
@@ -746,7 +767,7 @@ def finish_many(Q, err, flag, *, kinds, lower, upper, limits, scale, tol, slots)
     empty = (flag & EMPTY) != 0
     near &= ~empty
     family = ((flag & FAMILY) != 0) & ~empty
-    bad = (((flag & DEFER) != 0) | np.isnan(err) | np.isnan(Q).any(axis=2) | (family & near)) & ~empty
+    bad = (((flag & HAND_BACK) != 0) | np.isnan(err) | np.isnan(Q).any(axis=2) | (family & near)) & ~empty
     reference = bad.any(axis=1)
     route = np.where(reference, ROUTE_REFERENCE, ROUTE_DONE)
     route[(route == ROUTE_DONE) & near.any(axis=1)] = ROUTE_NEWTON

@@ -53,6 +53,7 @@ typedef int (*ikc_chain_fn)(const double *goal, const double *fr, double rep, do
 #define IKC_WHY_ROTATION 6    /* a target rotation orthonormal only to 1e-6 */
 #define IKC_WHY_SEARCH 7      /* the search fallback could not run or finish */
 #define IKC_WHY_SNAPPED 8     /* a snapped plan's correction is not certain */
+#define IKC_WHY_LOCK 9        /* an S2-RR lock (IKC_LOCK) whose representatives are not shown a line */
 #define IKC_WHY_ALT 16
 static __thread int ikc_why;
 
@@ -367,6 +368,8 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         if (flag & IKC_EMPTY) continue;
         err[k] = E[k];
         if (flag & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
+        /* an S2-RR lock: ikc_settle_chain's line test settles it (its leaves read FAMILY there) */
+        if (flag & IKC_LOCK) return (flag & IKC_FAMILY) ? IKC_FAMILY_MISS : ikc_hand_back(IKC_WHY_DEFER);
         if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
@@ -738,13 +741,40 @@ static int ikc_any_flag(int n, const int *F, int bit) {
 static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const double *fr, int limits,
                                   double *q, double *res, int *ls, int *cont);
 
+/* The leaves of a chain at rep for the settling below: an S2-RR lock (IKC_LOCK, the angle = rep) is a
+ * candidate self-motion (IKC_FAMILY too), kept only where its representatives are a line. */
+static int ikc_lock_leaves(ikc_chain_fn chain, const double *g, const double *fr, double rep, double *Q,
+                           double *E, int *F) {
+    const int n = chain(g, fr, rep, Q, E, F);
+    for (int k = 0; k < n; k++)
+        if (F[k] & IKC_LOCK) F[k] |= IKC_FAMILY;
+    return n;
+}
+
+/* The straight-line verdict of family leaf q0 (its leaf at rep = 0) with slopes s: -2 where it is not
+ * shown a line alone (a tangent line: its exact point near q0 is found first); else ikc_line_in_limits's
+ * 0 (the line misses the limits), 1 (*t: the middle of its widest in-limit stretch) or -1. */
+static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *q0, const double *s,
+                            int tangent, double *t) {
+    const int dof = rb->dof;
+    double p0[dof];
+    for (int c = 0; c < dof; c++) p0[c] = q0[c];
+    if (tangent && !(ikc_newton(rb, g, p0, 15) <= rb->tol * rb->scale &&
+                     ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
+        return -2;
+    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s))) return -2;
+    const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+    *t = 0.0;
+    return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
+}
+
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont,
                             int try_alt) {
     const int dof = rb->dof;
     double Q[L * dof], E[L];
     int F[L];
-    int n = chain(g, fr, 0.0, Q, E, F);
+    int n = ikc_lock_leaves(chain, g, fr, 0.0, Q, E, F);
     if (try_alt && ikc_any_flag(n, F, IKC_FAMILY)) {  /* a gimbal lock: the alternative chain first */
         int ka = ikc_settle_alternative(rb, g, fr, limits, q, res, ls, cont);
         if (ka != IKC_FAMILY_MISS) return ka;
@@ -752,8 +782,10 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     int k = ikc_finish(rb, g, n, Q, E, F, limits, q, res, ls, cont);
     if (k != IKC_FAMILY_MISS) return k;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
-    double Q2[L * dof], E2[L], B[L * dof], EB[L], Q0[L * dof], E0[L], S[L * dof];
-    int F2[L], line[L];
+    /* the leaves of every other representative (RQ, RE, RF: rep r at r - 1), kept for the polish */
+    double RQ[(IKC_REPS - 1) * L * dof], RE[(IKC_REPS - 1) * L], B[L * dof], EB[L], Q0[L * dof], E0[L],
+        S[L * dof];
+    int RF[(IKC_REPS - 1) * L], line[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
         for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
         E0[j] = E[j];
@@ -763,12 +795,15 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) &&
                   (E[j] <= exact_tol || ((F[j] & IKC_TANGENT_ROOT) && E[j] < near));
     }
-    for (int r = 1; r < IKC_REPS; r++) {
+    for (int r = 1; r < IKC_REPS; r++) {  /* the representatives' leaves, and which lie on a line */
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
-        int n2 = chain(g, fr, rep, Q2, E2, F2);
+        double *Q2 = RQ + (r - 1) * L * dof;
+        int *F2 = RF + (r - 1) * L;
+        int n2 = ikc_lock_leaves(chain, g, fr, rep, Q2, RE + (r - 1) * L, F2);
         if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
+        const double *E2 = RE + (r - 1) * L;
         for (int j = 0; j < n; j++) {
             if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
                 const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
@@ -786,8 +821,30 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
                 }
                 line[j] = fits;
             }
-            if (!(F[j] & IKC_FAMILY) || !(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)))
-                continue;
+        }
+    }
+    /* A tangent line shown to miss the limits has no solution: decided before its representatives are
+     * polished (docs/design.md section 6: each polish is 8 Newton steps, moot there). */
+    int verdict[L];  /* ikc_line_verdict of a tangent line (its t in VT), or -3 where not yet asked */
+    double VT[L];
+    for (int j = 0; j < n; j++) {
+        verdict[j] = -3;
+        VT[j] = 0.0;
+        if (line[j] && !(E0[j] <= exact_tol)) {
+            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, VT + j);
+            if (verdict[j] == 0) F[j] |= IKC_EMPTY;
+        }
+    }
+    for (int r = 1; r < IKC_REPS; r++) {  /* each family leaf: the first representative exact inside */
+        int step = (r + 1) / 2;
+        double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
+        if (rep <= -IKC_PI_F) continue;
+        double *Q2 = RQ + (r - 1) * L * dof, *E2 = RE + (r - 1) * L;
+        const int *F2 = RF + (r - 1) * L;
+        for (int j = 0; j < n; j++) {
+            if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_EMPTY | IKC_LOCK)) || !(F2[j] & IKC_FAMILY) ||
+                (F2[j] & (IKC_DEFER | IKC_EMPTY)))
+                continue;  /* a lock is settled by its line alone (below) */
             if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;  /* settled */
             double *row = Q2 + j * dof, e = E2[j];
             if (exact_tol < e && e < near) e = ikc_newton(rb, g, row, 8);  /* a tangent root: polish */
@@ -802,40 +859,34 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
             }
         }
     }
+    double Q3[L * dof], E3[L];
+    int F3[L];
     for (int j = 0; j < n; j++) {
         if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
-        if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
-        /* a tangent line: its exact point near the leaf of rep = 0 (the line is known to the margin) */
-        const int tangent = line[j] && !(E0[j] <= exact_tol);
-        double p0[dof];
-        for (int c = 0; c < dof; c++) p0[c] = Q0[j * dof + c];
-        if (tangent && !(ikc_newton(rb, g, p0, 15) <= exact_tol &&
-                         ikc_row_distance(rb, p0, Q0 + j * dof) <= IKC_TANGENT_MARGIN))
-            line[j] = 0;
-        if (line[j] && (tangent ? ikc_tangent_line_alone(rb, g, p0, S + j * dof)
-                                : ikc_line_alone(rb, Q0 + j * dof, S + j * dof))) {
-            double t = 0.0;
-            const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
-            const int found = ikc_line_in_limits(rb, Q0 + j * dof, S + j * dof, slack,
-                                                 tangent ? slack * rb->scale : slack, &t);
+        const int lock = F[j] & IKC_LOCK;  /* exact or not, a lock needs its line */
+        if (!lock && E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
+        double t = VT[j];
+        const int found = verdict[j] != -3 ? verdict[j]
+                          : line[j] ? ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, &t) : -2;
+        if (found != -2) {
             if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
                 F[j] |= IKC_EMPTY;
                 continue;
             }
             double e3 = INFINITY;
-            if (found == 1 && chain(g, fr, t, Q2, E2, F2) == n && (F2[j] & IKC_FAMILY) &&
-                !(F2[j] & (IKC_DEFER | IKC_EMPTY))) {
-                e3 = E2[j];
-                if (exact_tol < e3 && e3 < near) e3 = ikc_newton(rb, g, Q2 + j * dof, 15);
+            if (found == 1 && ikc_lock_leaves(chain, g, fr, t, Q3, E3, F3) == n && (F3[j] & IKC_FAMILY) &&
+                !(F3[j] & (IKC_DEFER | IKC_EMPTY))) {
+                e3 = E3[j];
+                if (exact_tol < e3 && e3 < near) e3 = ikc_newton(rb, g, Q3 + j * dof, 15);
             }
-            if (e3 <= exact_tol && ikc_row_inside(rb, Q2 + j * dof)) {
-                E2[j] = e3;
-                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q2[j * dof + c];
-                E[j] = E2[j];
-                F[j] = F2[j];
+            if (e3 <= exact_tol && ikc_row_inside(rb, Q3 + j * dof)) {
+                for (int c = 0; c < dof; c++) Q[j * dof + c] = Q3[j * dof + c];
+                E[j] = e3;
+                F[j] = F3[j] & ~IKC_LOCK;  /* a representative of the line */
                 continue;
             }
         }
+        if (lock) return ikc_hand_back(IKC_WHY_LOCK);  /* no line: the rest of the chain may fix it */
         double e = ikc_newton(rb, g, B + j * dof, 60);
         if (e <= exact_tol && (!limits || ikc_row_inside(rb, B + j * dof))) {
             for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
@@ -861,7 +912,7 @@ static int ikc_settle_alternative(const ikc_robot *rb, const double *g, const do
     int na = rb->chain_alt(g, fr, 0.0, Qa, Ea, Fa);
     int filled = 0;
     for (int k = 0; k < na; k++) filled |= !(Fa[k] & IKC_EMPTY);
-    if (!filled || ikc_any_flag(na, Fa, IKC_FAMILY | IKC_DEFER)) return IKC_FAMILY_MISS;
+    if (!filled || ikc_any_flag(na, Fa, IKC_FAMILY | IKC_DEFER | IKC_LOCK)) return IKC_FAMILY_MISS;
     int k = ikc_finish(rb, g, na, Qa, Ea, Fa, limits, q, res, ls, cont);
     return k < 0 ? IKC_PYTHON : k;
 }
@@ -1067,7 +1118,7 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
         good[k] = near[k] = 0;
-        if (F[k] & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
+        if (F[k] & (IKC_DEFER | IKC_LOCK)) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
         /* a self-motion of the snapped robot (also a gimbal lock where the plan has an alternative
          * chain: reference.with_alternative): whether the corrected row stays a representative (the

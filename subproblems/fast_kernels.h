@@ -27,6 +27,7 @@
 #define IKC_FAMILY 2
 #define IKC_DEFER 4
 #define IKC_EMPTY 8
+#define IKC_LOCK 16  /* an S2-RR angle left free by its geometry: rep (fast.LOCK) */
 
 #define IKC_NEAR 1e-7
 #define IKC_TANGENT 1e-10
@@ -275,9 +276,17 @@ static inline void ikc_point_r(const double *w, const double *r, const double *p
     q[0] = ikc_angle_about(w, u, v, ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r, r), &f[0]);
 }
 
+/* An S2-RR angle its geometry leaves free (ikc_angle_about deferred: the point on the axis): the
+ * representative rep, flagged IKC_LOCK (fast._locked). */
+static inline double ikc_locked(double th, int *flag, double rep) {
+    const int lock = *flag != 0;
+    *flag = lock ? IKC_LOCK : *flag;
+    return lock ? rep + 0.0 * th : th;
+}
+
 /* S2-RR, axes meeting: exp(w1 t1) exp(w2 t2)(p) = q (Paden-Kahan 2).  2 slots x 2 (t1, t2) */
 static inline void ikc_point_rr_meet(const double *w1, const double *r1, const double *w2, const double *r2,
-                                     const double *p, const double *qq, double *q, int *f) {
+                                     const double *p, const double *qq, double rep, double *q, int *f) {
     double n[3], d21[3], m[3], c[3], u[3], v[3];
     double k = ikc_dot(w1, w2);
     ikc_cross(w1, w2, n);
@@ -306,7 +315,9 @@ static inline void ikc_point_rr_meet(const double *w1, const double *r1, const d
         z[2] = alpha * w1[2] + beta * w2[2] + g * n[2];
         int f1, f2;
         double t2 = ikc_angle_about(w2, u, z, size2, &f2);
+        t2 = ikc_locked(t2, &f2, rep);
         double t1 = ikc_angle_about(w1, z, v, size2, &f1);
+        t1 = ikc_locked(t1, &f1, rep);
         q[2 * i] = t1;
         q[2 * i + 1] = t2;
         f[i] = degenerate | f1 | f2;
@@ -315,7 +326,7 @@ static inline void ikc_point_rr_meet(const double *w1, const double *r1, const d
 
 /* S2-RR, parallel axes (w2 = +-w1): a planar 2R arm.  2 slots x 2 (t1, t2) */
 static inline void ikc_point_rr_parallel(const double *w1, const double *r1, const double *w2, const double *r2,
-                                         const double *p, const double *qq, double *q, int *f) {
+                                         const double *p, const double *qq, double rep, double *q, int *f) {
     double w0 = w1[0], w1_ = w1[1], w2_ = w1[2];
     double e0 = r1[0] - r2[0], e1 = r1[1] - r2[1], e2 = r1[2] - r2[2];
     double h = w0 * e0 + w1_ * e1 + w2_ * e2;
@@ -344,7 +355,9 @@ static inline void ikc_point_rr_parallel(const double *w1, const double *r1, con
         double ze[3] = {z[0] - e0, z[1] - e1, z[2] - e2};
         int g1, g2;
         double t2 = ikc_angle_about(w2, a, z, size2, &g2);
+        t2 = ikc_locked(t2, &g2, rep);
         double t1 = ikc_angle_about(w1, ze, b, size2, &g1);
+        t1 = ikc_locked(t1, &g1, rep);
         q[2 * i] = t1;
         q[2 * i + 1] = t2;
         f[i] = degenerate | g1 | g2;

@@ -32,16 +32,15 @@ from subproblems.angles import wrap
 PYTHON = -1  # IKC_PYTHON: the reference runtime takes the target
 FAMILY_MISS = -3  # IKC_FAMILY_MISS: a self-motion whose representatives all miss (internal)
 REPS = 16  # IKC_REPS: representatives tried, rep = k pi / 8
-NEAR_MISS = 1e-4  # IKC_NEAR_MISS
-SPLIT_ROOT = 1e-6  # IKC_SPLIT_ROOT
-LIMIT_EPS = 1e-7  # IKC_LIMIT_EPS (fast.LIMIT_EPS)
-PI_SNAP = 1e-13  # IKC_PI_SNAP (fast.PI_SNAP)
+# The fast finish's constants (IKC_NEAR_MISS, IKC_SPLIT_ROOT, IKC_LIMIT_EPS, IKC_PI_SNAP and the
+# represent statuses) are fast.py's, from subproblems/tolerances.py (docs/design.md section 10).
+NEAR_MISS, SPLIT_ROOT, LIMIT_EPS = _fk.NEAR_MISS, _fk.SPLIT_ROOT, _fk.LIMIT_EPS
+INSIDE, ADJUSTED, OUTSIDE, CLAMPED = _fk.INSIDE, _fk.ADJUSTED, _fk.OUTSIDE, _fk.CLAMPED
 CLAMPED_NEWTON = 3  # IKC_CLAMPED_NEWTON
 LINE_FIT = 1e-9  # IKC_LINE_FIT
 LINE_RANK = 1e-5  # IKC_LINE_RANK
-TWO_PI = 6.283185307179586
-PI = 3.141592653589793
-INSIDE, ADJUSTED, OUTSIDE, CLAMPED = 0, 1, 2, 3
+TWO_PI = 2.0 * math.pi
+PI = math.pi
 TARGET_CODES = {"pose": 0, "position": 1, "orientation": 2}
 
 
@@ -83,10 +82,11 @@ class FinishRobot:
             chain=ns["_fast_chain"], chain_alt=chain_alt)
 
     def leaves(self, chain, goal, free, rep):
-        """(Q rows, errors, flags) of a chain at representative rep."""
+        """(Q rows, errors, flags) of a chain at representative rep; an S2-RR lock (LOCK) is a candidate
+        self-motion (FAMILY too), kept only where its representatives are a line (ikc_lock_leaves)."""
         found = chain(_fk.SCALAR, goal, free, rep)
         return ([list(leaf[:-2]) for leaf in found], [leaf[-2] for leaf in found],
-                [leaf[-1] for leaf in found])
+                [leaf[-1] | _fk.FAMILY if leaf[-1] & _fk.LOCK else leaf[-1] for leaf in found])
 
 
 # -- forward kinematics, error and Newton steps (ikc_fk_jacobian, ikc_pose_error, ikc_newton_steps) --
@@ -265,36 +265,8 @@ def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=N
 
 def represent(rb: FinishRobot, q, limits: bool, clamped=None) -> int:
     """q (in place) as returned; INSIDE, ADJUSTED, OUTSIDE or CLAMPED (and which joints were clamped)."""
-    status = INSIDE
-    for j in range(rb.dof):
-        if clamped is not None:
-            clamped[j] = False
-        x, rev = q[j], rb.revolute[j]
-        if rev:
-            x = wrap(x)
-            if x <= -PI + PI_SNAP:
-                if x != -PI and status == INSIDE:
-                    status = ADJUSTED
-                x = PI
-        lo, hi = rb.lower[j], rb.upper[j]
-        if limits and not (lo <= x <= hi):
-            choices = (x, x - TWO_PI, x + TWO_PI) if rev else (x,)
-            found = False
-            for c in choices:
-                if lo <= c <= hi:
-                    x, found = c, True
-                    break
-            if not found:
-                for c in choices:
-                    if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS:
-                        x = lo if c < lo else (hi if c > hi else c)
-                        found, status = True, CLAMPED
-                        if clamped is not None:
-                            clamped[j] = True
-                        break
-            if not found:
-                return OUTSIDE
-        q[j] = x
+    out, status = _fk.represent_one(q, rb.revolute, list(zip(rb.lower, rb.upper)), limits, clamped)
+    q[:len(out)] = out
     return status
 
 
@@ -316,6 +288,8 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
         err[k] = E[k]
         if flag & _fk.DEFER or err[k] != err[k]:
             return PYTHON
+        if flag & _fk.LOCK:  # settled by settle_chain's line test (its leaves read FAMILY there)
+            return FAMILY_MISS if flag & _fk.FAMILY else PYTHON
         w = list(Q[k])
         if exact_tol < err[k] < near:
             err[k] = newton_steps(rb, g, w, 15)
@@ -575,6 +549,30 @@ def _plain_family(flag) -> bool:
     return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
 
 
+def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool):
+    """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
+    a line alone (a tangent line: its exact point near q0 is found first), else :func:`line_in_limits`'s
+    0, 1 or -1 (ikc_line_verdict)."""
+    p0 = list(q0)
+    if tangent and not (newton_steps(rb, g, p0, 15) <= rb.tol * rb.scale
+                        and row_distance(rb, p0, q0) <= TANGENT_MARGIN):
+        return -2, 0.0
+    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s)):
+        return -2, 0.0
+    slack = TANGENT_MARGIN if tangent else LIMIT_EPS
+    found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
+    return found, (0.0 if t is None else t)
+
+
+def _reps():
+    """(r, rep) of the other representatives, in the C's order: pi/8, -pi/8, pi/4, -pi/4, ... pi."""
+    for r in range(1, REPS):
+        step = (r + 1) // 2
+        rep = (1.0 if r % 2 else -1.0) * step * (TWO_PI / REPS)
+        if rep > -PI:
+            yield r, rep
+
+
 def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = False):
     dof = rb.dof
     Q, E, F = rb.leaves(chain, g, free, 0.0)
@@ -594,12 +592,9 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     line = [limits and _plain_family(F[j])
             and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
-    for r in range(1, REPS):
-        step = (r + 1) // 2
-        rep = (1.0 if r % 2 else -1.0) * step * (TWO_PI / REPS)
-        if rep <= -PI:
-            continue
-        Q2, E2, F2 = rb.leaves(chain, g, free, rep)
+    kept = {}  # r -> the leaves of representative r, for the polish below
+    for r, rep in _reps():
+        Q2, E2, F2 = kept[r] = rb.leaves(chain, g, free, rep)
         if len(Q2) != n:
             return PYTHON
         for j in range(n):
@@ -621,8 +616,19 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                     else:
                         fits = abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit
                 line[j] = fits
-            if not F[j] & _fk.FAMILY or not F2[j] & _fk.FAMILY or F2[j] & (_fk.DEFER | _fk.EMPTY):
-                continue
+    # a tangent line shown to miss the limits has no solution: decided before the polish (moot there)
+    verdict = {}
+    for j in range(n):
+        if line[j] and not E0[j] <= exact_tol:
+            verdict[j] = line_verdict(rb, g, Q0[j], S[j], True)
+            if verdict[j][0] == 0:
+                F[j] |= _fk.EMPTY
+    for r, _rep in _reps():
+        Q2, E2, F2 = kept[r]
+        for j in range(n):
+            if not F[j] & _fk.FAMILY or F[j] & (_fk.EMPTY | _fk.LOCK) or not F2[j] & _fk.FAMILY \
+                    or F2[j] & (_fk.DEFER | _fk.EMPTY):
+                continue  # a lock is settled by its line alone (below)
             if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
                 continue
             row, e = Q2[j], E2[j]
@@ -636,16 +642,14 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     for j in range(n):
         if not F[j] & _fk.FAMILY or F[j] & (_fk.DEFER | _fk.EMPTY):
             continue
-        if E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
+        lock = F[j] & _fk.LOCK  # exact or not, a lock needs its line
+        if not lock and E[j] <= exact_tol and (not limits or row_inside(rb, Q[j])):
             continue
-        tangent = line[j] and not E0[j] <= exact_tol
-        p0 = list(Q0[j])
-        if tangent and not (newton_steps(rb, g, p0, 15) <= exact_tol
-                            and row_distance(rb, p0, Q0[j]) <= TANGENT_MARGIN):
-            line[j] = False
-        if line[j] and (tangent_line_alone(rb, g, p0, S[j]) if tangent else line_alone(rb, Q0[j], S[j])):
-            slack = TANGENT_MARGIN if tangent else LIMIT_EPS
-            found, t = line_in_limits(rb, Q0[j], S[j], slack, slack * rb.scale if tangent else slack)
+        if j in verdict:
+            found, t = verdict[j]
+        else:
+            found, t = line_verdict(rb, g, Q0[j], S[j], False) if line[j] else (-2, 0.0)
+        if found != -2:
             if found == 0:
                 F[j] |= _fk.EMPTY
                 continue
@@ -657,8 +661,10 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                     if exact_tol < e3 < near:
                         e3 = newton_steps(rb, g, row3, 15)
             if e3 <= exact_tol and row_inside(rb, row3):
-                Q[j], E[j], F[j] = list(row3), e3, F3[j]
+                Q[j], E[j], F[j] = list(row3), e3, F3[j] & ~_fk.LOCK
                 continue
+        if lock:
+            return PYTHON  # no line: the rest of the chain may fix the angle
         e = newton_steps(rb, g, B[j], 60)
         if e <= exact_tol and (not limits or row_inside(rb, B[j])):
             Q[j], E[j] = list(B[j]), e
@@ -674,7 +680,7 @@ def settle_alternative(rb: FinishRobot, g, free, limits: bool):
     """A gimbal lock of the chain where the plan has an alternative chain: the alternative chain's
     finish where it meets no lock and no degenerate geometry, else FAMILY_MISS (ikc_settle_alternative)."""
     Qa, Ea, Fa = rb.leaves(rb.chain_alt, g, free, 0.0)
-    if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER):
+    if all(f & _fk.EMPTY for f in Fa) or _any_flag(Fa, _fk.FAMILY | _fk.DEFER | _fk.LOCK):
         return FAMILY_MISS
     k = finish(rb, g, Qa, Ea, Fa, limits)
     return PYTHON if k == FAMILY_MISS else k

@@ -479,11 +479,36 @@ def test_alternative_chain_settles_in_c():
     q = np.array([0.7009, 0.0, -1.6688, math.pi])
     T = module.fk(q)
     leaves = module._fast_chain(fast.SCALAR, fast.goal_entries(T, module.TARGET), ())
-    assert any(leaf[-1] & fast.DEFER for leaf in leaves)
+    assert any(leaf[-1] & fast.HAND_BACK for leaf in leaves)
     found = module._native_chain().one(T, (), True)
     assert found is not None
     rows, _ = _exact_rows(module, T, found)
     assert (_same(rows, q, module.JOINT_TYPES) <= 1e-9).any(), rows
+
+
+@pytest.mark.parametrize("q, rows", [((math.pi / 2, 0.0, math.pi / 2, 0.0), 1),
+                                     ((math.pi / 2, math.pi, -math.pi / 2, 0.0), 0)])
+def test_an_s2_rr_lock_on_a_line_settles_in_c(q, rows):
+    # arm4dof with the elbow at +-pi/2 and the shoulder at 0 or pi: the wrist centre on the waist axis
+    # (S2-RR waist, shoulder locks the waist: fast.LOCK) and the wrist axis along it, so waist and
+    # wrist turn against each other, a straight-line self-motion (docs/design.md section 6, "Locks in S2-RR
+    # steps").  The C settles it: a representative of the line inside the limits, or none where the
+    # whole line misses them (the shoulder at pi is outside its limits), as the reference runtime says
+    module, _, _ = _compiled("arm4dof")
+    q = np.array(q)
+    T = module.fk(q)
+    leaves = module._fast_chain(fast.SCALAR, fast.goal_entries(T, module.TARGET), ())
+    assert any(leaf[-1] & fast.LOCK for leaf in leaves)
+    found = module._native_chain().one(T, (), True)
+    assert found is not None
+    got, continuum = _exact_rows(module, T, found)
+    assert len(got) == rows and continuum.all()
+    ref = _python(module, lambda: module.solve_info(T))
+    assert len(ref.q) >= rows and (len(ref.q) == 0) == (rows == 0)
+    for row in got:  # on the sampled vector's line: waist + wrist fixed, the rest stays
+        d = np.remainder(row - q + np.pi, 2 * np.pi) - np.pi
+        assert abs(d[1]) <= 1e-9 and abs(d[2]) <= 1e-9
+        assert abs(np.remainder(d[0] + d[3] + np.pi, 2 * np.pi) - np.pi) <= 1e-9, (row, q)
 
 
 @pytest.mark.parametrize("q1, q4, q6", [(2.3228, -2.4637, 1.6936), (1.0, 2.0, -1.0), (-2.0, 0.5, 2.5)])

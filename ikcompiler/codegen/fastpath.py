@@ -194,10 +194,10 @@ class _Emitter:
         self.flags: list[str] = []
         for k, j in enumerate(free_joints):
             self.q[j] = ir.Free(k)
-        self._couple()
+        self.couple()
 
     # -- joint values and their motions ------------------------------------------------------------
-    def _couple(self, solved=()):
+    def couple(self, solved=()):
         """Values of coupled joints from their masters.  A step that solved a coupled joint as if it
         were free (a subproblem over ``finger_joint`` and two joints that mimic it) gives it the
         master's value instead, so the leaf's forward-kinematics check sees the robot's own joint
@@ -261,6 +261,13 @@ class _Emitter:
             else:
                 G_u[i] = sofar
         return G_u, sofar
+
+    def lock_rep(self):
+        """The representative of an S2-RR angle its geometry leaves free (``fast.LOCK``): ``rep``
+        itself, outside the count of :meth:`rep`, so the other steps' families keep their factors.
+        Where a lock and the first family meet in one target they move together, and the finish's
+        line test (a null space of one direction) hands the target back (docs/design.md section 6)."""
+        return ir.Name("rep")
 
     def rep(self, length: float = math.pi):
         """The representative for the next step that can meet a self-motion: ``rep`` times 1, -2, 3,
@@ -332,18 +339,14 @@ class _Emitter:
         """The names of a loop's ``count`` outputs, numbered by the next name."""
         return [f"a{self.c.count}_{i}" for i in range(count)]
 
-    def solved(self, joints, call, names=None) -> list:
+    def solved(self, joints, call) -> list:
         """Loop over the slots of ``call`` (the rest of the chain nests inside), its outputs the values
-        of ``joints``; coupled joints follow.  ``names``: the outputs' names taken before the call was
-        built (else now)."""
-        outs = self.loop(names if names is not None else self.slot_names(len(joints)), call)
+        of ``joints``; coupled joints follow."""
+        outs = self.loop(self.slot_names(len(joints)), call)
         for j, name in zip(joints, outs):
             self.q[j] = name
-        self._couple(joints)
+        self.couple(joints)
         return outs
-
-    def couple(self, solved=()):
-        self._couple(solved)
 
     def loop(self, outs, call) -> list:
         """Loop over the slots of ``call`` binding the names ``outs``: the rest of the chain nests inside."""

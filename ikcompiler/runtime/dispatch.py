@@ -162,7 +162,7 @@ class Solver:
         # position fixes).  On a 6-joint chain the snapped lock is a self-motion: the family path below
         # keeps its representatives (puma560_robot.urdf at q5 = 0: sent away, 4 of 30 poses missed).
         lock = self.lock_targets(flag) & (len(r.vary) < 6)
-        defer = (flag & _fk.DEFER).any(axis=1) | lock
+        defer = (flag & _fk.HAND_BACK).any(axis=1) | lock
         rows, leaf = np.nonzero(~defer[:, None] & _fk.usable(Q, flag))
         # a leaf on a self-motion of the snapped robot stays a representative of it where the true
         # robot leaves it unresolved (the relation missed by ~1e-9: numerically the same family)

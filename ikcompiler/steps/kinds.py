@@ -133,7 +133,7 @@ class PointStep(Step):
         elif self.code == "S2-RR" and self.axes in ("parallel", "meet"):
             (w1, r1), (w2, r2) = args
             fn = "point_rr_parallel" if self.axes == "parallel" else "point_rr_meet"
-            call = em.kernel(fn, w1, r1, w2, r2, point, Tpp)
+            call = em.kernel(fn, w1, r1, w2, r2, point, Tpp, em.lock_rep())
         elif self.code == "S2-TTT":
             b = [em.c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
             call = em.kernel("slide3", args[0][0], args[1][0], args[2][0], b)

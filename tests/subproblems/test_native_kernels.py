@@ -39,8 +39,8 @@ AGREE = 1e-12
 
 # name: (argument kinds, slots, value kinds).  Argument kinds: "u" a unit axis, "v" any 3-vector,
 # "p" a point, "R" a rotation (9 entries, row-major), "s" a scalar (the last one of plane_r, plane_t,
-# dist_r and rot_rrr is ``rep``, the representative of a self-motion; 0.0 where an instance leaves it
-# out).  Value kinds: "R" an angle, "T" a slide.
+# dist_r, point_rr_meet, point_rr_parallel and rot_rrr is ``rep``, the representative of a self-motion
+# or lock; 0.0 where an instance leaves it out).  Value kinds: "R" an angle, "T" a slide.
 KERNELS = {
     "plane_r": ("uppvss", 2, "R"),
     "plane_t": ("vpvss", 1, "T"),
@@ -50,8 +50,8 @@ KERNELS = {
     "turn_slide2": ("upvvRp", 1, "RTT"),
     "slide2_turn": ("vvuppps", 2, "TTR"),
     "point_r": ("uppp", 1, "R"),
-    "point_rr_meet": ("upuppp", 2, "RR"),
-    "point_rr_parallel": ("upuppp", 2, "RR"),
+    "point_rr_meet": ("upuppps", 2, "RR"),
+    "point_rr_parallel": ("upuppps", 2, "RR"),
     "rot_r": ("uR", 1, "R"),
     "rot_rr": ("uuR", 1, "RR"),
     "rot_rrr": ("uuuRs", 2, "RRR"),
