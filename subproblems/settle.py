@@ -37,6 +37,7 @@ SPLIT_ROOT = 1e-6  # IKC_SPLIT_ROOT
 LIMIT_EPS = 1e-7  # IKC_LIMIT_EPS (fast.LIMIT_EPS)
 PI_SNAP = 1e-13  # IKC_PI_SNAP (fast.PI_SNAP)
 CLAMPED_NEWTON = 3  # IKC_CLAMPED_NEWTON
+SETTLED = 0.5  # IKC_SETTLED: a step ending this far inside the tolerance without halving the error is the last
 LINE_FIT = 1e-9  # IKC_LINE_FIT
 LINE_RANK = 1e-5  # IKC_LINE_RANK
 TWO_PI = 6.283185307179586
@@ -199,9 +200,13 @@ def solve_linear(n: int, M):
 
 
 def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=None) -> float:
-    """Damped Gauss-Newton steps on q (in place; free and ``held`` joints kept); the new pose error."""
+    """Damped Gauss-Newton steps on q (in place; free and ``held`` joints kept); the new pose error.
+    A guarded step ending inside SETTLED of the tolerance without halving the error is the last (Newton's
+    linear regime at a singular configuration)."""
     dof = rb.dof
     done = 1e-3 * rb.tol * rb.scale
+    exact = rb.tol * rb.scale
+    slow = False
     lam = 1e-12
     G, J = fk_jacobian(rb, q)
     now = pose_error(rb, G, g)
@@ -250,12 +255,13 @@ def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=N
             nxt = pose_error(rb, G2, g)
             if nxt < now or not guarded:
                 q[:] = trial
+                slow = guarded and nxt <= SETTLED * exact and nxt > 0.5 * now
                 G, J, now = G2, J2, nxt
                 lam = lam * 0.1 if lam > 1e-11 else 1e-12
                 accepted = True
                 break
             lam *= 100.0
-        if not accepted:
+        if not accepted or slow:
             break
     return now
 
