@@ -571,14 +571,14 @@ def render(rows, meta, opts) -> str:
             "`forward_kinematics` too (puma560, q = 0.1..0.6: by 0.25-1.1 m), with the rotation given "
             "either way round; the package's hard-coded bots have no FK to check a frame against.  So "
             "it is reported, not timed.",
-            "- Where ikcompiler's time goes (perf on the C build, puma560 and ur5, 20,000 poses): libm "
-            "`atan2` 24-29%, `sincos` 23-24%, `acos` 3-5%; the chain's own arithmetic 14-22%; the "
-            "kernels (`ikc_angle_about`, `ikc_rot_rrr`) ~14%; the finish (`ikc_finish`, "
-            "`ikc_represent`, Newton's Jacobian) 8-12%.  Angles computed by `atan2` and turned back "
-            "into cosine and sine by `sincos` are the lead for the C chain (issue 11 item 6).  The kinova "
-            "arm is the exception: its chain takes 3.8 us a pose but the whole call 27 us, 85% of it "
-            "Newton polishing in the finish (`ikc_fk_jacobian`, `ikc_newton_steps`, `ikc_solve_linear`): "
-            "its candidates get Newton steps (not yet traced further).",
+            "- Where ikcompiler's time goes (callgrind, `benchmarks/results/batch_instructions.md`, "
+            "session 8): on the RTB DH puma560 25.5k instructions a pose, `ikc_angle_about` 21% and libm `atan2` 20% "
+            "(the one libm call a leaf still needs: cosines and sines are passed on from the pairs the "
+            "angles are the atan2 of), the chain's own arithmetic 20%, `ikc_rot_rrr` 13%, the finish "
+            "(`ikc_finish`, `ikc_represent`) 14%.  The kinova arm is the exception (187k a pose): its "
+            "URDF writes pi/2 as 1.57079632679, so every candidate misses the 1e-12 precision by "
+            "1-4e-12 and gets a Newton step on the true robot in the finish (`ikc_fk_jacobian` 45%, "
+            "steps and linear solves 27%; docs/design.md section 14).",
             ""]
     return "\n".join(out)
 

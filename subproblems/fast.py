@@ -141,6 +141,34 @@ def rotate(m, w, th, x):
     )
 
 
+def unit_pair(m, c, s):
+    """``(cos th, sin th)`` of ``th = atan2(s, c)`` from the pair itself: ``(c, s) / |(c, s)|``, and
+    ``(1, 0)`` (the angle 0's) for a zero pair.  Branch-free, the same arithmetic on both backends
+    and in C (``fast_kernels.h``), so the chain can take it instead of ``cos`` and ``sin`` of the angle
+    (docs/design.md section 11, "cos and sin of kernel outputs")."""
+    r = m.sqrt(c * c + s * s)
+    inv = 1.0 / m.big(r)
+    return c * inv + (r == 0.0), s * inv
+
+
+def angle_about_cs(m, w, u, v, size2=0.0):
+    """:func:`angle_about` and the cosine and sine of its angle: ``(th, flag, cos th, sin th)``."""
+    w0, w1, w2 = w
+    u0, u1, u2 = u
+    v0, v1, v2 = v
+    uw = w0 * u0 + w1 * u1 + w2 * u2
+    vw = w0 * v0 + w1 * v1 + w2 * v2
+    a0, a1, a2 = u0 - uw * w0, u1 - uw * w1, u2 - uw * w2
+    b0, b1, b2 = v0 - vw * w0, v1 - vw * w1, v2 - vw * w2
+    sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0)
+    cos_part = a0 * b0 + a1 * b1 + a2 * b2
+    th = m.atan2(sin_part, cos_part)
+    lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + size2 + 1.0)
+    flag = ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) * DEFER
+    c, s = unit_pair(m, cos_part, sin_part)
+    return th, flag, c, s
+
+
 def angle_about(m, w, u, v, size2=0.0):
     """The angle that turns ``u`` toward ``v`` about ``w`` (their components across ``w``): S1-R.
 
@@ -184,19 +212,54 @@ def trig_roots(m, a, b, c, size, rep=0.0):
     return (m.where(every, here, phi + delta), flag), (m.where(every, here, phi - delta), flag)
 
 
+def trig_roots_cs(m, a, b, c, size, rep=0.0):
+    """:func:`trig_roots` with the cosine and sine of each root: ``(th, flag, cos th, sin th)`` twice.
+    The roots are ``phi +- delta``: cos phi = a / rho, sin phi = b / rho (:func:`unit_pair`), cos delta
+    the clipped ``c / rho``, sin delta = sqrt((1 - cos)(1 + cos)) >= 0 (delta = acos in [0, pi])."""
+    rho = m.sqrt(a * a + b * b)
+    phi = m.atan2(b, a)
+    x = c / m.big(rho)
+    cd = m.clip1(x)
+    delta = m.acos(cd)
+    flat = rho <= NEAR * size
+    every = flat & (abs(c) <= NEAR * size)
+    tangent = (abs(x * x - 1.0) <= TANGENT) * (rho > NEAR * size)
+    flag = (flat ^ every) * DEFER | every * FAMILY | tangent * TANGENT_ROOT
+    here = rep + 0.0 * phi
+    cp, sp = unit_pair(m, a, b)
+    sd = m.sqrt(m.pos((1.0 - cd) * (1.0 + cd)))
+    ch, sh = m.cos(here), m.sin(here)
+    return ((m.where(every, here, phi + delta), flag, m.where(every, ch, cp * cd - sp * sd),
+             m.where(every, sh, sp * cd + cp * sd)),
+            (m.where(every, here, phi - delta), flag, m.where(every, ch, cp * cd + sp * sd),
+             m.where(every, sh, sp * cd - cp * sd)))
+
+
+def _without_trig(slots, outs: int):
+    """A ``_cs`` kernel's slots without the cosines and sines (the kernel's plain form)."""
+    return tuple(slot[: outs + 1] for slot in slots)
+
+
 # ---------------------------------------------------------------------------------------------------
 # the kernels
 
 
-def plane_r(m, w, r, p, h, d, rep=0.0):
-    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r); ``rep``: see :func:`trig_roots`."""
+def plane_r_cs(m, w, r, p, h, d, rep=0.0):
+    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r); ``rep``: see :func:`trig_roots`.
+    Each slot also holds cos and sin of its angle (``_cs`` kernels; :func:`plane_r` without them)."""
     u = sub(p, r)
     uw = dot(w, u)
     up = axpy(-uw, w, u)
     a = dot(h, up)
     b = dot(h, cross(w, u))
     c = d - dot(h, r) - uw * dot(h, w)
-    return trig_roots(m, a, b, c, m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY, rep)
+    size = m.sqrt(dot(h, h) * (dot(u, u) + dot(r, r) + dot(p, p) + 1.0)) + TINY
+    return trig_roots_cs(m, a, b, c, size, rep)
+
+
+def plane_r(m, w, r, p, h, d, rep=0.0):
+    """:func:`plane_r_cs` without the cosines and sines."""
+    return _without_trig(plane_r_cs(m, w, r, p, h, d, rep), 1)
 
 
 def plane_t(m, v, p, h, d, rep=0.0):
@@ -209,8 +272,13 @@ def plane_t(m, v, p, h, d, rep=0.0):
 
 
 def dist_r(m, w, r, p, q, d, rep=0.0):
+    """:func:`dist_r_cs` without the cosines and sines."""
+    return _without_trig(dist_r_cs(m, w, r, p, q, d, rep), 1)
+
+
+def dist_r_cs(m, w, r, p, q, d, rep=0.0):
     """S3-R: ``|exp(w th)(p) - q| = d``: the plane equation with normal ``q - r``; ``rep``: see
-    :func:`trig_roots`."""
+    :func:`trig_roots`.  Slots with cos and sin (``_cs``)."""
     u = sub(p, r)
     z = sub(q, r)
     uw = dot(w, u)
@@ -218,7 +286,7 @@ def dist_r(m, w, r, p, q, d, rep=0.0):
     a = dot(z, up)
     b = dot(z, cross(w, u))
     c = 0.5 * (dot(u, u) + dot(z, z) - d * d) - uw * dot(z, w)
-    return trig_roots(m, a, b, c, dot(u, u) + dot(z, z) + dot(r, r) + d * d + 1.0, rep)
+    return trig_roots_cs(m, a, b, c, dot(u, u) + dot(z, z) + dot(r, r) + d * d + 1.0, rep)
 
 
 def dist_t(m, v, p, q, d):
@@ -279,12 +347,22 @@ def slide2_turn(m, v1, v2, w, r, p, q, rep=0.0):
     return tuple(out)
 
 
+def point_r_cs(m, w, r, p, q):
+    """S2-R: ``exp(w th)(p) = q``; the slot with cos and sin (``_cs``)."""
+    return angle_about_cs(m, w, sub(p, r), sub(q, r), dot(p, p) + dot(q, q) + dot(r, r)),
+
+
 def point_r(m, w, r, p, q):
-    """S2-R: ``exp(w th)(p) = q``."""
-    return angle_about(m, w, sub(p, r), sub(q, r), dot(p, p) + dot(q, q) + dot(r, r)),
+    """:func:`point_r_cs` without the cosines and sines."""
+    return _without_trig(point_r_cs(m, w, r, p, q), 1)
 
 
 def point_rr_meet(m, w1, r1, w2, r2, p, q, rep=0.0):
+    """:func:`point_rr_meet_cs` without the cosines and sines."""
+    return _without_trig(point_rr_meet_cs(m, w1, r1, w2, r2, p, q, rep), 2)
+
+
+def point_rr_meet_cs(m, w1, r1, w2, r2, p, q, rep=0.0):
     """S2-RR, axes meeting: ``exp(w1 t1) exp(w2 t2)(p) = q`` (Paden-Kahan 2).
 
     With ``c`` the meeting point, the middle point ``z = exp(w2 t2)(p) - c = exp(-w1 t1)(q) - c`` keeps
@@ -316,20 +394,27 @@ def point_rr_meet(m, w1, r1, w2, r2, p, q, rep=0.0):
             alpha * w1[1] + beta * w2[1] + g * n[1],
             alpha * w1[2] + beta * w2[2] + g * n[2],
         )
-        t2, f2 = _locked(m, *angle_about(m, w2, u, z, size2), rep)
-        t1, f1 = _locked(m, *angle_about(m, w1, z, v, size2), rep)
-        out.append((t1, t2, degenerate | f1 | f2))
+        t2, f2, c2, s2 = _locked_cs(m, *angle_about_cs(m, w2, u, z, size2), rep)
+        t1, f1, c1, s1 = _locked_cs(m, *angle_about_cs(m, w1, z, v, size2), rep)
+        out.append((t1, t2, degenerate | f1 | f2, c1, s1, c2, s2))
     return tuple(out)
 
 
-def _locked(m, th, flag, rep):
-    """An S2-RR angle that its geometry leaves free (:func:`angle_about` defers: the point on the axis)
-    as the representative ``rep``, flagged :data:`LOCK`."""
+def _locked_cs(m, th, flag, c, s, rep):
+    """An S2-RR angle that its geometry leaves free (:func:`angle_about_cs` defers: the point on the
+    axis) as the representative ``rep``, flagged :data:`LOCK`, with its cosine and sine."""
     lock = flag != 0
-    return m.where(lock, rep + 0.0 * th, th), m.where(lock, LOCK, flag)
+    here = rep + 0.0 * th
+    return (m.where(lock, here, th), m.where(lock, LOCK, flag), m.where(lock, m.cos(here), c),
+            m.where(lock, m.sin(here), s))
 
 
 def point_rr_parallel(m, w1, r1, w2, r2, p, q, rep=0.0):
+    """:func:`point_rr_parallel_cs` without the cosines and sines."""
+    return _without_trig(point_rr_parallel_cs(m, w1, r1, w2, r2, p, q, rep), 2)
+
+
+def point_rr_parallel_cs(m, w1, r1, w2, r2, p, q, rep=0.0):
     """S2-RR, parallel axes (``w2 = +-w1``): ``exp(w1 t1) exp(w2 t2)(p) = q`` (a planar 2R arm).
 
     The middle point ``z = exp(w2 t2)(p)`` keeps its height along the axes (from ``p``), its distance
@@ -361,27 +446,45 @@ def point_rr_parallel(m, w1, r1, w2, r2, p, q, rep=0.0):
     out = []
     for s in (y, -y):
         z = (x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2)  # middle point from axis 2, across
-        t2, g2 = _locked(m, *angle_about(m, w2, (a0, a1, a2), z, size2), rep)
-        t1, g1 = _locked(m, *angle_about(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2), (b0, b1, b2), size2), rep)
-        out.append((t1, t2, degenerate | g1 | g2))
+        t2, g2, c2, s2 = _locked_cs(m, *angle_about_cs(m, w2, (a0, a1, a2), z, size2), rep)
+        t1, g1, c1, s1 = _locked_cs(m, *angle_about_cs(m, w1, (z[0] - e0, z[1] - e1, z[2] - e2),
+                                                        (b0, b1, b2), size2), rep)
+        out.append((t1, t2, degenerate | g1 | g2, c1, s1, c2, s2))
     return tuple(out)
 
 
-def rot_r(m, w, R):
-    """O-R: ``exp([w] th) = R``: ``cos th = (tr R - w.Rw) / 2``, ``sin th`` from the skew part along w."""
+def rot_r_cs(m, w, R):
+    """O-R: ``exp([w] th) = R``: ``cos th = (tr R - w.Rw) / 2``, ``sin th`` from the skew part along w.
+    The slot with cos and sin (``_cs``)."""
     c = 0.5 * (R[0] + R[4] + R[8] - dot(w, mat_vec(R, w)))
     s = 0.5 * (w[0] * (R[7] - R[5]) + w[1] * (R[2] - R[6]) + w[2] * (R[3] - R[1]))
-    return (m.atan2(s, c), (c != c) * DEFER),
+    return (m.atan2(s, c), (c != c) * DEFER, *unit_pair(m, c, s)),
+
+
+def rot_r(m, w, R):
+    """:func:`rot_r_cs` without the cosines and sines."""
+    return _without_trig(rot_r_cs(m, w, R), 1)
+
+
+def rot_rr_cs(m, w1, w2, R):
+    """O-RR: ``exp([w1] t1) exp([w2] t2) = R``: t1 turns w2 onto R w2, t2 turns R^T w1 onto w1.
+    The slot with cos and sin of both (``_cs``)."""
+    t1, f1, c1, s1 = angle_about_cs(m, w1, w2, mat_vec(R, w2))
+    t2, f2, c2, s2 = angle_about_cs(m, w2, mat_t_vec(R, w1), w1)
+    return (t1, t2, f1 | f2, c1, s1, c2, s2),
 
 
 def rot_rr(m, w1, w2, R):
-    """O-RR: ``exp([w1] t1) exp([w2] t2) = R``: t1 turns w2 onto R w2, t2 turns R^T w1 onto w1."""
-    t1, f1 = angle_about(m, w1, w2, mat_vec(R, w2))
-    t2, f2 = angle_about(m, w2, mat_t_vec(R, w1), w1)
-    return (t1, t2, f1 | f2),
+    """:func:`rot_rr_cs` without the cosines and sines."""
+    return _without_trig(rot_rr_cs(m, w1, w2, R), 2)
 
 
 def rot_rrr(m, w1, w2, w3, R, rep=0.0):
+    """:func:`rot_rrr_cs` without the cosines and sines."""
+    return _without_trig(rot_rrr_cs(m, w1, w2, w3, R, rep), 3)
+
+
+def rot_rrr_cs(m, w1, w2, w3, R, rep=0.0):
     """O-RRR: ``exp([w1] t1) exp([w2] t2) exp([w3] t3) = R``.
 
     ``w1 . R w3 = w1 . exp([w2] t2) w3`` gives t2 (two roots); then t1 turns ``exp([w2] t2) w3`` onto
@@ -411,8 +514,7 @@ def rot_rrr(m, w1, w2, w3, R, rep=0.0):
     off = cross(w1, zl)
     aligned = dot(off, off) <= NEAR2
     out = []
-    for t2, f2 in trig_roots(m, a, b, c, 1.0, rep):
-        c2, s2 = m.cos(t2), m.sin(t2)
+    for t2, f2, c2, s2 in trig_roots_cs(m, a, b, c, 1.0, rep):
         k3, k1 = k23 * (1.0 - c2), k12 * (1.0 - c2)
         z = (  # exp([w2] t2) w3
             c2 * w3[0] + s2 * w23[0] + k3 * w2[0],
@@ -424,15 +526,17 @@ def rot_rrr(m, w1, w2, w3, R, rep=0.0):
             c2 * w1[1] - s2 * w21[1] + k1 * w2[1],
             c2 * w1[2] - s2 * w21[2] + k1 * w2[2],
         )
-        t1, f1 = angle_about(m, w1, z, Rw3)
-        t3, f3 = angle_about(m, w3, Rtw1, y)
+        t1, f1, c1, s1 = angle_about_cs(m, w1, z, Rw3)
+        t3, f3, c3, s3 = angle_about_cs(m, w3, Rtw1, y)
         # Gimbal lock (exp([w2] t2) w3 along w1): only t1 +- t3 is fixed; the representative above.
         lock = ((f1 | f3) != 0) | (((f2 & TANGENT_ROOT) != 0) & aligned)
         t1 = m.where(lock, t1_rep, t1)
         t2 = m.where(lock, t2_lock, t2)
         t3 = m.where(lock, rep + 0.0 * t3, t3)
         f13 = lock * (FAMILY | f_rep)
-        out.append((t1, t2, t3, f2 | f13))
+        trig = [m.where(lock, m.cos(t), x) if k % 2 == 0 else m.where(lock, m.sin(t), x)  # a lock: libm's
+                for k, (t, x) in enumerate(((t1, c1), (t1, s1), (t2, c2), (t2, s2), (t3, c3), (t3, s3)))]
+        out.append((t1, t2, t3, f2 | f13, *trig))
     return tuple(out)
 
 

@@ -93,7 +93,8 @@ typedef struct {
 } ikc_robot;
 
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
- * angular) of the true robot at returned joint values q: the C port of subproblems/newton.py tool_jacobian. */
+ * angular) of the true robot at returned joint values q: the C port of subproblems/newton.py tool_jacobian.
+ * J NULL: the pose alone (the same arithmetic for G, the Jacobian's columns skipped: a measure). */
 static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, double *J) {
     const int dof = rb->dof;
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};
@@ -102,15 +103,18 @@ static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, dou
         double th = rb->b[i];
         for (int j = 0; j < dof; j++) th += rb->A[i * dof + j] * q[j];
         const double *v = rb->twists + 6 * i, *w = v + 3;
-        double Rw[3], Rv[3];
-        for (int r = 0; r < 3; r++) {
-            Rw[r] = R[3 * r] * w[0] + R[3 * r + 1] * w[1] + R[3 * r + 2] * w[2];
-            Rv[r] = R[3 * r] * v[0] + R[3 * r + 1] * v[1] + R[3 * r + 2] * v[2];
-        }
-        double pxw[3] = {p[1] * Rw[2] - p[2] * Rw[1], p[2] * Rw[0] - p[0] * Rw[2], p[0] * Rw[1] - p[1] * Rw[0]};
-        for (int r = 0; r < 3; r++) {
-            cols[i][r] = Rv[r] + pxw[r];
-            cols[i][3 + r] = Rw[r];
+        if (J) {  /* this joint's space twist at q: its Jacobian column before the tool-point shift */
+            double Rw[3], Rv[3];
+            for (int r = 0; r < 3; r++) {
+                Rw[r] = R[3 * r] * w[0] + R[3 * r + 1] * w[1] + R[3 * r + 2] * w[2];
+                Rv[r] = R[3 * r] * v[0] + R[3 * r + 1] * v[1] + R[3 * r + 2] * v[2];
+            }
+            double pxw[3] = {p[1] * Rw[2] - p[2] * Rw[1], p[2] * Rw[0] - p[0] * Rw[2],
+                             p[0] * Rw[1] - p[1] * Rw[0]};
+            for (int r = 0; r < 3; r++) {
+                cols[i][r] = Rv[r] + pxw[r];
+                cols[i][3 + r] = Rw[r];
+            }
         }
         /* this joint's motion exp(xi th) as (E, t) */
         double E[9], t[3];
@@ -143,6 +147,7 @@ static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, dou
         for (int k = 0; k < 3; k++) G[3 * r + k] = R[3 * r] * H[k] + R[3 * r + 1] * H[3 + k] + R[3 * r + 2] * H[6 + k];
         G[9 + r] = R[3 * r] * H[9] + R[3 * r + 1] * H[10] + R[3 * r + 2] * H[11] + p[r];
     }
+    if (!J) return;
     const double *tp = G + 9;
     for (int j = 0; j < dof; j++) {
         double col[6] = {0, 0, 0, 0, 0, 0};
@@ -208,11 +213,17 @@ static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
  * not lower the error is retried with 100x the damping (Levenberg-Marquardt; up to 8 tries) when
  * `guarded`: at a doubly singular configuration the plain step runs off along the null directions.
  * Unguarded, every step is taken (far seeds of the search may need to climb before they descend).  At most `iters`
- * steps, fewer once the error is far inside the exact tolerance.  Returns the new pose error. */
+ * steps, fewer once the error is far inside the exact tolerance, or once a guarded step ends inside
+ * IKC_SETTLED of it without halving the error (Newton's linear regime at a singular configuration: a
+ * stretched arm's double root, kinova's q3 = pi leaves, took all 15 steps at ~0.92 each).  Returns the new
+ * pose error. */
+#define IKC_SETTLED 0.5
 static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
                                const int *held) {
     const int dof = rb->dof;
     const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
+    const double exact = rb->tol * rb->scale;
+    int slow = 0;  /* the last step, inside IKC_SETTLED of the tolerance, did not halve the error */
     double G[12], J[6 * dof], trial[dof], G2[12], J2[6 * dof];
     double lambda = 1e-12;  /* damping: raised when a step makes things worse (Levenberg-Marquardt) */
     ikc_fk_jacobian(rb, q, G, J);
@@ -239,10 +250,10 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
             for (int r = r0; r < r1; r++) Js[r * dof + j] = hold ? 0.0 : J[r * dof + j] / col[j];
         }
         for (int a = 0; a < dof; a++) {
-            for (int c = 0; c < dof; c++) {
+            for (int c = 0; c <= a; c++) {  /* symmetric: the same products, summed in the same order */
                 double s = 0.0;
                 for (int r = r0; r < r1; r++) s += Js[r * dof + a] * Js[r * dof + c];
-                JtJ[a][c] = s;
+                JtJ[a][c] = JtJ[c][a] = s;
             }
             double s = 0.0;
             for (int r = r0; r < r1; r++) s += Js[r * dof + a] * e[r];
@@ -264,6 +275,7 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
                 for (int j = 0; j < dof; j++) q[j] = trial[j];
                 for (int k = 0; k < 12; k++) G[k] = G2[k];
                 for (int k = 0; k < 6 * dof; k++) J[k] = J2[k];
+                slow = guarded && next <= IKC_SETTLED * exact && next > 0.5 * now;
                 now = next;
                 lambda = lambda > 1e-11 ? lambda * 0.1 : 1e-12;
                 accepted = 1;
@@ -271,7 +283,7 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
                 lambda *= 100.0;
             }
         }
-        if (!accepted) break;
+        if (!accepted || slow) break;
     }
     return now;
 }
@@ -279,6 +291,12 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
 /* Newton steps that never raise the error (near misses, self-motion representatives). */
 static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int iters) {
     return ikc_newton_steps(rb, g, q, iters, 1, NULL);
+}
+
+/* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit: fmod returns d itself below 2 pi, so the
+ * libm call (~10 a pose in the finish's duplicate test) is made only above. */
+static inline double ikc_mod_two_pi(double d) {
+    return d < IKC_TWO_PI ? d : fmod(d, IKC_TWO_PI);
 }
 
 /* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
@@ -344,8 +362,8 @@ static int ikc_row_inside(const ikc_robot *rb, const double *q) {
 
 /* The pose error of returned joint values q against goal g, measured on the true robot. */
 static double ikc_measure(const ikc_robot *rb, const double *g, const double *q) {
-    double G[12], J[6 * rb->dof];
-    ikc_fk_jacobian(rb, q, G, J);
+    double G[12];
+    ikc_fk_jacobian(rb, q, G, NULL);
     return ikc_pose_error(rb, G, g);
 }
 
@@ -424,7 +442,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             for (int j = 0; j < dof; j++) {
                 double d = w[j] > o[j] ? w[j] - o[j] : o[j] - w[j];
                 if (rb->revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
-                    d = fmod(d, IKC_TWO_PI);
+                    d = ikc_mod_two_pi(d);
                     if (d > IKC_PI_F) d = IKC_TWO_PI - d;
                 }
                 if (d > same) {
@@ -1076,7 +1094,7 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
     for (int j = 0; j < rb->dof; j++) {
         double d = fabs(x[j] - y[j]);
         if (rb->revolute[j]) {
-            d = fmod(d, IKC_TWO_PI);
+            d = ikc_mod_two_pi(d);
             if (d > IKC_PI_F) d = IKC_TWO_PI - d;
         } else {
             d /= rb->scale;

@@ -14,6 +14,12 @@
  *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide3 1x3,
  *    turn_slide2 1x3, slide2_turn 2x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
  *    rot_rrr 2x3;
+ *  - the angle kernels (plane_r, dist_r, point_r, point_rr_meet, point_rr_parallel, rot_r, rot_rr,
+ *    rot_rrr) have an ikc_NAME_cs form, fast.NAME_cs's port, that also writes double *cs: slots x outs
+ *    pairs (cos, sin) of each output angle (slot k, output j at cs[2 * (k * outs + j)]), computed from
+ *    the pair the angle is the atan2 of (fast.unit_pair) or by the sum formulas for phi +- acos(x); a
+ *    chain reads them instead of calling cos and sin (~1 libm call saved per angle and leaf; the
+ *    gimbal lock's values, rare, take libm's).  The plain forms drop cs;
  *  - SCALAR semantics: clip1 keeps NaN, pos(x) = x > 0 ? x : 0 (NaN -> 0), big(x) = x > TINY ? x : TINY;
  *    a comparison with NaN is false, as in Python.
  */
@@ -96,9 +102,19 @@ static inline void ikc_rotate(const double *w, double th, const double *x, doubl
     out[2] = c * x2 + s * (w0 * x1 - w1 * x0) + k * w2;
 }
 
-/* S1-R: the angle that turns u toward v about w; *flag = IKC_DEFER when either is (nearly) along w. */
-static inline double ikc_angle_about(const double *w, const double *u, const double *v, double size2,
-                                     int *flag) {
+/* fast.unit_pair: (cos th, sin th) of th = atan2(s, c) from the pair, (1, 0) for a zero pair */
+static inline void ikc_unit_pair(double c, double s, double *cs) {
+    double r = sqrt(c * c + s * s);
+    double inv = 1.0 / ikc_big(r);
+    cs[0] = c * inv + (r == 0.0 ? 1.0 : 0.0);
+    cs[1] = s * inv;
+}
+
+/* S1-R: the angle that turns u toward v about w; *flag = IKC_DEFER when either is (nearly) along w.
+ * Also its cosine and sine, *cs = {cos, sin}, from the two components whose atan2 it is (the chain
+ * takes them instead of cos and sin of the angle; a zero pair, always flagged, gives the angle 0's). */
+static inline double ikc_angle_about_cs(const double *w, const double *u, const double *v, double size2,
+                                        int *flag, double *cs) {
     double w0 = w[0], w1 = w[1], w2 = w[2];
     double u0 = u[0], u1 = u[1], u2 = u[2];
     double v0 = v[0], v1 = v[1], v2 = v[2];
@@ -107,20 +123,30 @@ static inline double ikc_angle_about(const double *w, const double *u, const dou
     double a0 = u0 - uw * w0, a1 = u1 - uw * w1, a2 = u2 - uw * w2;
     double b0 = v0 - vw * w0, b1 = v1 - vw * w1, b2 = v2 - vw * w2;
     double sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0);
-    double th = atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2);
+    double cos_part = a0 * b0 + a1 * b1 + a2 * b2;
+    double th = atan2(sin_part, cos_part);
     double lim = IKC_NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + size2 + 1.0);
     *flag = ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) ? IKC_DEFER : 0;
+    ikc_unit_pair(cos_part, sin_part, cs);
     return th;
+}
+
+static inline double ikc_angle_about(const double *w, const double *u, const double *v, double size2,
+                                     int *flag) {
+    double cs[2];
+    return ikc_angle_about_cs(w, u, v, size2, flag, cs);
 }
 
 /* Both roots of a cos th + b sin th = c (clamped to the nearest when |c| > rho): th[0..1], f[0..1].
  * rho and c both negligible: every angle solves it, both slots th = rep, IKC_FAMILY; rho alone
  * negligible: IKC_DEFER. */
-static inline void ikc_trig_roots(double a, double b, double c, double size, double rep, double *th, int *f) {
+static inline void ikc_trig_roots_cs(double a, double b, double c, double size, double rep, double *th, int *f,
+                                     double *cs) {
     double rho = sqrt(a * a + b * b);
     double phi = atan2(b, a);
     double x = c / ikc_big(rho);
-    double delta = acos(ikc_clip1(x));
+    double cd = ikc_clip1(x);
+    double delta = acos(cd);
     int flat = rho <= IKC_NEAR * size;
     int every = flat && fabs(c) <= IKC_NEAR * size;
     int tangent = (fabs(x * x - 1.0) <= IKC_TANGENT) && rho > IKC_NEAR * size;
@@ -130,14 +156,36 @@ static inline void ikc_trig_roots(double a, double b, double c, double size, dou
     th[1] = every ? here : phi - delta;
     f[0] = flag;
     f[1] = flag;
+    /* cos and sin of the roots phi +- delta by the sum formulas: cos phi = a / rho, sin phi = b / rho,
+     * cos delta = the clipped x, sin delta = sqrt((1 - x)(1 + x)) >= 0 (delta = acos in [0, pi]) */
+    if (every) {
+        cs[0] = cos(here);
+        cs[1] = sin(here);
+        cs[2] = cs[0];
+        cs[3] = cs[1];
+        return;
+    }
+    double u[2];
+    ikc_unit_pair(a, b, u);
+    double cp = u[0], sp = u[1];
+    double sd = sqrt(ikc_pos((1.0 - cd) * (1.0 + cd)));
+    cs[0] = cp * cd - sp * sd;
+    cs[1] = sp * cd + cp * sd;
+    cs[2] = cp * cd + sp * sd;
+    cs[3] = sp * cd - cp * sd;
+}
+
+static inline void ikc_trig_roots(double a, double b, double c, double size, double rep, double *th, int *f) {
+    double cs[4];
+    ikc_trig_roots_cs(a, b, c, size, rep, th, f, cs);
 }
 
 /* ------------------------------------------------------------------------------------------------
  * the kernels */
 
 /* H-R: h . exp(w th)(p) = d.  2 slots x 1 */
-static inline void ikc_plane_r(const double *w, const double *r, const double *p, const double *h, double d,
-                               double rep, double *q, int *f) {
+static inline void ikc_plane_r_cs(const double *w, const double *r, const double *p, const double *h, double d,
+                                  double rep, double *q, int *f, double *cs) {
     double u[3], up[3], wu[3];
     ikc_sub(p, r, u);
     double uw = ikc_dot(w, u);
@@ -147,7 +195,7 @@ static inline void ikc_plane_r(const double *w, const double *r, const double *p
     double b = ikc_dot(h, wu);
     double c = d - ikc_dot(h, r) - uw * ikc_dot(h, w);
     double size = sqrt(ikc_dot(h, h) * (ikc_dot(u, u) + ikc_dot(r, r) + ikc_dot(p, p) + 1.0)) + IKC_TINY;
-    ikc_trig_roots(a, b, c, size, rep, q, f);
+    ikc_trig_roots_cs(a, b, c, size, rep, q, f, cs);
 }
 
 /* H-T: h . (p + v th) = d.  1 slot x 1; h (nearly) across the slide: th = rep, IKC_FAMILY */
@@ -161,8 +209,8 @@ static inline void ikc_plane_t(const double *v, const double *p, const double *h
 }
 
 /* S3-R: |exp(w th)(p) - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
-static inline void ikc_dist_r(const double *w, const double *r, const double *p, const double *qq, double d,
-                              double rep, double *q, int *f) {
+static inline void ikc_dist_r_cs(const double *w, const double *r, const double *p, const double *qq, double d,
+                                 double rep, double *q, int *f, double *cs) {
     double u[3], z[3], up[3], wu[3];
     ikc_sub(p, r, u);
     ikc_sub(qq, r, z);
@@ -172,7 +220,7 @@ static inline void ikc_dist_r(const double *w, const double *r, const double *p,
     ikc_cross(w, u, wu);
     double b = ikc_dot(z, wu);
     double c = 0.5 * (ikc_dot(u, u) + ikc_dot(z, z) - d * d) - uw * ikc_dot(z, w);
-    ikc_trig_roots(a, b, c, ikc_dot(u, u) + ikc_dot(z, z) + ikc_dot(r, r) + d * d + 1.0, rep, q, f);
+    ikc_trig_roots_cs(a, b, c, ikc_dot(u, u) + ikc_dot(z, z) + ikc_dot(r, r) + d * d + 1.0, rep, q, f, cs);
 }
 
 /* S3-T: |p + v th - q| = d.  2 slots x 1 (argument qq is the Python kernel's q) */
@@ -207,6 +255,9 @@ static inline void ikc_slide3(const double *v1, const double *v2, const double *
     f[0] = (fabs(det) <= IKC_NEAR * scale) ? IKC_DEFER : 0;
 }
 
+static inline void ikc_plane_r(const double *w, const double *r, const double *p, const double *h, double d,
+                               double rep, double *q, int *f);  /* below, with the other plain forms */
+
 /* S2-TTR: v1 t1 + v2 t2 + exp(xi3 t3)(p) = q, xi3 about the axis (w, r): t3 from the plane across both
  * slides (plane_r with the normal v1 x v2), then the slides by normal equations.  2 slots x 3 */
 static inline void ikc_slide2_turn(const double *v1, const double *v2, const double *w, const double *r,
@@ -236,13 +287,19 @@ static inline void ikc_slide2_turn(const double *v1, const double *v2, const dou
 }
 
 /* O-R: exp([w] th) = R.  1 slot x 1 */
-static inline void ikc_rot_r(const double *w, const double *R, double *q, int *f) {
+static inline void ikc_rot_r_cs(const double *w, const double *R, double *q, int *f, double *cs) {
     double Rw[3];
     ikc_mat_vec(R, w, Rw);
     double c = 0.5 * (R[0] + R[4] + R[8] - ikc_dot(w, Rw));
     double s = 0.5 * (w[0] * (R[7] - R[5]) + w[1] * (R[2] - R[6]) + w[2] * (R[3] - R[1]));
     q[0] = atan2(s, c);
     f[0] = (c != c) ? IKC_DEFER : 0;
+    ikc_unit_pair(c, s, cs);
+}
+
+static inline void ikc_rot_r(const double *w, const double *R, double *q, int *f) {
+    double cs[2];
+    ikc_rot_r_cs(w, R, q, f, cs);
 }
 
 /* S1-RTT: exp(xi1 t1) exp(v2 t2) exp(v3 t3) = (R, t), xi1 about the axis (w, r).  1 slot x 3 */
@@ -268,25 +325,28 @@ static inline void ikc_turn_slide2(const double *w, const double *r, const doubl
 }
 
 /* S2-R: exp(w th)(p) = q.  1 slot x 1 (argument qq is the Python kernel's q) */
-static inline void ikc_point_r(const double *w, const double *r, const double *p, const double *qq, double *q,
-                               int *f) {
+static inline void ikc_point_r_cs(const double *w, const double *r, const double *p, const double *qq, double *q,
+                                  int *f, double *cs) {
     double u[3], v[3];
     ikc_sub(p, r, u);
     ikc_sub(qq, r, v);
-    q[0] = ikc_angle_about(w, u, v, ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r, r), &f[0]);
+    q[0] = ikc_angle_about_cs(w, u, v, ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r, r), &f[0], cs);
 }
 
-/* An S2-RR angle its geometry leaves free (ikc_angle_about deferred: the point on the axis): the
- * representative rep, flagged IKC_LOCK (fast._locked). */
-static inline double ikc_locked(double th, int *flag, double rep) {
-    const int lock = *flag != 0;
-    *flag = lock ? IKC_LOCK : *flag;
-    return lock ? rep + 0.0 * th : th;
+/* An S2-RR angle its geometry leaves free (ikc_angle_about_cs deferred: the point on the axis): the
+ * representative rep, flagged IKC_LOCK, and its cosine and sine in cs[0], cs[1] (fast._locked_cs). */
+static inline double ikc_locked_cs(double th, int *flag, double rep, double *cs) {
+    if (*flag == 0) return th;
+    *flag = IKC_LOCK;
+    cs[0] = cos(rep);
+    cs[1] = sin(rep);
+    return rep + 0.0 * th;
 }
 
 /* S2-RR, axes meeting: exp(w1 t1) exp(w2 t2)(p) = q (Paden-Kahan 2).  2 slots x 2 (t1, t2) */
-static inline void ikc_point_rr_meet(const double *w1, const double *r1, const double *w2, const double *r2,
-                                     const double *p, const double *qq, double rep, double *q, int *f) {
+static inline void ikc_point_rr_meet_cs(const double *w1, const double *r1, const double *w2, const double *r2,
+                                        const double *p, const double *qq, double rep, double *q, int *f,
+                                        double *cs) {
     double n[3], d21[3], m[3], c[3], u[3], v[3];
     double k = ikc_dot(w1, w2);
     ikc_cross(w1, w2, n);
@@ -314,10 +374,10 @@ static inline void ikc_point_rr_meet(const double *w1, const double *r1, const d
         z[1] = alpha * w1[1] + beta * w2[1] + g * n[1];
         z[2] = alpha * w1[2] + beta * w2[2] + g * n[2];
         int f1, f2;
-        double t2 = ikc_angle_about(w2, u, z, size2, &f2);
-        t2 = ikc_locked(t2, &f2, rep);
-        double t1 = ikc_angle_about(w1, z, v, size2, &f1);
-        t1 = ikc_locked(t1, &f1, rep);
+        double t2 = ikc_angle_about_cs(w2, u, z, size2, &f2, cs + 4 * i + 2);
+        t2 = ikc_locked_cs(t2, &f2, rep, cs + 4 * i + 2);
+        double t1 = ikc_angle_about_cs(w1, z, v, size2, &f1, cs + 4 * i);
+        t1 = ikc_locked_cs(t1, &f1, rep, cs + 4 * i);
         q[2 * i] = t1;
         q[2 * i + 1] = t2;
         f[i] = degenerate | f1 | f2;
@@ -325,8 +385,9 @@ static inline void ikc_point_rr_meet(const double *w1, const double *r1, const d
 }
 
 /* S2-RR, parallel axes (w2 = +-w1): a planar 2R arm.  2 slots x 2 (t1, t2) */
-static inline void ikc_point_rr_parallel(const double *w1, const double *r1, const double *w2, const double *r2,
-                                         const double *p, const double *qq, double rep, double *q, int *f) {
+static inline void ikc_point_rr_parallel_cs(const double *w1, const double *r1, const double *w2,
+                                            const double *r2, const double *p, const double *qq, double rep,
+                                            double *q, int *f, double *cs) {
     double w0 = w1[0], w1_ = w1[1], w2_ = w1[2];
     double e0 = r1[0] - r2[0], e1 = r1[1] - r2[1], e2 = r1[2] - r2[2];
     double h = w0 * e0 + w1_ * e1 + w2_ * e2;
@@ -354,10 +415,10 @@ static inline void ikc_point_rr_parallel(const double *w1, const double *r1, con
         double z[3] = {x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2};
         double ze[3] = {z[0] - e0, z[1] - e1, z[2] - e2};
         int g1, g2;
-        double t2 = ikc_angle_about(w2, a, z, size2, &g2);
-        t2 = ikc_locked(t2, &g2, rep);
-        double t1 = ikc_angle_about(w1, ze, b, size2, &g1);
-        t1 = ikc_locked(t1, &g1, rep);
+        double t2 = ikc_angle_about_cs(w2, a, z, size2, &g2, cs + 4 * i + 2);
+        t2 = ikc_locked_cs(t2, &g2, rep, cs + 4 * i + 2);
+        double t1 = ikc_angle_about_cs(w1, ze, b, size2, &g1, cs + 4 * i);
+        t1 = ikc_locked_cs(t1, &g1, rep, cs + 4 * i);
         q[2 * i] = t1;
         q[2 * i + 1] = t2;
         f[i] = degenerate | g1 | g2;
@@ -365,19 +426,20 @@ static inline void ikc_point_rr_parallel(const double *w1, const double *r1, con
 }
 
 /* O-RR: exp([w1] t1) exp([w2] t2) = R.  1 slot x 2 */
-static inline void ikc_rot_rr(const double *w1, const double *w2, const double *R, double *q, int *f) {
+static inline void ikc_rot_rr_cs(const double *w1, const double *w2, const double *R, double *q, int *f,
+                                  double *cs) {
     double Rw2[3], Rtw1[3];
     int f1, f2;
     ikc_mat_vec(R, w2, Rw2);
-    q[0] = ikc_angle_about(w1, w2, Rw2, 0.0, &f1);
+    q[0] = ikc_angle_about_cs(w1, w2, Rw2, 0.0, &f1, cs);
     ikc_mat_t_vec(R, w1, Rtw1);
-    q[1] = ikc_angle_about(w2, Rtw1, w1, 0.0, &f2);
+    q[1] = ikc_angle_about_cs(w2, Rtw1, w1, 0.0, &f2, cs + 2);
     f[0] = f1 | f2;
 }
 
 /* O-RRR: exp([w1] t1) exp([w2] t2) exp([w3] t3) = R.  2 slots x 3; gimbal lock: t3 = rep, IKC_FAMILY */
-static inline void ikc_rot_rrr(const double *w1, const double *w2, const double *w3, const double *R, double rep,
-                               double *q, int *f) {
+static inline void ikc_rot_rrr_cs(const double *w1, const double *w2, const double *w3, const double *R,
+                                   double rep, double *q, int *f, double *cs) {
     double Rw3[3], Rtw1[3], w23[3], w21[3], Rw2[3];
     ikc_mat_vec(R, w3, Rw3);
     ikc_mat_t_vec(R, w1, Rtw1);
@@ -387,9 +449,9 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
     double a = ikc_dot(w1, w3) - k12 * k23;
     double b = ikc_dot(w1, w23);
     double c = ikc_dot(w1, Rw3) - k12 * k23;
-    double roots[2];
+    double roots[2], rcs[4];
     int rf[2];
-    ikc_trig_roots(a, b, c, 1.0, rep, roots, rf);
+    ikc_trig_roots_cs(a, b, c, 1.0, rep, roots, rf, rcs);
     /* The lock's values (t2_lock, whether it is a lock at all, the representative t1_rep) are computed
      * only where a slot reads them: the values returned are those of fast.py, which computes them
      * always (4 libm calls of ~12 per call saved on a regular target). */
@@ -407,11 +469,11 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
         ikc_cross(w1, zl, off);
         aligned = ikc_dot(off, off) <= IKC_NEAR2;
     }
-    double t[6];
+    double t[6], tcs[12];
     int lock[2];
     for (int i = 0; i < 2; i++) {
         double t2 = roots[i];
-        double c2 = cos(t2), s2 = sin(t2);
+        double c2 = rcs[2 * i], s2 = rcs[2 * i + 1];  /* cos t2, sin t2 (fast.py: m.cos(t2), m.sin(t2)) */
         double k3 = k23 * (1.0 - c2), k1 = k12 * (1.0 - c2);
         double z[3] = {
             c2 * w3[0] + s2 * w23[0] + k3 * w2[0],
@@ -424,9 +486,11 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
             c2 * w1[2] - s2 * w21[2] + k1 * w2[2],
         };
         int f1, f3;
-        t[3 * i] = ikc_angle_about(w1, z, Rw3, 0.0, &f1);
+        t[3 * i] = ikc_angle_about_cs(w1, z, Rw3, 0.0, &f1, tcs + 6 * i);
         t[3 * i + 1] = t2;
-        t[3 * i + 2] = ikc_angle_about(w3, Rtw1, y, 0.0, &f3);
+        tcs[6 * i + 2] = c2;
+        tcs[6 * i + 3] = s2;
+        t[3 * i + 2] = ikc_angle_about_cs(w3, Rtw1, y, 0.0, &f3, tcs + 6 * i + 4);
         lock[i] = ((f1 | f3) != 0) || ((rf[i] & IKC_TANGENT_ROOT) && aligned);
     }
     double t1_rep = 0.0;
@@ -443,7 +507,56 @@ static inline void ikc_rot_rrr(const double *w1, const double *w2, const double 
         q[3 * i + 1] = lock[i] ? t2_lock : t[3 * i + 1];
         q[3 * i + 2] = lock[i] ? rep + 0.0 * t[3 * i + 2] : t[3 * i + 2];
         f[i] = rf[i] | (lock[i] ? (IKC_FAMILY | f_rep) : 0);
+        for (int j = 0; j < 3; j++) {  /* a lock's values are rare: their cos and sin from libm */
+            double v = q[3 * i + j];
+            cs[6 * i + 2 * j] = lock[i] ? cos(v) : tcs[6 * i + 2 * j];
+            cs[6 * i + 2 * j + 1] = lock[i] ? sin(v) : tcs[6 * i + 2 * j + 1];
+        }
     }
+}
+
+/* ------------------------------------------------------------------------------------------------
+ * The kernels without their angles' cosines and sines (the signatures of fast.py's kernels) */
+
+static inline void ikc_plane_r(const double *w, const double *r, const double *p, const double *h, double d,
+                               double rep, double *q, int *f) {
+    double cs[4];
+    ikc_plane_r_cs(w, r, p, h, d, rep, q, f, cs);
+}
+
+static inline void ikc_dist_r(const double *w, const double *r, const double *p, const double *qq, double d,
+                              double rep, double *q, int *f) {
+    double cs[4];
+    ikc_dist_r_cs(w, r, p, qq, d, rep, q, f, cs);
+}
+
+static inline void ikc_point_r(const double *w, const double *r, const double *p, const double *qq, double *q,
+                               int *f) {
+    double cs[2];
+    ikc_point_r_cs(w, r, p, qq, q, f, cs);
+}
+
+static inline void ikc_point_rr_meet(const double *w1, const double *r1, const double *w2, const double *r2,
+                                     const double *p, const double *qq, double rep, double *q, int *f) {
+    double cs[8];
+    ikc_point_rr_meet_cs(w1, r1, w2, r2, p, qq, rep, q, f, cs);
+}
+
+static inline void ikc_point_rr_parallel(const double *w1, const double *r1, const double *w2, const double *r2,
+                                         const double *p, const double *qq, double rep, double *q, int *f) {
+    double cs[8];
+    ikc_point_rr_parallel_cs(w1, r1, w2, r2, p, qq, rep, q, f, cs);
+}
+
+static inline void ikc_rot_rr(const double *w1, const double *w2, const double *R, double *q, int *f) {
+    double cs[4];
+    ikc_rot_rr_cs(w1, w2, R, q, f, cs);
+}
+
+static inline void ikc_rot_rrr(const double *w1, const double *w2, const double *w3, const double *R, double rep,
+                               double *q, int *f) {
+    double cs[12];
+    ikc_rot_rrr_cs(w1, w2, w3, R, rep, q, f, cs);
 }
 
 #endif /* IKC_FAST_KERNELS_H */

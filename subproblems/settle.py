@@ -37,6 +37,7 @@ REPS = 16  # IKC_REPS: representatives tried, rep = k pi / 8
 NEAR_MISS, SPLIT_ROOT, LIMIT_EPS = _fk.NEAR_MISS, _fk.SPLIT_ROOT, _fk.LIMIT_EPS
 INSIDE, ADJUSTED, OUTSIDE, CLAMPED = _fk.INSIDE, _fk.ADJUSTED, _fk.OUTSIDE, _fk.CLAMPED
 CLAMPED_NEWTON = 3  # IKC_CLAMPED_NEWTON
+SETTLED = 0.5  # IKC_SETTLED: a step ending this far inside the tolerance, not halving the error, is the last
 LINE_FIT = 1e-9  # IKC_LINE_FIT
 LINE_RANK = 1e-5  # IKC_LINE_RANK
 TWO_PI = 2.0 * math.pi
@@ -200,9 +201,13 @@ def solve_linear(n: int, M):
 
 
 def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=None) -> float:
-    """Damped Gauss-Newton steps on q (in place; free and ``held`` joints kept); the new pose error."""
+    """Damped Gauss-Newton steps on q (in place; free and ``held`` joints kept); the new pose error.
+    A guarded step ending inside SETTLED of the tolerance without halving the error is the last (Newton's
+    linear regime at a singular configuration)."""
     dof = rb.dof
     done = 1e-3 * rb.tol * rb.scale
+    exact = rb.tol * rb.scale
+    slow = False
     lam = 1e-12
     G, J = fk_jacobian(rb, q)
     now = pose_error(rb, G, g)
@@ -251,12 +256,13 @@ def newton_steps(rb: FinishRobot, g, q, iters: int, guarded: bool = True, held=N
             nxt = pose_error(rb, G2, g)
             if nxt < now or not guarded:
                 q[:] = trial
+                slow = guarded and nxt <= SETTLED * exact and nxt > 0.5 * now
                 G, J, now = G2, J2, nxt
                 lam = lam * 0.1 if lam > 1e-11 else 1e-12
                 accepted = True
                 break
             lam *= 100.0
-        if not accepted:
+        if not accepted or slow:
             break
     return now
 

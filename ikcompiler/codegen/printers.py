@@ -23,6 +23,11 @@ KERNEL_SLOTS = {
     "point_r": 1,
     "point_rr_meet": 2, "point_rr_parallel": 2, "rot_r": 1, "rot_rr": 1, "rot_rrr": 2,
 }
+# kernels with a ``NAME_cs`` form (fast.py, fast_kernels.h) that also returns the cosine and sine of
+# each output angle, from the quantities the angle is the atan2 or acos of: a chain reads them where it
+# would call ``cos(out)`` and ``sin(out)`` (docs/design.md section 11, "cos and sin of kernel outputs")
+KERNEL_TRIG = frozenset({"plane_r", "dist_r", "point_r", "point_rr_meet", "point_rr_parallel", "rot_r",
+                         "rot_rr", "rot_rrr"})
 C_WIDTH = 100  # C lines are broken at spaces beyond this (the C must fit a Python module's 110 columns)
 
 PYTHON_DOC = (
@@ -54,7 +59,17 @@ def _prec(e) -> int:
     return _ATOM
 
 
-def py_expr(e) -> str:
+def _trig_name(e, trig):
+    """The name holding ``cos(x)`` / ``sin(x)`` of a kernel output ``x`` in scope, or None."""
+    if trig and isinstance(e, ir.Call) and e.fn in ("cos", "sin") and isinstance(e.args[0], ir.Name):
+        pair = trig.get(e.args[0].id)
+        if pair is not None:
+            return pair[0] if e.fn == "cos" else pair[1]
+    return None
+
+
+def py_expr(e, trig=None) -> str:
+    """``e`` in Python; ``trig`` maps a kernel output's name to the names of its cosine and sine."""
     if isinstance(e, ir.Const):
         return _py_number(e.value)
     if isinstance(e, ir.Name):
@@ -62,53 +77,66 @@ def py_expr(e) -> str:
     if isinstance(e, ir.Free):
         return f"free[{e.index}]"
     if isinstance(e, ir.Call):
-        return f"m.{e.fn}({', '.join(py_expr(a) for a in e.args)})"
+        return _trig_name(e, trig) or f"m.{e.fn}({', '.join(py_expr(a, trig) for a in e.args)})"
     if isinstance(e, ir.Neg):
-        inner = py_expr(e.operand)
+        inner = py_expr(e.operand, trig)
         return "-" + (inner if _prec(e.operand) >= _ATOM else f"({inner})")
     p = _PREC[e.op]
-    left = py_expr(e.left)
+    left = py_expr(e.left, trig)
     if _prec(e.left) < p:
         left = f"({left})"
-    right = py_expr(e.right)
+    right = py_expr(e.right, trig)
     if _prec(e.right) <= p or _prec(e.right) == _UNARY:  # a - (b + c), a*(-b): the tree's grouping
         right = f"({right})"
     return f"{left} {e.op} {right}" if e.op in "+-" else f"{left}{e.op}{right}"
 
 
-def _py_arg(a) -> str:
+def _py_arg(a, trig=None) -> str:
     if isinstance(a, tuple):
-        return "(" + ", ".join(_py_arg(x) for x in a) + ("," if len(a) == 1 else "") + ")"
-    return py_expr(a)
+        return "(" + ", ".join(_py_arg(x, trig) for x in a) + ("," if len(a) == 1 else "") + ")"
+    return py_expr(a, trig)
 
 
-def _py_block(block, depth: int, lines: list) -> None:
+def trig_names(s: ir.Loop) -> dict | None:
+    """For a kernel loop whose body reads cos or sin of an output, and whose kernel has a ``_cs`` form:
+    each output's (cosine, sine) names (``<flag>_c<j>``, ``<flag>_s<j>``); else None."""
+    if s.kernel not in KERNEL_TRIG or not _trig_read(s.body, set(s.outs)):
+        return None
+    return {name: (f"{s.flag}_c{j}", f"{s.flag}_s{j}") for j, name in enumerate(s.outs)}
+
+
+def _py_block(block, depth: int, lines: list, trig: dict) -> None:
     pad = "    " * depth
     for s in block:
         if isinstance(s, ir.Assign):
-            lines.append(f"{pad}{s.name} = {py_expr(s.value)}")
+            lines.append(f"{pad}{s.name} = {py_expr(s.value, trig)}")
         elif isinstance(s, ir.Loop):
-            args = ", ".join(["m"] + [_py_arg(a) for a in s.args])
-            lines.append(f"{pad}for {', '.join(s.outs + (s.flag,))} in _fk.{s.kernel}({args}):")
-            _py_block(s.body, depth + 1, lines)
+            args = ", ".join(["m"] + [_py_arg(a, trig) for a in s.args])
+            pairs = trig_names(s)
+            if pairs:
+                names = s.outs + (s.flag,) + tuple(x for name in s.outs for x in pairs[name])
+                lines.append(f"{pad}for {', '.join(names)} in _fk.{s.kernel}_cs({args}):")
+            else:
+                lines.append(f"{pad}for {', '.join(s.outs + (s.flag,))} in _fk.{s.kernel}({args}):")
+            _py_block(s.body, depth + 1, lines, {**trig, **(pairs or {})})
         elif isinstance(s, ir.ReferenceLoop):
-            screws = ", ".join(_py_arg(x) for x in s.screws)
-            fields = ", ".join(f"{k!r}: {_py_arg(v)}" for k, v in s.inputs)
+            screws = ", ".join(_py_arg(x, trig) for x in s.screws)
+            fields = ", ".join(f"{k!r}: {_py_arg(v, trig)}" for k, v in s.inputs)
             call = f"_fk.reference(m, {s.code!r}, ({screws},), {{{fields}}})"
             lines.append(f"{pad}for {', '.join(s.outs + (s.flag,))} in {call}:")
-            _py_block(s.body, depth + 1, lines)
+            _py_block(s.body, depth + 1, lines, trig)
         else:
-            err = py_expr(s.errors[0]) if len(s.errors) == 1 else (
-                f"m.max2({', '.join(py_expr(x) for x in s.errors)})")
+            err = py_expr(s.errors[0], trig) if len(s.errors) == 1 else (
+                f"m.max2({', '.join(py_expr(x, trig) for x in s.errors)})")
             defer = " | ".join(s.flags) if s.flags else "False"
-            qs = ", ".join(py_expr(x) for x in s.q)
+            qs = ", ".join(py_expr(x, trig) for x in s.q)
             lines.append(f"{pad}out.append(({qs}, {err}, {defer}))")
 
 
 def python_source(program: ir.Program, name: str = "_fast_chain") -> str:
     """The program as ``def NAME(m, goal, free=(), rep=0.0)`` returning its list of leaves."""
     lines = [f"    {', '.join(program.goal)} = goal", "    out = []"]
-    _py_block(program.body, 1, lines)
+    _py_block(program.body, 1, lines, {})
     head = f"\n\ndef {name}(m, goal, free=(), rep=0.0):\n" + PYTHON_DOC
     return head + "\n".join(lines) + "\n    return out\n"
 
@@ -130,7 +158,8 @@ def c_number(x: float) -> str:
 _C_CALLS = {"cos": "cos", "sin": "sin", "sqrt": "sqrt", "atan2": "atan2", "max2": "ikc_max2"}
 
 
-def c_expr(e) -> str:
+def c_expr(e, trig=None) -> str:
+    """``e`` in C; ``trig`` maps a kernel output's name to the names of its cosine and sine."""
     if isinstance(e, ir.Const):
         return c_number(e.value)
     if isinstance(e, ir.Name):
@@ -138,16 +167,35 @@ def c_expr(e) -> str:
     if isinstance(e, ir.Free):
         return f"fr[{e.index}]"
     if isinstance(e, ir.Call):
-        return f"{_C_CALLS[e.fn]}({', '.join(c_expr(a) for a in e.args)})"
+        name = _trig_name(e, trig)
+        if name is not None:
+            return name
+        return f"{_C_CALLS[e.fn]}({', '.join(c_expr(a, trig) for a in e.args)})"
     if isinstance(e, ir.Neg):
-        return f"(-{c_expr(e.operand)})"
-    return f"({c_expr(e.left)} {e.op} {c_expr(e.right)})"
+        return f"(-{c_expr(e.operand, trig)})"
+    return f"({c_expr(e.left, trig)} {e.op} {c_expr(e.right, trig)})"
 
 
-def _c_arg(a) -> str:
+def _c_arg(a, trig=None) -> str:
     if isinstance(a, tuple):
-        return f"(const double[]){{{', '.join(c_expr(x) for x in ir.arg_exprs(a))}}}"
-    return c_expr(a)
+        return f"(const double[]){{{', '.join(c_expr(x, trig) for x in ir.arg_exprs(a))}}}"
+    return c_expr(a, trig)
+
+
+def _trig_read(block, names: set) -> bool:
+    """Whether ``cos`` or ``sin`` of one of ``names`` is read anywhere in ``block`` (nested too)."""
+    def reads(e) -> bool:
+        if isinstance(e, ir.Call) and e.fn in ("cos", "sin") and isinstance(e.args[0], ir.Name):
+            if e.args[0].id in names:
+                return True
+        return any(reads(c) for c in ir.children(e))
+
+    for s in block:
+        if any(reads(e) for e in ir.statement_exprs(s)):
+            return True
+        if ir.body_of(s) is not None and _trig_read(ir.body_of(s), names):
+            return True
+    return False
 
 
 class _CPrinter:
@@ -157,6 +205,7 @@ class _CPrinter:
         self.depth = 1
         self.leaves = 0
         self.slots = [1]  # product of the slots of the enclosing loops
+        self.trig: dict = {}  # kernel output in scope -> the names of its cosine and sine
 
     def emit(self, text: str) -> None:
         self.lines.append("    " * self.depth + text)
@@ -164,7 +213,7 @@ class _CPrinter:
     def block(self, block) -> None:
         for s in block:
             if isinstance(s, ir.Assign):
-                self.emit(f"const double {s.name} = {c_expr(s.value)};")
+                self.emit(f"const double {s.name} = {c_expr(s.value, self.trig)};")
             elif isinstance(s, ir.Loop):
                 self.loop(s)
             elif isinstance(s, ir.ReferenceLoop):
@@ -176,19 +225,31 @@ class _CPrinter:
         if s.kernel not in KERNEL_SLOTS:
             raise Untranslatable(f"kernel {s.kernel}")
         flag, outs, slots = s.flag, len(s.outs), KERNEL_SLOTS[s.kernel]
-        args = [_c_arg(a) for a in s.args]
+        args = [_c_arg(a, self.trig) for a in s.args]
+        trig = trig_names(s)
         self.emit("{")
         self.depth += 1
         self.emit(f"double {flag}_q[{slots * outs}];")
         self.emit(f"int {flag}_f[{slots}];")
-        self.emit(f"ikc_{s.kernel}({', '.join(args + [f'{flag}_q', f'{flag}_f'])});")
+        if trig:  # the kernel also writes cos and sin of each output: the chain reads them
+            self.emit(f"double {flag}_cs[{2 * slots * outs}];")
+            self.emit(f"ikc_{s.kernel}_cs({', '.join(args + [f'{flag}_q', f'{flag}_f', f'{flag}_cs'])});")
+        else:
+            self.emit(f"ikc_{s.kernel}({', '.join(args + [f'{flag}_q', f'{flag}_f'])});")
         self.emit(f"for (int {flag}_k = 0; {flag}_k < {slots}; {flag}_k++) {{")
         self.depth += 1
         for j, name in enumerate(s.outs):
             self.emit(f"const double {name} = {flag}_q[{flag}_k * {outs} + {j}];")
+            if trig:
+                cos_name, sin_name = trig[name]
+                self.emit(f"const double {cos_name} = {flag}_cs[{flag}_k * {2 * outs} + {2 * j}];")
+                self.emit(f"const double {sin_name} = {flag}_cs[{flag}_k * {2 * outs} + {2 * j + 1}];")
+                self.trig[name] = trig[name]
         self.emit(f"const int {flag} = {flag}_f[{flag}_k];")
         self.slots.append(self.slots[-1] * slots)
         self.block(s.body)
+        for name in s.outs:
+            self.trig.pop(name, None)
         self.slots.pop()
         self.depth -= 1
         self.emit("}")
@@ -199,9 +260,9 @@ class _CPrinter:
         if len(s.q) != self.dof:
             raise Untranslatable(f"a leaf of {len(s.q)} joint values, the robot has {self.dof}")
         for j, e in enumerate(s.q):
-            self.emit(f"Q[n * {self.dof} + {j}] = {c_expr(e)};")
-        err = c_expr(s.errors[0]) if len(s.errors) == 1 else (
-            f"ikc_max2({', '.join(c_expr(x) for x in s.errors)})")
+            self.emit(f"Q[n * {self.dof} + {j}] = {c_expr(e, self.trig)};")
+        err = c_expr(s.errors[0], self.trig) if len(s.errors) == 1 else (
+            f"ikc_max2({', '.join(c_expr(x, self.trig) for x in s.errors)})")
         self.emit(f"E[n] = {err};")
         flags = s.flags[0] if s.flags else "0"
         for f in s.flags[1:]:  # as Python groups ``f1 | f2 | f3``
