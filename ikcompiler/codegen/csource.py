@@ -32,6 +32,7 @@ import numpy as np
 
 from ikcompiler.codegen import ir
 from ikcompiler.codegen.printers import Untranslatable, c_function, c_number, wrap
+from subproblems import native
 
 __all__ = [
     "TARGET_CODES", "chain_c_source", "module_c_source", "native_source", "translatable",
@@ -74,18 +75,28 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
     except Untranslatable:
         return None
     try:
-        alt = c_function(alternative, "ikc_chain_alt", dof) if alternative is not None else None
+        alt = (c_function(alternative, "ikc_chain_alt", dof, storage=native.UNIT_LOCAL)
+               if alternative is not None else None)
     except Untranslatable:
         alt = None
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
         " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
     ]
-    body = main[0] + (alt[0] if alt else [])
-    return _with_entries(head + body, leaves=main[1], alt=alt[1] if alt else None, kinds=kinds, lower=lower,
-                         upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
-                         twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
-                         near_singular=near_singular)
+    if alt is None:
+        return _with_entries(head + main[0], leaves=main[1], alt=None, kinds=kinds, lower=lower,
+                             upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
+                             twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
+                             near_singular=near_singular)
+    # The alternative chain runs only where the chain cannot settle a target: it is a translation unit
+    # of its own (native.COLD_UNIT), compiled beside the chain's and at a lower -O level (section 14).
+    declaration = [native.UNIT_LOCAL_DEFINITION, alt[0][0],
+                   alt[0][1].replace(") {", ");"), ""]
+    first = _with_entries(head + main[0] + declaration, leaves=main[1], alt=alt[1], kinds=kinds,
+                          lower=lower, upper=upper, free=free, target=target, scale=scale, tol=tol,
+                          slots=slots, twists=twists, home=home, A=A, b=b, search=search, grid=grid,
+                          polish=polish, near_singular=near_singular)
+    return first + "\n".join([native.COLD_UNIT, native.UNIT_LOCAL_DEFINITION] + alt[0])
 
 
 def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target, scale, tol, slots, twists,
@@ -255,8 +266,6 @@ def native_source(namespace) -> str | None:
     key = data_key(namespace)
     if key in _SOURCES:
         return _SOURCES[key]
-    from subproblems import native
-
     path = native.cache_dir() / f"ikc_src_{key}.c"
     try:
         text = path.read_text()
@@ -270,8 +279,6 @@ def native_source(namespace) -> str | None:
 
 def _store(path, text: str) -> None:
     """Write the cache file (another process may write it too: ``native.replace_atomically``)."""
-    from subproblems import native
-
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         native.replace_atomically(path, lambda partial: partial.write_text(text))
