@@ -33,26 +33,18 @@ from pathlib import Path
 # -ffp-contract=off: no fused multiply-adds, so C rounds like the Python path; -fno-math-errno lets
 # sqrt inline (errno is never read).  No -ffast-math: NaN and infinity checks must keep working.
 FLAGS = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
-# A chain alone, against the shared finish (split build, below): the same flags for now.
-CHAIN_FLAGS = FLAGS
-
-# A chain's source may hold more than one translation unit: a line COLD_UNIT starts one whose code
-# runs rarely (the plan's alternative chain, run only where the chain cannot settle a target).  The
-# split build compiles the units at the same time (the chain's at -O2, a cold one at -O1: it costs
-# the compiler about half the time) and links them into one library (docs/design.md section 14).
-# Rounding is the same at every -O level (no -ffast-math, no contraction), so the answers are too.
-# A function one unit defines and another calls is declared UNIT_LOCAL: hidden outside the library.
-COLD_UNIT = "/* ikc: a cold translation unit starts here (subproblems/native.py COLD_UNIT) */"
-UNIT_LOCAL = "IKC_UNIT_LOCAL"
-UNIT_LOCAL_DEFINITION = (
-    "#ifndef IKC_UNIT_LOCAL\n#if defined(__GNUC__)\n"
-    '#define IKC_UNIT_LOCAL __attribute__((visibility("hidden")))\n#else\n#define IKC_UNIT_LOCAL\n#endif\n'
-    "#endif")
-# a unit compiled to an object file; a call to an undeclared function (which C99 compilers accept
-# with a warning) would only fail when the library is loaded: make it fail the build
-UNIT_FLAGS = tuple(f for f in CHAIN_FLAGS if f != "-shared") + ("-Werror=implicit-function-declaration",)
-COLD_FLAGS = ("-O1",) + tuple(f for f in UNIT_FLAGS if not f.startswith("-O"))
-LINK_FLAGS = ("-shared", "-pthread")
+# A chain alone, against the shared finish (split build, below), without the second (post register
+# allocation) instruction scheduling: 10% of the compiler's instructions on puma560's chain, no
+# measured cost in batch time on this out-of-order CPU, the same bits (docs/design.md section 14).
+CHAIN_FLAGS = FLAGS + ("-fno-schedule-insns2",)
+# A function of a chain that runs rarely (the plan's alternative chain: only where the chain cannot
+# settle a target) is declared COLD: GCC compiles it at -O1 and as cold code, 7% of the compiler's
+# instructions on puma560's chain (docs/design.md section 14).  The rounding is the same at every -O
+# level (no -ffast-math, no contraction), so are the answers; other compilers ignore the macro.
+COLD = "IKC_COLD"
+COLD_DEFINITION = (
+    "#ifndef IKC_COLD\n#if defined(__GNUC__) && !defined(__clang__)\n"
+    '#define IKC_COLD __attribute__((optimize("O1"), cold))\n#else\n#define IKC_COLD\n#endif\n#endif')
 
 last_error: str | None = None  # why the last load returned None (for `ikc compile` to report)
 _loaded: dict[str, ctypes.CDLL] = {}
@@ -118,70 +110,33 @@ def replace_atomically(target: Path, fill) -> None:
     os.replace(partial, target)
 
 
-def _run_all(cc: str, commands) -> bool:
-    """Run the compiler ``commands`` (argument lists after ``cc``) at the same time; False with
-    :data:`last_error` set when one fails."""
-    global last_error
-    running = []
-    try:
-        for args in commands:
-            running.append(subprocess.Popen(cc.split() + list(args), stdout=subprocess.PIPE,
-                                            stderr=subprocess.PIPE, text=True))
-        results = [(p.communicate(timeout=300)[1], p.returncode) for p in running]
-    except (OSError, subprocess.SubprocessError) as exc:
-        for p in running:
-            p.kill()
-            p.wait()
-        last_error = f"{cc} failed to run: {exc}"
-        return False
-    for stderr, code in results:
-        if code != 0:
-            last_error = f"{cc} failed: {stderr.strip()[:2000]}"
-            return False
-    return True
-
-
-def _install(lib: Path, target: Path) -> bool:
-    """Copy a built library into the cache (another process may build the same one at the same time)."""
-    global last_error
-    try:
-        replace_atomically(target, lambda partial: shutil.copyfile(lib, partial))
-    except OSError as exc:
-        last_error = (f"cannot write the C build to {target.parent} ({exc}); "
-                      "set IKC_CACHE to a writable one")
-        return False
-    return True
-
-
 def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
     """Compile ``text`` into the shared library ``target`` (kept when it exists); False with
     :data:`last_error` set when the compiler fails."""
+    global last_error
     if target.exists():
         return True
     with tempfile.TemporaryDirectory(prefix="ikc-build-") as tmp:
         src = Path(tmp) / "chain.c"
         src.write_text(text)
         lib = Path(tmp) / "chain.so"
-        return (_run_all(cc, [list(flags) + ["-o", str(lib), str(src), *extra, "-lm"]])
-                and _install(lib, target))
-
-
-def _compile_units(cc: str, units, target: Path, extra=()) -> bool:
-    """Compile the translation units ``[(flags, text), ...]`` at the same time and link them (with
-    ``extra``) into the shared library ``target`` (kept when it exists)."""
-    if target.exists():
-        return True
-    with tempfile.TemporaryDirectory(prefix="ikc-build-") as tmp:
-        objects, commands = [], []
-        for k, (flags, text) in enumerate(units):
-            src, obj = Path(tmp) / f"unit{k}.c", Path(tmp) / f"unit{k}.o"
-            src.write_text(text)
-            objects.append(str(obj))
-            commands.append(list(flags) + ["-c", "-o", str(obj), str(src)])
-        lib = Path(tmp) / "chain.so"
-        return (_run_all(cc, commands)
-                and _run_all(cc, [list(LINK_FLAGS) + ["-o", str(lib), *objects, *extra, "-lm"]])
-                and _install(lib, target))
+        try:
+            done = subprocess.run(cc.split() + list(flags) + ["-o", str(lib), str(src), *extra, "-lm"],
+                                  capture_output=True, text=True, timeout=300)
+        except (OSError, subprocess.SubprocessError) as exc:
+            last_error = f"{cc} failed to run: {exc}"
+            return False
+        if done.returncode != 0:
+            last_error = f"{cc} failed: {done.stderr.strip()[:2000]}"
+            return False
+        # another process may build the same library at the same time
+        try:
+            replace_atomically(target, lambda partial: shutil.copyfile(lib, partial))
+        except OSError as exc:
+            last_error = (f"cannot write the C build to {target.parent} ({exc}); "
+                          "set IKC_CACHE to a writable one")
+            return False
+    return True
 
 
 def _key(*parts: str) -> str:
@@ -248,17 +203,9 @@ def build(source: str, *, include_kernels: bool = True) -> Path | None:
     if include_kernels:
         finish = _finish_library(cc, cc_id, directory)
         if finish is not None:
-            prelude = _chain_prelude()
-            text = prelude + source
-            units = source.split(COLD_UNIT)
-            flags = " ".join(CHAIN_FLAGS) if len(units) == 1 else " ".join(UNIT_FLAGS + COLD_FLAGS)
-            target = directory / f"ikc_{_key(text, cc_id, flags, str(finish))}.so"
-            if len(units) == 1:
-                built = _compile(cc, CHAIN_FLAGS, text, target, extra=(str(finish),))
-            else:
-                parts = [(UNIT_FLAGS, prelude + units[0])] + [(COLD_FLAGS, prelude + u) for u in units[1:]]
-                built = _compile_units(cc, parts, target, extra=(str(finish),))
-            if built:
+            text = _chain_prelude() + source
+            target = directory / f"ikc_{_key(text, cc_id, ' '.join(CHAIN_FLAGS), str(finish))}.so"
+            if _compile(cc, CHAIN_FLAGS, text, target, extra=(str(finish),)):
                 return target
     text = (kernels + "\n" if include_kernels else "") + source
     target = directory / f"ikc_{_key(text, cc_id, ' '.join(FLAGS))}.so"

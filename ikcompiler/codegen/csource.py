@@ -75,7 +75,9 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
     except Untranslatable:
         return None
     try:
-        alt = (c_function(alternative, "ikc_chain_alt", dof, storage=native.UNIT_LOCAL)
+        # the alternative chain runs only where the chain cannot settle a target: compiled as cold
+        # code (native.COLD: a lower -O level, about half the compiler's time on it; section 14)
+        alt = (c_function(alternative, "ikc_chain_alt", dof, storage=f"{native.COLD} static")
                if alternative is not None else None)
     except Untranslatable:
         alt = None
@@ -83,20 +85,11 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
         " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
     ]
-    if alt is None:
-        return _with_entries(head + main[0], leaves=main[1], alt=None, kinds=kinds, lower=lower,
-                             upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
-                             twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
-                             near_singular=near_singular)
-    # The alternative chain runs only where the chain cannot settle a target: it is a translation unit
-    # of its own (native.COLD_UNIT), compiled beside the chain's and at a lower -O level (section 14).
-    declaration = [native.UNIT_LOCAL_DEFINITION, alt[0][0],
-                   alt[0][1].replace(") {", ");"), ""]
-    first = _with_entries(head + main[0] + declaration, leaves=main[1], alt=alt[1], kinds=kinds,
-                          lower=lower, upper=upper, free=free, target=target, scale=scale, tol=tol,
-                          slots=slots, twists=twists, home=home, A=A, b=b, search=search, grid=grid,
-                          polish=polish, near_singular=near_singular)
-    return first + "\n".join([native.COLD_UNIT, native.UNIT_LOCAL_DEFINITION] + alt[0])
+    body = main[0] + ([*native.COLD_DEFINITION.splitlines(), *alt[0]] if alt else [])
+    return _with_entries(head + body, leaves=main[1], alt=alt[1] if alt else None, kinds=kinds, lower=lower,
+                         upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
+                         twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
+                         near_singular=near_singular)
 
 
 def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target, scale, tol, slots, twists,

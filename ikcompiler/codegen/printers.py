@@ -228,9 +228,7 @@ def wrap(line: str, width: int = C_WIDTH) -> list[str]:
 def c_function(program: ir.Program, name: str, dof: int, *,
                storage: str = "static") -> tuple[list[str], int]:
     """(C lines of ``STORAGE int NAME(...)``, the most leaves it writes); raises :class:`Untranslatable`.
-
-    ``storage``: ``static``, or the linkage macro of a function that another translation unit of the
-    same library calls (csource.UNIT_LOCAL)."""
+    ``storage``: ``static``, or with an attribute macro in front (``native.COLD``)."""
     pr = _CPrinter(dof)
     for i, g in enumerate(program.goal):
         pr.emit(f"const double {g} = goal[{i}];")
