@@ -113,9 +113,8 @@ def main(argv=None) -> int:
         "Cold: the chain not in the cache (the shared finish library is: it is built once per machine "
         "and compiler, docs/design.md section 14). Warm: the chain found in the cache. One-piece: kernels, "
         "finish and chain compiled as one file (the build before this change; still the fallback). "
-        "CPU: the process's own time plus its compiler's. The C build compiles the chain's translation "
-        "unit and, where the plan has one, its alternative chain's (at -O1) at the same time, so its wall "
-        "time on an idle machine is below its CPU time (docs/design.md section 14). Python's bytecode "
+        "CPU: the process's own time plus its compiler's (the alternative chain compiled as cold code, "
+        "-O1, the chain without -fschedule-insns2: docs/design.md section 14). Python's bytecode "
         "cache is on, as for an installed package; the last column is the cold total without it "
         "(PYTHONDONTWRITEBYTECODE=1, this machine's default environment: each fresh process compiles "
         "the source of the modules it imports lazily again).", "",
