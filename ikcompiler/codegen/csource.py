@@ -76,7 +76,7 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         return None
     try:
         # the alternative chain runs only where the chain cannot settle a target: compiled as cold
-        # code (native.COLD: -O1, a fifth less of the compiler's work on it; design section 14)
+        # code (native.COLD: -O1, a fifth less of the compiler's work on it; docs/design.md section 14)
         alt = (c_function(alternative, "ikc_chain_alt", dof, storage=f"{native.COLD} static")
                if alternative is not None else None)
     except Untranslatable:
