@@ -22,6 +22,7 @@ from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.facts import configurations, record_step_facts
 from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
 from ikcompiler.model import Chain, Joint
+from ikcompiler.model.fold import fold_slides
 from ikcompiler.plan import Plan
 from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
@@ -72,7 +73,11 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
             )
     dof_needed = 6 if target == "pose" else 3
     unknown = chain.dof - len(free)
-    notes = []
+    # runs of mimicking slides become one slide each: the plan is made on the folded chain, whose
+    # joint names are the original independent ones (docs/design.md section 2, "Folded slides")
+    folding = fold_slides(chain)
+    chain = folding.chain
+    notes = list(folding.notes)
     if target == "orientation":
         sliding = [
             j.name
@@ -203,6 +208,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     Where a 1-D search exists (``search_1d()``), both are measured on sample poses and the 1-D search
     plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
     from ikcompiler import general6_route
+    from ikcompiler.codegen.csource import general6_native_arrangements
     from subproblems import general6
 
     if not USE_GENERAL6 or target != "pose" or free or len(chain.joint_types) != 6 or chain.couplings:
@@ -212,28 +218,36 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
-    found = search_1d()
-    if found is not None:
-        searched = _search_plan(chain, target, free, geometry, notes, found)
-        module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
-        verdict = general6_route.compare(chain, module, solver, searched.method)
-        notes.append(verdict.note)
-        if verdict.keep_search:
-            return dataclasses.replace(searched, notes=tuple(notes))
     step = General6Step(
         code="G6R",
         solve=list(range(6)),
         arrangements=list(solver.usable),
+        native=general6_native_arrangements(solver),
         rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     )
     names = [j.name for j in chain.joints]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
-    notes.append(f"general 6R elimination, arrangements in order (later ones for doubtful poses): {tried}")
     all_names = tuple(j.name for j in chain.joints)
-    return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
-                tuple(free), False, 0, geometry, tuple(notes), 0.0, all_names=all_names)
+
+    def general_plan(extra=()) -> Plan:
+        told = (*notes, *extra, f"general 6R elimination, arrangements in order (later ones for doubtful "
+                f"poses): {tried}")
+        return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
+                    tuple(free), False, 0, geometry, told, 0.0, all_names=all_names)
+
+    found = search_1d()
+    if found is None:
+        return general_plan()
+    # both measured as their modules run (the C chain where it builds, docs/general6.md "When it is used")
+    searched = _search_plan(chain, target, free, geometry, notes, found)
+    module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
+    general = load_module(plan_source(general_plan(), chain, tol=tol), _module_name(chain.name))
+    verdict = general6_route.compare(chain, module, general, searched.method)
+    if verdict.keep_search:
+        return dataclasses.replace(searched, notes=(*notes, verdict.note))
+    return general_plan((verdict.note,))
 
 
 def _search_fallback(chain, ctx, couplings, lower, upper, start, sizes=(1, 2)):
@@ -276,7 +290,8 @@ def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> st
     from ikcompiler import __version__
 
     tol = tol or Tolerance()
-    solved = with_tool_roll(chain) if plan.virtual else chain
+    folding = fold_slides(chain)  # as compile_plan did: the plan's joints are the folded chain's
+    solved = with_tool_roll(folding.chain) if plan.virtual else folding.chain
     return generate(
         plan,
         solved,
@@ -284,7 +299,8 @@ def plan_source(plan: Plan, chain: Chain, *, tol: Tolerance | None = None) -> st
         version=__version__,
         scale=chain.scale,
         tol=tol.exact,
-        output=chain,
+        output=folding.chain,
+        speed=folding.speed if folding.folded else None,
     )
 
 

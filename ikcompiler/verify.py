@@ -97,14 +97,20 @@ class VerifyReport:
         )
 
 
-def sample_configurations(chain, count: int, seed: int = 0, special: float = 0.25) -> np.ndarray:
-    """Joint values inside the limits; each revolute value is a special angle with probability ``special``."""
+def sample_configurations(chain, count: int, seed: int = 0, special: float = 0.25, limits=None) -> np.ndarray:
+    """Joint values inside the limits; each revolute value is a special angle with probability ``special``.
+
+    ``limits`` (lower, upper): narrower limits to sample in, where a module imposes them (folded slides
+    intersect their members' limits into the master's: ikcompiler/model/fold.py)."""
     rng = np.random.default_rng(seed)
-    lo = np.where(np.isfinite(chain.lower), chain.lower, -math.pi)
-    hi = np.where(np.isfinite(chain.upper), chain.upper, math.pi)
+    lower, upper = chain.lower, chain.upper
+    if limits is not None:
+        lower, upper = np.maximum(lower, limits[0]), np.minimum(upper, limits[1])
+    lo = np.where(np.isfinite(lower), lower, -math.pi)
+    hi = np.where(np.isfinite(upper), upper, math.pi)
     kinds = [chain.joints[i].kind for i in chain.independent]
     for c, k in enumerate(kinds):
-        if k == "T" and not (np.isfinite(chain.lower[c]) and np.isfinite(chain.upper[c])):
+        if k == "T" and not (np.isfinite(lower[c]) and np.isfinite(upper[c])):
             lo[c], hi[c] = -chain.scale, chain.scale
     Q = rng.uniform(lo, hi, size=(count, chain.dof))
     snap = rng.random(size=Q.shape) < special
@@ -192,7 +198,7 @@ def verify(
     allow_missed: int = 0,
 ) -> VerifyReport:
     """Sample, solve and count (see the module docstring); ``progress(done, total)`` after each chunk."""
-    Q = sample_configurations(chain, samples, seed, special)
+    Q = sample_configurations(chain, samples, seed, special, (module.LOWER, module.UPPER))
     kinds = [chain.joints[i].kind for i in chain.independent]
     G = chain.fk_batch(Q)
     targets = {"position": G[:, :3, 3], "orientation": G[:, :3, :3]}.get(module.TARGET, G)

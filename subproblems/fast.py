@@ -31,6 +31,7 @@ Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 * :func:`point_r`   S2-R  ``exp(w th)(p) = q``                 1 slot
 * :func:`turn_slide2` S1-RTT ``exp(xi1 t1) exp(v2 t2) exp(v3 t3) = T``  1 slot
 * :func:`slide3`    S2-TTT, S1-TTT ``v1 t1 + v2 t2 + v3 t3 = b`` 1 slot
+* :func:`slide2_turn` S2-TTR ``v1 t1 + v2 t2 + exp(xi3 t3)(p) = q``  2 slots
 * :func:`point_rr_meet`  S2-RR, axes meeting at ``c``          2 slots
 * :func:`point_rr_parallel`  S2-RR, parallel axes              2 slots
 * :func:`rot_r`, :func:`rot_rr`, :func:`rot_rrr`   O-R, O-RR, O-RRR on a rotation ``R`` (9-tuple,
@@ -249,6 +250,28 @@ def turn_slide2(m, w, r, v2, v3, R, t):
     inv = 1.0 / m.big(det)
     y2, y3 = dot(v2, x), dot(v3, x)
     return ((t1, (e * y2 - b * y3) * inv, (a * y3 - b * y2) * inv, f1 | (det <= NEAR * a * e) * DEFER),)
+
+
+def slide2_turn(m, v1, v2, w, r, p, q, rep=0.0):
+    """S2-TTR: ``v1 t1 + v2 t2 + exp(xi3 t3)(p) = q`` with xi3 about the axis (w, r).
+
+    Across both slides (the normal ``n = v1 x v2``) they move nothing: ``n . exp(xi3 t3)(p) = n . q``
+    gives t3 (H-R, 2 slots; ``rep``: see :func:`trig_roots`); the slides then take
+    ``x = q - exp(xi3 t3)(p)``: ``v1 t1 + v2 t2 = x`` by normal equations.  Defer when the slides are
+    (nearly) parallel, where the normal is not defined."""
+    n = cross(v1, v2)
+    a, b, e = dot(v1, v1), dot(v1, v2), dot(v2, v2)
+    det = a * e - b * b
+    inv = 1.0 / m.big(det)
+    parallel = (det <= NEAR * a * e) * DEFER
+    u = sub(p, r)
+    out = []
+    for t3, f3 in plane_r(m, w, r, p, n, dot(n, q), rep):
+        y = rotate(m, w, t3, u)
+        x = (q[0] - y[0] - r[0], q[1] - y[1] - r[1], q[2] - y[2] - r[2])
+        y1, y2 = dot(v1, x), dot(v2, x)
+        out.append(((e * y1 - b * y2) * inv, (a * y2 - b * y1) * inv, t3, f3 | parallel))
+    return tuple(out)
 
 
 def point_r(m, w, r, p, q):

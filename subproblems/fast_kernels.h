@@ -12,7 +12,7 @@
  *    row-major rotation R (9 entries) as const double *, scalars as double; then its outputs:
  *    double *q, slots x outs values slot-major (slot k, output j at q[k * outs + j]), and int *f,
  *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide3 1x3,
- *    turn_slide2 1x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
+ *    turn_slide2 1x3, slide2_turn 2x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
  *    rot_rrr 2x3;
  *  - SCALAR semantics: clip1 keeps NaN, pos(x) = x > 0 ? x : 0 (NaN -> 0), big(x) = x > TINY ? x : TINY;
  *    a comparison with NaN is false, as in Python.
@@ -204,6 +204,34 @@ static inline void ikc_slide3(const double *v1, const double *v2, const double *
     q[1] = ikc_dot(b, c31) * inv;
     q[2] = ikc_dot(b, c12) * inv;
     f[0] = (fabs(det) <= IKC_NEAR * scale) ? IKC_DEFER : 0;
+}
+
+/* S2-TTR: v1 t1 + v2 t2 + exp(xi3 t3)(p) = q, xi3 about the axis (w, r): t3 from the plane across both
+ * slides (plane_r with the normal v1 x v2), then the slides by normal equations.  2 slots x 3 */
+static inline void ikc_slide2_turn(const double *v1, const double *v2, const double *w, const double *r,
+                                   const double *p, const double *qq, double rep, double *q, int *f) {
+    double n[3], u[3];
+    ikc_cross(v1, v2, n);
+    double a = ikc_dot(v1, v1), b = ikc_dot(v1, v2), e = ikc_dot(v2, v2);
+    double det = a * e - b * b;
+    double inv = 1.0 / ikc_big(det);
+    int parallel = (det <= IKC_NEAR * a * e) ? IKC_DEFER : 0;
+    ikc_sub(p, r, u);
+    double t3[2];
+    int f3[2];
+    ikc_plane_r(w, r, p, n, ikc_dot(n, qq), rep, t3, f3);
+    for (int k = 0; k < 2; k++) {
+        double y[3], x[3];
+        ikc_rotate(w, t3[k], u, y);
+        x[0] = qq[0] - y[0] - r[0];
+        x[1] = qq[1] - y[1] - r[1];
+        x[2] = qq[2] - y[2] - r[2];
+        double y1 = ikc_dot(v1, x), y2 = ikc_dot(v2, x);
+        q[3 * k] = (e * y1 - b * y2) * inv;
+        q[3 * k + 1] = (a * y2 - b * y1) * inv;
+        q[3 * k + 2] = t3[k];
+        f[k] = f3[k] | parallel;
+    }
 }
 
 /* O-R: exp([w] th) = R.  1 slot x 1 */

@@ -39,7 +39,6 @@
 #define G6_STACK 256       /* isolation cells pending at once */
 #define G6_RANK 1e-9       /* |R_last / R_first| of B' below this: doubtful (general6 brank) */
 #define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
-#define G6_STALLED 1e-3    /* a clean candidate missing by less (of the size) after Newton: doubtful */
 #define G6_CLEAN 1e-6      /* prismatic pencils: a candidate missing by less (of the size) before Newton
                             * is a clean root, a farther one may be spurious */
 
@@ -47,7 +46,7 @@ typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
     int conj;         /* the first conj joints have their axes mapped by the target */
     int order[6];     /* original joint index at positions a..f */
-    int prism[6];     /* prismatic, in arrangement order (only a, b can be) */
+    int prism[6];     /* prismatic, in arrangement order (a, b, d, e can be; c and f are revolute) */
     int ncols;        /* columns of B' present */
     int cols[8];
     double w[18], r[18];  /* axes in arrangement order, normalised coordinates */
@@ -92,18 +91,20 @@ static void g6_compose(double *R, double *t, const double *R2, const double *t2)
     for (int k = 0; k < 3; k++) t[k] = tn[k];
 }
 
+/* y = R x + t (t NULL: R x); fast_kernels.h's ikc_mat_vec */
 static void g6_apply(const double *R, const double *t, const double *x, double *y) {
-    for (int i = 0; i < 3; i++) y[i] = R[3 * i] * x[0] + R[3 * i + 1] * x[1] + R[3 * i + 2] * x[2] + (t ? t[i] : 0.0);
+    ikc_mat_vec(R, x, y);
+    if (t)
+        for (int i = 0; i < 3; i++) y[i] += t[i];
 }
 
+/* the fourteen quantities p, l, p.p, p.l, p x l, (p.p) l - 2 (p.l) p (general6.py _fourteen) */
 static void g6_fourteen(const double *p, const double *l, double *q) {
-    double pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2], pl = p[0] * l[0] + p[1] * l[1] + p[2] * l[2];
+    const double pp = ikc_dot(p, p), pl = ikc_dot(p, l);
     for (int k = 0; k < 3; k++) q[k] = p[k], q[3 + k] = l[k];
     q[6] = pp;
     q[7] = pl;
-    q[8] = p[1] * l[2] - p[2] * l[1];
-    q[9] = p[2] * l[0] - p[0] * l[2];
-    q[10] = p[0] * l[1] - p[1] * l[0];
+    ikc_cross(p, l, q + 8);
     for (int k = 0; k < 3; k++) q[11 + k] = pp * l[k] - 2.0 * pl * p[k];
 }
 
@@ -241,21 +242,14 @@ static void g6_trig3(const double *a, const double *b, double c1, double s1, dou
     }
 }
 
-/* D, D' and D'' at phi (g6_trig3 at its cosine and sine) */
-static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
-    double d[4];
-    g6_trig3(a, b, cos(phi), sin(phi), d);
-    *f = d[0];
-    if (df) *df = d[1];
-    if (ddf) *ddf = d[2];
-}
-
-/* a root of D in [lo, hi] where D(lo), D(hi) differ in sign: Newton inside the bracket, else bisection */
-static double g6_refine(const double *a, const double *b, double lo, double hi, double flo) {
+/* A zero of D (order 0) or of D' (order 1) in [lo, hi], where that derivative changes sign (its
+ * value at lo is flo) and is monotone: Newton on it inside the bracket, bisection where a step leaves. */
+static double g6_bracket(const double *a, const double *b, double lo, double hi, double flo, int order) {
     double x = 0.5 * (lo + hi);
     for (int it = 0; it < 80; it++) {
-        double f, df;
-        g6_trig(a, b, x, &f, &df, NULL);
+        double d[4];
+        g6_trig3(a, b, cos(x), sin(x), d);
+        const double f = d[order], df = d[order + 1];
         if (f == 0.0) return x;
         if ((f < 0.0) == (flo < 0.0)) lo = x, flo = f;
         else hi = x;
@@ -267,22 +261,25 @@ static double g6_refine(const double *a, const double *b, double lo, double hi, 
     return x;
 }
 
-/* a zero of D' in [lo, hi] where D' changes sign and is monotone: Newton on D' inside the bracket */
+/* D, D' and D'' at phi (g6_trig3 at its cosine and sine) */
+static void g6_trig(const double *a, const double *b, double phi, double *f, double *df, double *ddf) {
+    double d[4];
+    g6_trig3(a, b, cos(phi), sin(phi), d);
+    *f = d[0];
+    if (df) *df = d[1];
+    if (ddf) *ddf = d[2];
+}
+
+/* a root of D in [lo, hi] where D(lo) = flo and D(hi) differ in sign */
+static double g6_refine(const double *a, const double *b, double lo, double hi, double flo) {
+    return g6_bracket(a, b, lo, hi, flo, 0);
+}
+
+/* a zero of D' in [lo, hi] where D' changes sign and is monotone */
 static double g6_extremum(const double *a, const double *b, double lo, double hi) {
-    double f, dlo, x = 0.5 * (lo + hi);
+    double f, dlo;
     g6_trig(a, b, lo, &f, &dlo, NULL);
-    for (int it = 0; it < 80; it++) {
-        double d, dd;
-        g6_trig(a, b, x, &f, &d, &dd);
-        if (d == 0.0) return x;
-        if ((d < 0.0) == (dlo < 0.0)) lo = x, dlo = d;
-        else hi = x;
-        double next = dd != 0.0 ? x - d / dd : 0.5 * (lo + hi);
-        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        if (fabs(next - x) <= 4e-16 * (1.0 + fabs(x)) || hi - lo <= 4e-16 * (1.0 + fabs(x))) return next;
-        x = next;
-    }
-    return x;
+    return g6_bracket(a, b, lo, hi, dlo, 1);
 }
 
 /* cos and sin of the first isolation grid, 2 pi i / G6_GRID (printed by Python's math) */
@@ -417,15 +414,25 @@ static int g6_roots(const double *a, const double *b, double noise, double *root
 
 static const double g6_probe[12] = {0.31, -0.77, 0.52, 0.13, -0.48, 0.91, -0.26, 0.67, -0.84, 0.39, 0.58, -0.19};
 
-/* th = 2 atan2(num, den) from the pair of largest magnitude */
-static double g6_ratio(int n, const double *den, const double *num) {
+/* A joint from consecutive monomials (num = its variable times den): th = 2 atan2(num, den) from the
+ * pair of largest magnitude (the half-angle tangent, valid at th = pi), or for a prismatic joint (its
+ * monomials are powers of the displacement itself) num / den from the pair of largest den
+ * (general6.py _read_ratio) */
+static double g6_ratio(int n, const double *den, const double *num, int prism) {
     int best = 0;
     double m = -1.0;
     for (int k = 0; k < n; k++) {
-        double s = den[k] * den[k] + num[k] * num[k];
+        double s = prism ? fabs(den[k]) : den[k] * den[k] + num[k] * num[k];
         if (s > m) m = s, best = k;
     }
-    return 2.0 * atan2(num[best], den[best]);
+    return prism ? num[best] / den[best] : 2.0 * atan2(num[best], den[best]);
+}
+
+/* (1, cos th, sin th) of a revolute joint, (1, d, d^2) of a prismatic one (general6.py _basis) */
+static void g6_basis(double th, int prism, double *u) {
+    u[0] = 1.0;
+    u[1] = prism ? th : cos(th);
+    u[2] = prism ? th * th : sin(th);
 }
 
 /* Candidates of goal g (12 entries, robot units) in the original joint order, prismatic values in
@@ -500,8 +507,11 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         for (int q = 0; q < 14; q++) s += Nl[e][q] * B[0][q];
         Cm[e][0][0] -= s;
     }
-    /* (1, c, s) times (1 + x^2) in powers of x: 1 -> (1, 0, 1), c -> (1, 0, -1), s -> (0, 2, 0) */
+    /* (1, c, s) times (1 + x^2) in powers of x: 1 -> (1, 0, 1), c -> (1, 0, -1), s -> (0, 2, 0); a
+     * prismatic d or e has its basis (1, d, d^2) already in monomials: the identity */
     static const double half[3][3] = {{1.0, 0.0, 1.0}, {1.0, 0.0, -1.0}, {0.0, 2.0, 0.0}};
+    static const double same[3][3] = {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+    const double (*hd)[3] = G->prism[3] ? same : half, (*he)[3] = G->prism[4] ? same : half;
     double Mt[3][12][12];
     for (int tt = 0; tt < 3; tt++)
         for (int i = 0; i < 12; i++)
@@ -513,7 +523,7 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
                     double s = 0.0;
                     for (int td = 0; td < 3; td++)
                         for (int te = 0; te < 3; te++)
-                            s += Cm[e][tt][3 * td + te] * half[td][md] * half[te][me];
+                            s += Cm[e][tt][3 * td + te] * hd[td][md] * he[te][me];
                     Mt[tt][e][3 * md + me] = s;
                     Mt[tt][6 + e][3 * md + 3 + me] = s;
                 }
@@ -573,11 +583,14 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         /* v[3 i + j] = x_d^i x_e^j, i <= 3, j <= 2 */
         double den[9], num[9];
         for (int i = 0; i < 9; i++) den[i] = v[i], num[i] = v[i + 3];
-        const double thd = g6_ratio(9, den, num);
+        const double thd = g6_ratio(9, den, num, G->prism[3]);
         for (int i = 0; i < 4; i++)
             for (int j = 0; j < 2; j++) den[2 * i + j] = v[3 * i + j], num[2 * i + j] = v[3 * i + j + 1];
-        const double the = g6_ratio(8, den, num);
-        const double tc[3] = {1.0, c, s}, ud[3] = {1.0, cos(thd), sin(thd)}, ue[3] = {1.0, cos(the), sin(the)};
+        const double the = g6_ratio(8, den, num, G->prism[4]);
+        const double tc[3] = {1.0, c, s};
+        double ud[3], ue[3];
+        g6_basis(thd, G->prism[3], ud);
+        g6_basis(the, G->prism[4], ue);
         double rhs[14];
         for (int q = 0; q < 14; q++) {
             double acc = 0.0;
@@ -624,10 +637,8 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         double Ru[3], cr[3];
         g6_apply(Rf, NULL, G->u, Ru);
         const double *u = G->u, *wf = G->w + 15;
-        cr[0] = u[1] * Ru[2] - u[2] * Ru[1];
-        cr[1] = u[2] * Ru[0] - u[0] * Ru[2];
-        cr[2] = u[0] * Ru[1] - u[1] * Ru[0];
-        th[5] = atan2(cr[0] * wf[0] + cr[1] * wf[1] + cr[2] * wf[2], Ru[0] * u[0] + Ru[1] * u[1] + Ru[2] * u[2]);
+        ikc_cross(u, Ru, cr);
+        th[5] = atan2(ikc_dot(cr, wf), ikc_dot(Ru, u));
         for (int j = 0; j < 6; j++) {
             double x = th[j];
             if (G->prism[j]) x *= G->s;
@@ -638,17 +649,13 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
     return n;
 }
 
-/* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g: every candidate after
- * G6_NEWTON Newton steps on the true robot, exact ones as plain leaves, far ones empty; a doubtful
- * target (or a candidate stalled short of exact) one DEFER leaf, for the Python general6. */
-static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E, int *F) {
+/* One arrangement's leaves for goal g: every candidate after G6_NEWTON Newton steps on the true robot,
+ * exact ones as plain leaves, far ones empty; their count, or -1 when the target is doubtful under this
+ * arrangement (a candidate stalled short of exact, two candidates that met). */
+static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E,
+                                 int *F) {
     int n = ikc_g6_candidates(G, g, Q);
-    if (n < 0) {
-        for (int j = 0; j < 6; j++) Q[j] = 0.0;
-        E[0] = 0.0;
-        F[0] = IKC_DEFER;
-        return 1;
-    }
+    if (n < 0) return -1;
     const double exact = rb->tol * rb->scale;
     int clean[16];
     for (int k = 0; k < n; k++) {
@@ -660,21 +667,35 @@ static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, 
         E[k] = e;
         F[k] = 0;
         if (e <= exact) continue;
-        /* a clean root (it started close) that Newton cannot finish: a double root in disguise */
-        if (e != e || (clean[k] && e < G6_STALLED * rb->scale)) {
-            F[0] = IKC_DEFER;
-            return 1;
-        }
+        /* a clean root that Newton cannot finish, near or far: a double root in disguise or a null
+         * vector misread beside a close root (dropping the far ones lost 2 of 8 solutions on Jaco
+         * poses with every joint at 0, +-pi/2 or pi) */
+        if (e != e || clean[k]) return -1;
         F[k] = IKC_EMPTY;  /* a spurious root of a prismatic pencil (started far, went nowhere) */
     }
     /* two clean roots whose candidates met: a near-double root (Newton took both to one solution, or
-     * the pencil's rounding split one double root); the Python path's re-solve decides */
+     * the pencil's rounding split one double root) */
     for (int i = 0; i < n; i++)
         for (int j = i + 1; j < n; j++)
             if (clean[i] && clean[j] && !(F[i] & IKC_EMPTY) && !(F[j] & IKC_EMPTY) &&
-                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE) {
-                F[0] = IKC_DEFER;
-                return 1;
-            }
+                ikc_row_distance(rb, Q + 6 * i, Q + 6 * j) < G6_COLLIDE)
+                return -1;
     return n;
+}
+
+/* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g, trying the module's
+ * arrangements G[0..count-1] in order (general6.py's usable order): a target doubtful under one is
+ * re-solved under the next, and the first that answers it cleanly gives its leaves, the same trust as a
+ * clean first arrangement (general6.py's doubtful-target path, docs/general6.md "Native path").  A
+ * target doubtful under every one is one DEFER leaf, for the Python general6 (rotated copies). */
+static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
+                         int *F) {
+    for (int k = 0; k < count; k++) {
+        int n = g6_arrangement_leaves(rb, G + k, g, Q, E, F);
+        if (n >= 0) return n;
+    }
+    for (int j = 0; j < 6; j++) Q[j] = 0.0;
+    E[0] = 0.0;
+    F[0] = IKC_DEFER;
+    return 1;
 }

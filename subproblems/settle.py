@@ -73,7 +73,8 @@ class FinishRobot:
         return cls(
             dof=dof, slots=int(ns["MAX_SOLUTIONS"]), target=TARGET_CODES[ns["TARGET"]],
             revolute=tuple(k == "R" for k in ns["JOINT_TYPES"]),
-            lower=tuple(float(x) for x in ns["LOWER"]), upper=tuple(float(x) for x in ns["UPPER"]),
+            lower=tuple(float(x) for x in ns.get("_LOWER", ns["LOWER"])),
+            upper=tuple(float(x) for x in ns.get("_UPPER", ns["UPPER"])),
             scale=float(ns["SCALE"]), tol=float(ns["TOLERANCE"]),
             twists=tuple(tuple(float(x) for x in t) for t in ns["_TWISTS"]),
             home=tuple([H[i][j] for i in range(3) for j in range(3)] + [H[i][3] for i in range(3)]),

@@ -72,6 +72,10 @@ INPUT_UNIT_NOTE = 1e-12
 #: URDF mimic joints: a multiplier within this of +-1 can stand for its master; a follower's limits
 #: contain the master's when they do to this.
 INPUT_MIMIC = 1e-12
+#: Folded slides (``ikcompiler/model/fold.py``): a run of slides driven by one master whose summed
+#: direction ``sum a_i v_i`` (multipliers times unit vectors, absolute) is shorter than this cancels out
+#: and is not folded (the master would move nothing there).
+FOLD_SPEED = 1e-9
 
 # -------------------------------------------------------------------------- class I (S1-*), _class1.py
 
@@ -297,7 +301,8 @@ G6_LEADING_OK = 1e-9
 #: (a ratio): the target is doubtful.  general6.h ``G6_RANK`` (|R_last / R_first| of its pivoted QR).
 G6_RANK = 1e-9
 #: A candidate still missing by less than this (of the size) after Newton stalled near a solution (a
-#: double root): its target is doubtful.  general6.h ``G6_STALLED``.
+#: double root): its target is doubtful (general6.py; general6.h treats every clean candidate that
+#: Newton cannot finish as doubtful).
 G6_STALLED = 1e-3
 #: A column of B' whose largest entry over sample targets is below this times B's largest is
 #: structurally absent (a prismatic joint's missing products; a ratio).

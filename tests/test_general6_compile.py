@@ -116,8 +116,9 @@ def _irb140():
 
 
 def test_irb140_keeps_the_1d_search_measured_complete_and_faster():
-    """rtb-data's abb_irb140: the C 1-D search was complete there and 100x faster than general-6r's
-    doubtful-pose path (issue 10 item 1); the sampled decision keeps it and says so in the notes."""
+    """rtb-data's abb_irb140: the C 1-D search is complete on the sample (a quarter of the values
+    special) and faster than the general-6r module, which misses rows at its wrist-singular special
+    poses (issue 10 item 1); the sampled decision keeps it and says so in the notes."""
     from ikcompiler.compiler import compile_plan
 
     chain = _irb140()
@@ -138,7 +139,7 @@ def test_irb140_general6_prefers_an_order_with_few_doubtful_poses():
 
     chain = _irb140()
     solver = g6.General6(chain.twists, chain.home, chain.scale)
-    Q = sample_joints(chain)
+    Q = sample_joints(chain, special=0.0)
     Tn = solver._norm(chain.fk_batch(Q))
     _, _, doubt = solver._candidates(solver._arr[solver.usable[0]], Tn @ g6._inv(solver.Mn))
     assert doubt.sum() <= 4, (solver.usable, solver.why)
@@ -178,11 +179,26 @@ def test_route_refuses_an_incomplete_or_slower_search():
 
     chain = _random_chain(4)
     solver = g6.General6(chain.twists, chain.home, chain.scale)
-    missing = compare(chain, _Dropping(solver, drop=7), solver, "1d-search")
+    general = _Dropping(solver, drop=0)  # the general-6r module's solve_batch: every row
+    missing = compare(chain, _Dropping(solver, drop=7), general, "1d-search")
     assert not missing.keep_search and "incomplete" in missing.note, missing.note
-    slow = compare(chain, _Dropping(solver, drop=0, work=3), solver, "1d-search")
+    slow = compare(chain, _Dropping(solver, drop=0, work=3), general, "1d-search")
     assert not slow.keep_search and "slower" in slow.note, slow.note
     assert "on 8 sampled poses" in slow.note and "recovered 8/8 sampled joint vectors" in slow.note, slow.note
+
+
+def test_route_keeps_a_slower_search_where_general6r_misses_rows():
+    """Both sides' completeness is measured: a complete search is kept, slower or not, where the
+    general-6r module misses a row it finds (abb_irb140's doubtful targets at special poses)."""
+    from ikcompiler.general6_route import compare
+    from subproblems import general6 as g6
+
+    chain = _random_chain(4)
+    solver = g6.General6(chain.twists, chain.home, chain.scale)
+    kept = compare(chain, _Dropping(solver, drop=0, work=3), _Dropping(solver, drop=5), "1d-search")
+    assert kept.keep_search and "complete where general-6r is not" in kept.note, kept.note
+    assert "on 64 sampled poses" in kept.note, kept.note
+    assert "recovered 64/64 sampled joint vectors" in kept.note, kept.note
 
 
 def test_general_trrrrr_chain_compiles_to_general_6r_and_verifies():
@@ -223,3 +239,16 @@ def test_prismatic_joints_on_both_sides_keep_the_search_with_a_note():
     assert plan.method != "general-6r"
     refused = [n for n in plan.notes if "general 6R elimination not used" in n]
     assert refused and "pencil is singular" in refused[0], plan.notes
+    assert "joints 3 and 4 are adjacent prismatic joints" in refused[0], refused[0]
+
+
+@pytest.mark.parametrize("kinds, joints", [("RTTRRR", "2 and 3"), ("RRRTTR", "4 and 5")])
+def test_adjacent_prismatic_joints_are_refused_by_name(kinds, joints):
+    """The known gap (adjacent prismatic joints at d and e of every usable order) is a typed refusal
+    (General6Error) that names the joints."""
+    from ikcompiler.configs import modular_chain
+    from subproblems import general6 as g6
+
+    chain = modular_chain(kinds, 0, "general")
+    with pytest.raises(g6.General6Error, match=f"joints {joints} are adjacent prismatic joints"):
+        g6.General6(chain.twists, chain.home, chain.scale)

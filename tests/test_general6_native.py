@@ -104,16 +104,21 @@ def test_random_arms_same_sets_as_python(seed):
     assert back <= HANDED_BACK * len(T), back
 
 
-def test_prismatic_at_d_or_e_stays_python():
-    """An arm whose preferred arrangement puts a prismatic joint at d or e (RTRRRR here: general6.py
-    chose its joint 2 at d) has no C chain: general6.h covers prismatic joints at a, b only."""
-    module = compile_robot(_prismatic_chain("RTRRRR", 1))
+def test_deflated_pencil_stays_python():
+    """An arm whose preferred arrangement needs the deflated 9 x 9 pencil (a prismatic joint on each
+    side of the split: TRTRRR here) has no C chain, and its module says so (NATIVE False: one rule,
+    csource.general6_native_arrangements)."""
+    module = compile_robot(_prismatic_chain("TRTRRR", 1))
+    assert module.METHOD == "general-6r"
     arr = module._GENERAL6._arr[module._GENERAL6.usable[0]]
-    assert any(arr.prism[2:]) and module._SOLVER.native_chain() is None
+    assert arr.deflate is not None and module._SOLVER.native_chain() is None
+    assert module.NATIVE is False
 
 
-@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "TTRRRR", "RRRRTT"])
+@pytest.mark.parametrize("kinds", ["TRRRRR", "RRRRRT", "TTRRRR", "RRRRTT", "RTRRRR", "RRTRRR", "RRRTRR"])
 def test_prismatic_same_sets_as_python(kinds):
+    """Prismatic joints at a, b (TRRRRR ...) and at d or e (RTRRRR: general6.py prefers its joint 2 at
+    d; RRTRRR, RRRTRR): the C's rows are the Python general6's."""
     chain = _prismatic_chain(kinds, 1)
     module, nc = _module(kinds, chain)
     prism = np.array([k == "T" for k in kinds])
@@ -198,6 +203,57 @@ def test_header_thresholds_are_the_tolerances():
     text = (Path(native.__file__).with_name("general6.h")).read_text()
     found = dict(re.findall(r"#define (G6_[A-Z_]+) ([0-9.e+-]+)", text))
     mirrored = {k: v for k, v in found.items() if hasattr(tolerances, k)}
-    assert {"G6_RANK", "G6_STALLED", "G6_CLOSE", "G6_NEAR_DOUBLE", "G6_NOISE", "G6_CLEAN"} <= set(mirrored)
+    assert {"G6_RANK", "G6_CLOSE", "G6_NEAR_DOUBLE", "G6_NOISE", "G6_CLEAN"} <= set(mirrored)
     for name, value in mirrored.items():
         assert float(value) == getattr(tolerances, name), name
+
+
+def _first_arrangement_only(module, robot):
+    """The module's C with its first arrangement alone (what the C ran before the re-solve)."""
+    from ikcompiler.codegen import csource
+    from subproblems import general6 as g6
+
+    ns = vars(module)
+    solver = g6.General6(robot.twists, robot.home, robot.scale, arrangement=[module._GENERAL6.usable[0]])
+    src = csource.general6_c_source(
+        solver, kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"], target=ns["TARGET"],
+        scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
+        home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
+    return native.bind(src, dof=6, slots=ns["MAX_SOLUTIONS"], nfree=0, target="pose")
+
+
+def test_jaco_doubtful_targets_resolved_by_the_next_arrangement_in_c():
+    """A target doubtful under the first arrangement is re-solved in C under the next (general6.h
+    ikc_g6_leaves): on special-angle Jaco poses some targets the first arrangement alone hands back are
+    answered in C, and those answers are the Python general6's rows, exact, with the sampled vector."""
+    robot = load_robot("jaco")
+    module, nc = _module("jaco", robot)
+    assert len(csource_arrangements(module)) >= 2
+    first = _first_arrangement_only(module, robot)
+    Q = sample_configurations(robot, 150, seed=4, special=0.3)
+    T = np.array([module.fk(q) for q in Q])
+    rescued = [n for n in range(len(T)) if first.exact(T[n], (), False) is None
+               and nc.exact(T[n], (), False) is not None]
+    assert rescued, "no target needed the second arrangement"
+    back = _compare(module, nc, Q[rescued], T[rescued])
+    assert back == 0
+
+
+def csource_arrangements(module):
+    from ikcompiler.codegen.csource import general6_native_arrangements
+
+    return general6_native_arrangements(module._GENERAL6)
+
+
+def test_jaco_all_special_poses_c_answers_are_complete():
+    """Poses with every Jaco joint at 0, +-pi/2 or pi (double roots and near-double roots abound): where
+    the C answers, its rows are the Python general6's rows and hold the sampled vector.  A clean
+    candidate that Newton cannot finish makes its target doubtful: dropping it as spurious lost 2 of
+    8 solutions on poses 154 and 176 of this sample."""
+    robot = load_robot("jaco")
+    module, nc = _module("jaco", robot)
+    Q = sample_configurations(robot, 400, seed=21, special=1.0)
+    T = np.array([module.fk(q) for q in Q])
+    answered = [n for n in range(len(T)) if nc.exact(T[n], (), False) is not None]
+    assert len(answered) >= len(T) // 3, len(answered)
+    assert _compare(module, nc, Q[answered], T[answered]) == 0

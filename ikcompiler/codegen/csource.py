@@ -139,44 +139,69 @@ def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target,
     return "\n".join(list(lines) + tail) + "\n"
 
 
+def general6_native_arrangements(solver) -> list[int]:
+    """The arrangements of ``solver`` (a :class:`subproblems.general6.General6`) that the C elimination
+    runs, in its usable order: those with the 12 x 12 pencil (general6.h's coverage: prismatic
+    joints at a, b, d or e; not the deflated 9 x 9 pencil of a
+    prismatic joint on each side of the split); none when the preferred one is not among them (its
+    rows are the reference's first answer).  The one rule for a general-6r module's C (``NATIVE``)."""
+    def covered(arr) -> bool:
+        return not (arr.prism[2] or arr.prism[5] or arr.swap) and arr.deflate is None
+
+    arrangements = [k for k in solver.usable if covered(solver._arr[k])]
+    return arrangements if arrangements and arrangements[0] == solver.usable[0] else []
+
+
+def general6_plain_pose(*, kinds: str, target: str, A, b) -> bool:
+    """A plain 6-joint pose chain (no mimic or free joints): what a general-6r module's C solves."""
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    return (target == "pose" and len(kinds) == 6 and A.shape == (6, 6) and np.array_equal(A, np.eye(6))
+            and not np.any(b != 0))
+
+
 def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: float, tol: float,
                       slots: int, twists, home, A, b) -> str | None:
-    """C source of a general-6r module (docs/general6.md, "Native path"): the data of the preferred
-    arrangement of ``solver`` (a :class:`subproblems.general6.General6`) as an ``ikc_g6`` and a chain
-    ``ikc_chain`` that calls ``ikc_g6_leaves`` of ``subproblems/general6.h``; None when the module is
-    not a plain 6-joint pose chain (mimic or free joints)."""
-    A, b = np.asarray(A, float), np.asarray(b, float)
-    if (target != "pose" or len(kinds) != 6 or A.shape != (6, 6) or not np.array_equal(A, np.eye(6))
-            or np.any(b != 0)):
+    """C source of a general-6r module (docs/general6.md, "Native path"): the data of the arrangements
+    of ``solver`` (a :class:`subproblems.general6.General6`) that the C covers, in its usable order
+    (:func:`general6_native_arrangements`), as ``ikc_g6`` structs and a chain ``ikc_chain`` that calls
+    ``ikc_g6_leaves`` of ``subproblems/general6.h`` (a target doubtful under one arrangement is
+    re-solved under the next); None when the module is not a plain 6-joint pose chain or the C does
+    not cover its preferred arrangement."""
+    arrangements = general6_native_arrangements(solver)
+    if not general6_plain_pose(kinds=kinds, target=target, A=A, b=b) or not arrangements:
         return None
-    arr = solver._arr[solver.usable[0]]
-    if any(arr.prism[2:]) or getattr(arr, "deflate", None) is not None:
-        return None  # general6.h covers prismatic joints at a, b only, and the 12 x 12 pencil
+    A, b = np.asarray(A, float), np.asarray(b, float)
     Mi = np.linalg.inv(solver.Mn)
     flat = lambda x: _array(np.asarray(x, float).ravel().tolist(), _number)  # noqa: E731
     ints = lambda x: _array(list(x), str)  # noqa: E731
-    data = [
-        f"static const ikc_g6 ikc_g6_this = {{{int(arr.sign)}, {arr.conj}, {ints(arr.order)},",
-        f"    {ints(int(p) for p in arr.prism)}, {len(arr.cols)},",
-        f"    {ints(list(arr.cols) + [0] * (8 - len(arr.cols)))},",
-        f"    {flat(arr.w)}, {flat(arr.r)},",
-        f"    {flat(arr.A)},",
-        f"    {flat(arr.inv9)}, {flat(arr.grid_ab)}, {flat(arr.u)},",
-        f"    {flat(list(Mi[:3, :3].ravel()) + list(Mi[:3, 3]))},",
-        f"    {flat(solver.center)}, {_number(solver._s)}}};",
+    data = [f"static const ikc_g6 ikc_g6_these[{len(arrangements)}] = {{"]
+    for k in arrangements:
+        arr = solver._arr[k]
+        data += [
+            f"    {{{int(arr.sign)}, {arr.conj}, {ints(arr.order)},",
+            f"    {ints(int(p) for p in arr.prism)}, {len(arr.cols)},",
+            f"    {ints(list(arr.cols) + [0] * (8 - len(arr.cols)))},",
+            f"    {flat(arr.w)}, {flat(arr.r)},",
+            f"    {flat(arr.A)},",
+            f"    {flat(arr.inv9)}, {flat(arr.grid_ab)}, {flat(arr.u)},",
+            f"    {flat(list(Mi[:3, :3].ravel()) + list(Mi[:3, 3]))},",
+            f"    {flat(solver.center)}, {_number(solver._s)}}},",
+        ]
+    data += [
+        "};",
         "static const ikc_robot ikc_this;",
         "",
         "static int ikc_chain(const double *goal, const double *fr, double rep, double *Q, double *E,",
         "                     int *F) {",
         "    (void)fr;",
         "    (void)rep;",
-        "    return ikc_g6_leaves(&ikc_this, &ikc_g6_this, goal, Q, E, F);",
+        f"    return ikc_g6_leaves(&ikc_this, ikc_g6_these, {len(arrangements)}, goal, Q, E, F);",
         "}",
         "",
     ]
     head = [
         "/* The general-6r chain of this module in C (ikcompiler/codegen/csource.py): the elimination of",
-        " * subproblems/general6.h on the data of its preferred arrangement (subproblems/general6.py). */",
+        " * subproblems/general6.h on the data of its arrangements (subproblems/general6.py), in order. */",
     ]
     lines = head + [w for line in data for w in wrap(line)]
     return _with_entries(lines, leaves=16, alt=None, kinds=kinds, lower=lower, upper=upper, free=[],
@@ -242,7 +267,7 @@ def data_key(namespace) -> str:
     """A hash of the data a module's C is printed from and of the code that prints it."""
     code = _generator_code()
     snapped = namespace["_PLAN_TWISTS"] is not namespace["_TWISTS"]
-    data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [snapped])
+    data = repr([_plain(namespace[k]) for k in _MODULE_FIELDS] + [_plain(namespace.get("_SPEED")), snapped])
     return hashlib.sha256((code + "\0" + data).encode()).hexdigest()[:24]
 
 
@@ -285,7 +310,8 @@ def module_c_source(ns) -> str | None:
 
     if ns["METHOD"] == "general-6r":
         return general6_c_source(
-            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+            ns["_GENERAL6"], kinds=ns["JOINT_TYPES"], lower=ns.get("_LOWER", ns["LOWER"]),
+            upper=ns.get("_UPPER", ns["UPPER"]),
             target=ns["TARGET"],
             scale=ns["SCALE"], tol=ns["TOLERANCE"], slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"],
             home=np.asarray(ns["_HOME"], float), A=ns["_A"], b=ns["_B"])
@@ -300,7 +326,8 @@ def module_c_source(ns) -> str | None:
         near = near_singular(np.asarray(ns["_PLAN_TWISTS"], float), np.asarray(ns["_TWISTS"], float),
                              ns["SCALE"])
     return chain_c_source(
-        program, alternative=alternative, kinds=ns["JOINT_TYPES"], lower=ns["LOWER"], upper=ns["UPPER"],
+        program, alternative=alternative, kinds=ns["JOINT_TYPES"], lower=ns.get("_LOWER", ns["LOWER"]),
+        upper=ns.get("_UPPER", ns["UPPER"]),
         free=list(ns["_FREE"]), target=ns["TARGET"], scale=ns["SCALE"], tol=ns["TOLERANCE"],
         slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"], home=np.asarray(ns["_HOME"], float), A=ns["_A"],
         b=ns["_B"], search=len(ns["_SEARCH"]), grid=ns["_GRID"], polish=ns["_POLISH"], near_singular=near)

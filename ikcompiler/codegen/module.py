@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ikcompiler.codegen.csource import translatable
+from ikcompiler.codegen.csource import general6_plain_pose, translatable
 from ikcompiler.codegen.fastpath import fast_chain_program
 from ikcompiler.codegen.printers import python_source
 from subproblems import tolerances as _tol
@@ -102,12 +102,15 @@ def _step_source(step, line: str) -> str:
 PRECISION = _tol.PRECISION
 
 
-def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float, output=None) -> str:
+def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float, output=None,
+             speed=None) -> str:
     """The module source for ``plan`` on ``chain``.
 
     ``output`` is the robot whose joints the module returns when ``chain`` carries extra virtual joints
     (a tool roll for position + direction targets); by default the chain itself.  ``tol``: the
-    exactness threshold of a returned row, at most :data:`PRECISION`.
+    exactness threshold of a returned row, at most :data:`PRECISION`.  ``speed`` (JOINT_NAMES order):
+    the chain solves for ``speed * q`` where it has folded slides (``ikcompiler/model/fold.py``); the
+    module returns and takes ``q``.
     """
     output = output or chain
     tol = min(tol, PRECISION)
@@ -133,8 +136,20 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     out.append(f"METHOD = {plan.method!r}\n")
     out.append(f"TARGET = {plan.target!r}\n")
     out.append(f"FREE_JOINTS = {tuple(plan.free)!r}\n")
-    out.append(f"LOWER = np.array({_array(output.lower)})  # joint limits, JOINT_NAMES order\n")
-    out.append(f"UPPER = np.array({_array(output.upper)})\n")
+    if speed is None:
+        out.append(f"LOWER = np.array({_array(output.lower)})  # joint limits, JOINT_NAMES order\n")
+        out.append(f"UPPER = np.array({_array(output.upper)})\n")
+        out.append("_SPEED = None  # each joint solved in its own value (no folded slides)\n")
+        out.append("_LOWER, _UPPER = LOWER, UPPER  # limits of the values solved for\n")
+    else:
+        sp = np.asarray(speed, dtype=float)
+        out.append(f"LOWER = np.array({_array(output.lower / sp)})  # joint limits, JOINT_NAMES order\n")
+        out.append(f"UPPER = np.array({_array(output.upper / sp)})\n")
+        out.append("# Folded slides (docs/design.md section 2): the chain below solves for _SPEED * q, one\n")
+        out.append("# slide for each run of slides following one master; q (JOINT_NAMES) goes in and out.\n")
+        out.append(f"_SPEED = np.array({_array(sp)})\n")
+        out.append(f"_LOWER = np.array({_array(output.lower)})  # limits of the values solved for\n")
+        out.append(f"_UPPER = np.array({_array(output.upper)})\n")
     out.append(f"SCALE = {_num(scale)}  # robot size; tolerances are relative to it\n")
     out.append(f"TOLERANCE = {_num(tol)}  # a solution is exact when its error <= TOLERANCE * SCALE\n")
     out.append(f"MAX_SOLUTIONS = {slots}\n")
@@ -191,7 +206,8 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
     )
     # a general-6r plan has no Python fast chain (FAST_PATH False); its native path is the C
     # elimination (subproblems/general6.h), switched by NATIVE alone
-    general6_native = plan.method == "general-6r" and plan.target == "pose" and not free_idx
+    general6_native = (plan.method == "general-6r" and bool(plan.steps[0].get("native"))
+                       and general6_plain_pose(kinds=chain.joint_types, target=plan.target, A=A, b=b))
     out.append(f"FAST_PATH = {fast is not None}\n")
     out.append(python_source(fast) if fast is not None else "\n\n_fast_chain = None\n")
     native = translatable(fast, target=plan.target, dof=len(output.independent)) or general6_native

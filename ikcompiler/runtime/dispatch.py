@@ -203,6 +203,11 @@ class Solver:
         targets; processed in chunks to bound memory.  With ``limits`` (the default) solutions outside
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
+        Q, *rest = self._solved_batch_info(Ts, *self._free_in(free), limits=limits, chunk=chunk)
+        return (self._out(Q), *rest)
+
+    def _solved_batch_info(self, Ts, *free, limits=True, chunk=CHUNK):
+        """solve_batch_info in the values the chain solves for (see :meth:`_out`)."""
         done = self._native_batch(Ts, free, limits)
         if done is not None:
             return done
@@ -262,11 +267,12 @@ class Solver:
         optional per-joint ``weights``; wrapped to [-pi, pi] only with ``limits=False``); with limits,
         without aliases, each wide-range revolute value is the alias nearest the seed.
         """
-        q = self.rows(T, free, limits, exact_only=True)
+        q = self.rows(T, self._free_in(free), limits, exact_only=True)
         if aliases or q_seed is not None:
-            return selection.select(self.robot, q, np.ones(len(q), dtype=bool), limits, aliases, q_seed,
-                                    weights)[0]
-        return q
+            q_seed, weights = self._seed_in(q_seed, weights)
+            q = selection.select(self.robot, q, np.ones(len(q), dtype=bool), limits, aliases, q_seed,
+                                 weights)[0]
+        return self._out(q)
 
     def solve_info(self, T, *free, limits=True, aliases=False, q_seed=None, weights=None):
         """Every candidate of one target with residuals and flags: a SolveInfo.
@@ -277,9 +283,11 @@ class Solver:
         leave out, each with the joints outside their limits.  ``aliases`` and ``q_seed`` / ``weights`` as
         in ``solve``.
         """
+        free = self._free_in(free)
         found = self.rows(T, free, limits)
         unlimited = self.rows(T, free, False) if limits else None
-        return selection.info(self.robot, found, unlimited, limits, aliases, q_seed, weights)
+        q_seed, weights = self._seed_in(q_seed, weights)
+        return self._info_out(selection.info(self.robot, found, unlimited, limits, aliases, q_seed, weights))
 
     def nearest(self, T, q_seed, *free, limits=True, aliases=True, weights=None):
         """The exact solution closest to q_seed (see solve), or None when there is none.
@@ -291,7 +299,48 @@ class Solver:
 
     def fk(self, q):
         """Tool pose (4x4) for joint values q in JOINT_NAMES order (exactly len(JOINT_NAMES) of them)."""
+        sp = self.robot.speed
+        if sp is not None and np.shape(q) == sp.shape:
+            q = np.asarray(q, dtype=float) * sp
         return self.robot.fk(q)
+
+    # -- folded slides: the chain solves for speed * q, the API takes and returns q -----------------
+    # (ikcompiler/model/fold.py; docs/design.md section 2).  Without folded slides these are identities.
+
+    def _out(self, Q):
+        """Rows (..., n) solved for, as returned: each folded slide's value over its speed."""
+        sp = self.robot.speed
+        return Q if sp is None else Q / sp
+
+    def _free_in(self, free):
+        """Free joint values as the chain solves for them (a wrong count is left to the checks)."""
+        r = self.robot
+        if r.speed is None or len(free) != len(r.free):
+            return free
+        return tuple(f if r.speed[p] == 1.0 else np.asarray(f, dtype=float) * r.speed[p]
+                     for f, p in zip(free, r.free))
+
+    def _seed_in(self, q_seed, weights):
+        """A seed and weights in the solved values: the same distances as in the returned ones."""
+        sp = self.robot.speed
+        if sp is None or q_seed is None:
+            return q_seed, weights
+        w = np.ones(len(sp)) if weights is None else np.asarray(weights, dtype=float)
+        return np.asarray(q_seed, dtype=float) * sp, w / sp
+
+    def _info_out(self, info):
+        """A SolveInfo as returned; sigma_min of the Jacobian in the returned values."""
+        r = self.robot
+        if r.speed is None:
+            return info
+        from subproblems import select as _sel
+
+        q = info.q / r.speed
+        A = r.A.copy()
+        A[:, :len(r.speed)] *= r.speed  # d th / d q of the returned values (a virtual roll's column kept)
+        sig = _sel.sigma_min(q, twists=r.twists, A=A, b=r.B, home=r.home, scale=r.scale, target=r.target)
+        excluded = tuple(e._replace(q=e.q / r.speed) for e in info.excluded)
+        return info._replace(q=q, sigma_min=sig, excluded=excluded)
 
     def invalid_reasons(self, Ts):
         """{index: reason} of the targets that are not valid (NaN or infinity, a bottom row not [0, 0, 0, 1],

@@ -55,12 +55,14 @@ class Robot:
     fast_chain: Any  # the module's _fast_chain or None
     target_error: type
     free_error: type
+    speed: Any = None  # None or (n,): solved value = speed * q (folded slides, docs/design.md section 2)
 
     @classmethod
     def from_namespace(cls, ns: dict) -> Robot:
         return cls(
             joint_names=tuple(ns["JOINT_NAMES"]), joint_types=ns["JOINT_TYPES"], method=ns["METHOD"],
-            target=ns["TARGET"], free_joints=tuple(ns["FREE_JOINTS"]), lower=ns["LOWER"], upper=ns["UPPER"],
+            target=ns["TARGET"], free_joints=tuple(ns["FREE_JOINTS"]), lower=ns.get("_LOWER", ns["LOWER"]),
+            upper=ns.get("_UPPER", ns["UPPER"]),
             scale=float(ns["SCALE"]), tol=float(ns["TOLERANCE"]), slots=int(ns["MAX_SOLUTIONS"]),
             twists=ns["_TWISTS"], plan_twists=ns["_PLAN_TWISTS"], kinds=ns["_KINDS"], home=ns["_HOME"],
             home_inv=_rt.inverse_transform(ns["_HOME"]), couplings=ns["_COUPLINGS"], A=ns["_A"], B=ns["_B"],
@@ -71,6 +73,7 @@ class Robot:
             steps=ns["_STEPS"], alt_steps=ns["_ALT_STEPS"], general6=ns.get("_GENERAL6"),
             fast_chain=ns.get("_fast_chain"),
             target_error=ns["InvalidTargetError"], free_error=ns["InvalidFreeValueError"],
+            speed=None if ns.get("_SPEED") is None else np.asarray(ns["_SPEED"], dtype=float),
         )
 
     def finish_kwargs(self, limits) -> dict:

@@ -137,6 +137,9 @@ class PointStep(Step):
         elif self.code == "S2-TTT":
             b = [em.c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
             call = em.kernel("slide3", args[0][0], args[1][0], args[2][0], b)
+        elif self.code == "S2-TTR":
+            (v1,), (v2,), (w, r) = args
+            call = em.kernel("slide2_turn", v1, v2, w, r, point, Tpp, em.rep())
         else:  # skew S2-RR and the types without a kernel: the general solver
             call = em.reference_call(self.code, args, {"p": point, "q": Tpp})
         em.solved(self.solve, call)
@@ -293,11 +296,13 @@ class NumericalStep(Step):
 @_frozen
 class General6Step(Step):
     """The general 6R elimination (subproblems.general6) on the whole chain, trying the elimination
-    ``arrangements`` in order."""
+    ``arrangements`` in order; ``native``: those the C elimination runs, in the same order
+    (``codegen.csource.general6_native_arrangements``; empty: the module has no C chain)."""
 
     kind: ClassVar[str] = "G6R"
     solve: tuple[int, ...]
     arrangements: tuple[int, ...]
+    native: tuple[int, ...] = ()
 
     @property
     def slots(self) -> int:

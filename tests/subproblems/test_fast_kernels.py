@@ -39,7 +39,8 @@ but more than ``EXACT``, and the checks below apply where it does not):
    the geometry; :func:`near_degenerate_point` describes the family); ``point_rr_meet`` with exactly
    parallel axes gave NaN on ARRAY (``pos``/``big`` now map NaN like the scalar comparisons).
 
-Not covered: ``slide3`` and ``turn_slide2`` (added to ``fast.py`` after this file was specified).
+Not covered by the specs: ``slide3`` and ``turn_slide2`` (added to ``fast.py`` after this file was
+specified); ``slide2_turn`` (S2-TTR) has its own round trip and reference agreement at the end.
 
 Budgets follow the active hypothesis profile (``HYPOTHESIS_PROFILE``).
 """
@@ -937,3 +938,70 @@ def test_parallel_axes_in_point_rr_meet_give_no_nan():
     for (q, _), (Q, _) in zip(scalar, array):
         assert not np.isnan(Q).any(), Q
         assert np.allclose(Q[:, 0], q, atol=BACKEND), (q, Q)
+
+
+# ---------------------------------------------------------------------------------------------------
+# slide2_turn (S2-TTR): v1 t1 + v2 t2 + exp(xi3 t3)(p) = q
+
+
+def _ttr_instance(rng, special: bool):
+    v1, v2 = (_unit_rng(rng) for _ in range(2))
+    w, r, p = _unit_rng(rng), rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+    t3 = rng.choice([0.0, math.pi / 2, -math.pi / 2, math.pi]) if special else rng.uniform(-math.pi, math.pi)
+    th = np.array([rng.uniform(-2, 2), rng.uniform(-2, 2), t3])
+    twists = np.array([prismatic_twist(v1), prismatic_twist(v2), revolute_twist(w, r)])
+    g = twist_exp(twists[0], th[0]) @ twist_exp(twists[1], th[1]) @ twist_exp(twists[2], th[2])
+    return twists, (v1, v2, w, r, p, apply(g, p)), th
+
+
+def _unit_rng(rng):
+    x = rng.normal(size=3)
+    return x / np.linalg.norm(x)
+
+
+def _ttr_residual(twists, p, q, row):
+    g = twist_exp(twists[0], row[0]) @ twist_exp(twists[1], row[1]) @ twist_exp(twists[2], row[2])
+    return float(np.linalg.norm(apply(g, p) - q))
+
+
+@pytest.mark.parametrize("special", [False, True])
+def test_slide2_turn_round_trip_and_reference(special):
+    """Reachable instances: no slot defers in general position, every slot is exact, the drawn values
+    are among the slots, and the exact slots are the reference S2-TTR's exact rows as a set."""
+    rng = np.random.default_rng(29 + special)
+    for _ in range(200):
+        twists, args, th = _ttr_instance(rng, special)
+        p, q = args[4], args[5]
+        size = max(1.0, *(float(np.linalg.norm(x)) for x in args[3:]))
+        slots = fast.slide2_turn(fast.SCALAR, *(tuple(a) for a in args))
+        assert all((s[-1] & fast.DEFER) == 0 for s in slots), (args, slots)
+        rows = [np.array(s[:3]) for s in slots]
+        assert all(_ttr_residual(twists, p, q, row) <= EXACT * size for row in rows)
+
+        def dist(a, b):
+            return max(abs(a[0] - b[0]), abs(a[1] - b[1]), angle_distance(a[2], b[2]))
+
+        assert min(dist(row, th) for row in rows) <= 1e-9
+        ref = solve("S2-TTR", twists=twists, p=p, q=q)
+        exact = [row for row, ls in zip(ref.q, ref.ls) if not ls]
+        assert not ref.continuum
+        for row in exact:
+            assert min(dist(row, s) for s in rows) <= 1e-8, (row, rows)
+        for row in rows:
+            assert min(dist(row, e) for e in exact) <= 1e-8, (row, exact)
+
+
+def test_slide2_turn_backends_agree_and_parallel_slides_defer():
+    rng = np.random.default_rng(31)
+    cases = [_ttr_instance(rng, bool(k % 2))[1] for k in range(50)]
+    ex, ey, ez = np.eye(3)
+    cases.append((ex, ex, ez, np.zeros(3), ex, ey))  # parallel slides: no normal
+    stacked = [tuple(np.array([c[i][j] for c in cases]) for j in range(3)) for i in range(6)]
+    many = fast.slide2_turn(fast.ARRAY, *stacked)
+    for k, c in enumerate(cases):
+        one = fast.slide2_turn(fast.SCALAR, *(tuple(a) for a in c))
+        for slot_one, slot_many in zip(one, many):
+            assert int(slot_one[-1]) == int(slot_many[-1][k])
+            assert abs(slot_one[0] - slot_many[0][k]) <= 1e-12 * max(1.0, abs(slot_one[0]))
+            assert angle_distance(slot_one[2], slot_many[2][k]) <= 1e-12
+    assert all(int(s[-1][-1]) & fast.DEFER for s in many)

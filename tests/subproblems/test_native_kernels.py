@@ -8,9 +8,9 @@ The header is a port of :mod:`subproblems.fast` in the same order of operations,
   points on or near axes, normals along or across an axis or zero, meeting / parallel / antiparallel /
   nearly parallel / coincident axes, gimbal locks, special angles 0, +-pi/2, pi, reachable and
   unreachable right-hand sides), for the ten kernels it specifies;
-* raw instances from this file for all twelve (``slide3`` and ``turn_slide2`` included): each vector
-  argument drawn as a fresh one, a copy, a multiple or a near copy of an earlier one, zero, or on an
-  earlier axis, so that coincidences of every pair of arguments come up;
+* raw instances from this file for all thirteen (``slide3``, ``turn_slide2``, ``slide2_turn``
+  included): each vector argument drawn as a fresh one, a copy, a multiple or a near copy of an
+  earlier one, zero, or on an earlier axis, so that coincidences of every pair of arguments come up;
 * hand-built corner cases, and a bulk run of numpy-random instances.
 
 Expected: identical flags; values equal to ``AGREE`` (angles modulo 2 pi, slides relative to
@@ -48,6 +48,7 @@ KERNELS = {
     "dist_t": ("upps", 2, "T"),
     "slide3": ("vvvp", 1, "TTT"),
     "turn_slide2": ("upvvRp", 1, "RTT"),
+    "slide2_turn": ("vvuppps", 2, "TTR"),
     "point_r": ("uppp", 1, "R"),
     "point_rr_meet": ("upuppp", 2, "RR"),
     "point_rr_parallel": ("upuppp", 2, "RR"),
@@ -254,6 +255,16 @@ def _more_corners(name):
             [ez, z, ex, ey, rotation_exp(ex, math.pi).ravel(), ex],  # not a turn about w
             [ex, ey, ey, ez, rotation_exp(ex, math.pi).ravel(), z],
         ]
+    if name == "slide2_turn":
+        return [
+            [ex, ey, ez, z, ex, np.array([1.0, 2.0, 3.0]), 0.0],
+            [ex, ex, ez, z, ex, ey, 0.0],  # parallel slides
+            [ex, -ex, ez, z, ex, ey, 0.0],  # antiparallel
+            [z, ey, ez, z, ex, ey, 0.0],  # a zero slide
+            [ex, ey, ez, z, ez, ez, 0.5],  # the point on the axis: every t3 (a family)
+            [ex, ey, ex, ey, ex, ey, 0.0],  # the axis in the slides' plane
+            [ex, ey, ez, ex, ex, ez, 1.0],  # the point on the axis, off the plane: none
+        ]
     spec = SPEC_BY_NAME[name]
     cases = [[inst[a] for a in spec.args] for inst in _corners(name)]
     if name == "rot_rrr":  # w2 1.2e-7 from w1 (t1_rep defers, t2 does not), R w3 along w1: a lock
@@ -277,6 +288,8 @@ def _rng_args(name, rng):
         return [inst[a] for a in spec.args]
     if name == "slide3":
         return [rng.uniform(-2, 2, 3) for _ in range(4)]
+    if name == "slide2_turn":
+        return [src.unit(), src.unit(), src.unit(), src.vec(), src.vec(), src.vec(), rng.uniform(-3, 3)]
     w, r, v2, v3, t = src.unit(), src.vec(), src.vec(), src.vec(), src.vec()
     th = rng.choice([rng.uniform(-math.pi, math.pi), *SPECIAL_ANGLES])
     return [w, r, v2, v3, rotation_exp(w, th).ravel(), t]
