@@ -33,8 +33,18 @@ from pathlib import Path
 # -ffp-contract=off: no fused multiply-adds, so C rounds like the Python path; -fno-math-errno lets
 # sqrt inline (errno is never read).  No -ffast-math: NaN and infinity checks must keep working.
 FLAGS = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
-# A chain alone, against the shared finish (split build, below): the same flags for now.
-CHAIN_FLAGS = FLAGS
+# A chain alone, against the shared finish (split build, below), without the second (post register
+# allocation) instruction scheduling: 10% of the compiler's instructions on puma560's chain, no
+# measured cost in batch time on this out-of-order CPU, the same bits (docs/design.md section 14).
+CHAIN_FLAGS = FLAGS + ("-fno-schedule-insns2",)
+# A function of a chain that runs rarely (the plan's alternative chain: only where the chain cannot
+# settle a target) is declared COLD: GCC compiles it at -O1 and as cold code, 7% of the compiler's
+# instructions on puma560's chain (docs/design.md section 14).  The rounding is the same at every -O
+# level (no -ffast-math, no contraction), so are the answers; other compilers ignore the macro.
+COLD = "IKC_COLD"
+COLD_DEFINITION = (
+    "#ifndef IKC_COLD\n#if defined(__GNUC__) && !defined(__clang__)\n"
+    '#define IKC_COLD __attribute__((optimize("O1"), cold))\n#else\n#define IKC_COLD\n#endif\n#endif')
 
 last_error: str | None = None  # why the last load returned None (for `ikc compile` to report)
 _loaded: dict[str, ctypes.CDLL] = {}

@@ -439,6 +439,28 @@ def test_one_piece_fallback_gives_the_split_builds_answers(monkeypatch, tmp_path
     _same_results(module, whole, Ts)
 
 
+@pytest.mark.parametrize("name", ["puma560", "prob"])
+def test_the_cold_alternative_chain_gives_the_answers_of_o2(name, monkeypatch, tmp_path):
+    """The alternative chain is compiled as cold code (native.COLD: -O1 under GCC; docs/design.md
+    section 14): the same C with it at -O2 gives the same rows bit for bit, on poses of which a sixth
+    or more go through the alternative chain (puma560 49 and prob 74 of these 300, counted by hand)."""
+    module, chain, split = _compiled(name)
+    assert split is not None
+    source = csource.native_source(vars(module))
+    assert f"{native.COLD} static int ikc_chain_alt(" in source
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    shape = dict(dof=len(module.JOINT_TYPES), slots=module.MAX_SOLUTIONS, nfree=0, target="pose")
+    cold = native.bind(source, **shape)
+    hot = native.bind(f"#define {native.COLD}\n" + source, **shape)  # the macro empty: -O2 throughout
+    assert cold is not None and hot is not None, native.last_error
+    _, Ts, _ = _poses(module, chain, 300, seed=23, special=0.6)
+    for limits in (True, False):
+        a, b = cold.many(Ts, np.zeros((len(Ts), 0)), limits), hot.many(Ts, np.zeros((len(Ts), 0)), limits)
+        for x, y in zip([*a[0], a[1]], [*b[0], b[1]]):
+            assert np.array_equal(x, y, equal_nan=True)
+
+
 # --- 7. the generated C --------------------------------------------------------------------------------
 
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from ikcompiler.codegen import ir
 from ikcompiler.codegen.printers import Untranslatable, c_function, c_number, wrap
+from subproblems import native
 
 __all__ = [
     "TARGET_CODES", "chain_c_source", "module_c_source", "native_source", "translatable",
@@ -74,14 +75,17 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
     except Untranslatable:
         return None
     try:
-        alt = c_function(alternative, "ikc_chain_alt", dof) if alternative is not None else None
+        # the alternative chain runs only where the chain cannot settle a target: compiled as cold
+        # code (native.COLD: -O1, a fifth less of the compiler's work on it; docs/design.md section 14)
+        alt = (c_function(alternative, "ikc_chain_alt", dof, storage=f"{native.COLD} static")
+               if alternative is not None else None)
     except Untranslatable:
         alt = None
     head = [
         "/* The chain of this module in C (ikcompiler/codegen/csource.py): the same arithmetic as",
         " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
     ]
-    body = main[0] + (alt[0] if alt else [])
+    body = main[0] + ([*native.COLD_DEFINITION.splitlines(), *alt[0]] if alt else [])
     return _with_entries(head + body, leaves=main[1], alt=alt[1] if alt else None, kinds=kinds, lower=lower,
                          upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
                          twists=twists, home=home, A=A, b=b, search=search, grid=grid, polish=polish,
@@ -280,8 +284,6 @@ def native_source(namespace) -> str | None:
     key = data_key(namespace)
     if key in _SOURCES:
         return _SOURCES[key]
-    from subproblems import native
-
     path = native.cache_dir() / f"ikc_src_{key}.c"
     try:
         text = path.read_text()
@@ -295,8 +297,6 @@ def native_source(namespace) -> str | None:
 
 def _store(path, text: str) -> None:
     """Write the cache file (another process may write it too: ``native.replace_atomically``)."""
-    from subproblems import native
-
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         native.replace_atomically(path, lambda partial: partial.write_text(text))

@@ -287,14 +287,16 @@ def wrap(line: str, width: int = C_WIDTH) -> list[str]:
     return out + [current]
 
 
-def c_function(program: ir.Program, name: str, dof: int) -> tuple[list[str], int]:
-    """(C lines of ``static int NAME(...)``, the most leaves it writes); raises :class:`Untranslatable`."""
+def c_function(program: ir.Program, name: str, dof: int, *,
+               storage: str = "static") -> tuple[list[str], int]:
+    """(C lines of ``STORAGE int NAME(...)``, the most leaves it writes); raises :class:`Untranslatable`.
+    ``storage``: ``static``, or with an attribute macro in front (``native.COLD``)."""
     pr = _CPrinter(dof)
     for i, g in enumerate(program.goal):
         pr.emit(f"const double {g} = goal[{i}];")
     pr.block(program.body)
     head = [
-        f"static int {name}(const double *goal, const double *fr, double rep, double *Q, double *E,",
+        f"{storage} int {name}(const double *goal, const double *fr, double rep, double *Q, double *E,",
         "                     int *F) {",
         "    int n = 0;",
         "    (void)fr;",
