@@ -212,32 +212,51 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
     from ikcompiler import general6_route
     from ikcompiler.codegen.csource import general6_native_arrangements
+    from ikcompiler.runtime import freefold
     from subproblems import general6
 
     if not USE_GENERAL6 or target != "pose" or chain.couplings or len(chain.joint_types) - len(free) != 6:
         return None
     solved = free_end_split(chain, free)
+    fold = None
     if solved is None:
-        notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
-                     "solved twists depend on its value (free joints at the chain's ends keep them fixed)")
-        return None
+        fold = _fold_column(chain, free)
+        if fold is None:
+            notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
+                         "solved twists depend on its value (folded at run time only for seven revolute "
+                         "joints with one free: runtime/freefold.py)")
+            return None
+        solved = [j for j in range(len(chain.joints)) if j != fold]
     try:
-        solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
+        if fold is None:
+            solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
+            arrangements, native = list(solver.usable), general6_native_arrangements(solver)
+        else:  # chosen on the chain folded at a few free values, fixed for every value at run time
+            joint = chain.joints[fold]
+            arrangements = freefold.choose_arrangements(chain.twists, chain.home, chain.scale, fold,
+                                                        joint.lower, joint.upper)
+            six = freefold.folded(chain.twists, chain.home, fold, freefold.CHOICE_VALUES[0])
+            solver = general6.General6(*six, chain.scale, arrangement=arrangements)  # for its notes
+            native = []  # the C elimination does not fold: Python only (the module's NATIVE is False)
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
     step = General6Step(
         code="G6R",
-        solve=list(range(6)),
-        arrangements=list(solver.usable),
-        native=general6_native_arrangements(solver),
+        solve=list(range(6)) if fold is None else solved,  # folded: the six joints around the free one
+        arrangements=arrangements,
+        native=native,
+        fold=fold,
         rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     )
     names = [chain.joints[j].name for j in solved]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
-    if free:
+    if fold is not None:
+        notes.append(f"general 6R elimination on {', '.join(names)}: their twists folded at the free joint "
+                     f"{chain.joints[fold].name}'s value (runtime/freefold.py; Python only)")
+    elif free:
         notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} "
                      "at the chain's ends move the target, not the six twists")
     all_names = tuple(j.name for j in chain.joints)
@@ -248,14 +267,17 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                     tuple(free), False, 0, geometry, told, 0.0, all_names=all_names)
 
-    found = search_1d() if not free else None  # the route's measurement runs free of free joints
+    # measured against the 1-D search free of free joints, or with one folded free joint (its values
+    # those of the sample); free end joints keep general-6r unmeasured
+    found = search_1d() if not free or fold is not None else None
     if found is None:
         return general_plan()
     # both measured as their modules run (the C chain where it builds, docs/general6.md "When it is used")
     searched = _search_plan(chain, target, free, geometry, notes, found)
     module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
     general = load_module(plan_source(general_plan(), chain, tol=tol), _module_name(chain.name))
-    verdict = general6_route.compare(chain, module, general, searched.method)
+    verdict = general6_route.compare(chain, module, general, searched.method,
+                                     free=[chain.index(f) for f in free])
     if verdict.keep_search:
         return dataclasses.replace(searched, notes=(*notes, verdict.note))
     return general_plan((verdict.note,))
@@ -274,6 +296,14 @@ def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:
             "at every sampled configuration (a redundant chain within the snap tolerance); rows whose own "
             "smallest singular value is below it are flagged continuum: representatives of the snapped "
             "chain's self-motion, not a complete set of the true robot's isolated solutions",)
+
+
+def _fold_column(chain: Chain, free) -> int | None:
+    """The chain index of the one free joint of a seven-revolute chain, which the general 6R elimination
+    folds at run time (runtime/freefold.py), or None (other chains)."""
+    if chain.joint_types != "R" * 7 or len(free) != 1 or chain.couplings:
+        return None
+    return chain.index(free[0])
 
 
 def free_end_split(chain: Chain, free) -> list[int] | None:
