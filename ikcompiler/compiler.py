@@ -52,13 +52,16 @@ def with_tool_roll(chain: Chain) -> Chain:
     return dataclasses.replace(chain, joints=chain.joints + (roll,))
 
 
-def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> Plan:
-    """Search the cheapest subproblem chain for ``chain``; see the module docstring."""
+def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None,
+                 fold: bool = True) -> Plan:
+    """Search the cheapest subproblem chain for ``chain``; see the module docstring.  ``fold``: a free
+    joint between solved ones may take the general 6R elimination folded at its value
+    (runtime/freefold.py; ``configs.compile_chain`` tries the free choices without it first)."""
     tol = tol or Tolerance()
     if target not in TARGETS:
         raise CompileError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
     if target == "position+direction":
-        plan = compile_plan(with_tool_roll(chain), target="pose", free=free, tol=tol)
+        plan = compile_plan(with_tool_roll(chain), target="pose", free=free, tol=tol, fold=fold)
         note = (
             f"position + direction target: a virtual joint {VIRTUAL_ROLL} about the tool z axis makes it "
             "a pose target; its value is dropped from every solution"
@@ -133,7 +136,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         )
         search_1d = functools.partial(_search_fallback, chain, ctx, couplings, full_lower, full_upper, start,
                                       sizes=(1,))
-        general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol)
+        general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol, fold and FOLD_FREE)
         if general is not None:
             return general
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
@@ -189,6 +192,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
 SEARCH_GRID = {1: 128, 2: 40}
 GENERAL6 = "general-6r"
 USE_GENERAL6 = True  # False: 6R chains without a closed form take the search fallback as before (tests)
+FOLD_FREE = True  # False: no general-6r folded at a free joint between solved ones (benchmarks: before)
 
 
 def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Plan:
@@ -203,7 +207,7 @@ def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Pla
                 SEARCH_GRID[len(joints)], tuple(j.name for j in chain.joints))
 
 
-def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol) -> Plan | None:
+def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol, may_fold) -> Plan | None:
     """The general 6R elimination (subproblems.general6) for a 6-joint pose target without a closed
     form (prismatic joints where an arrangement puts them on its right side), or None (other chains;
     or a geometry where it degenerates or a prismatic joint sits in the middle: the note says why).
@@ -220,7 +224,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     solved = free_end_split(chain, free)
     fold = None
     if solved is None:
-        fold = _fold_column(chain, free)
+        fold = _fold_column(chain, free) if may_fold else None
         if fold is None:
             notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
                          "solved twists depend on its value (folded at run time only for seven revolute "
