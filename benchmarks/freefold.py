@@ -78,7 +78,8 @@ def measure(seed: int, count: int) -> tuple[dict, str]:
     module = compile_robot(chain, free=(chain.joints[FREE].name,))
     module.solve_batch(T[:1], Q[:1, FREE])
     batch = _ms(lambda: module.solve_batch(T, Q[:, FREE])) / count
-    prof = _profile(lambda: [general6.General6(*freefold.folded(tw, home, FREE, v), scale) for v in values[:4]])
+    prof = _profile(lambda: [general6.General6(*freefold.folded(tw, home, FREE, v), scale)
+                             for v in values[:4]])
     row = {"seed": seed, "method": module.METHOD, "arrangements": len(arrangement),
            "choose": statistics.median(choose), "given": statistics.median(given),
            "first": statistics.median(first), "again": statistics.median(again), "batch": batch}
