@@ -314,7 +314,8 @@ def free_end_split(chain: Chain, free) -> list[int] | None:
     """The joints the general 6R elimination solves when ``free`` joints are given: every other joint,
     provided the free ones sit before or after all of them (then ``P X(q) S M = T`` is a 6R problem of
     fixed twists with the target ``P^-1 T M^-1 S^-1 M``: runtime.reference.general6_rows); None when a
-    free joint lies between solved ones (the solved twists after it would turn with its value)."""
+    free joint lies between solved ones (the solved twists after it turn with its value: folded at run
+    time where ``_fold_column`` allows, runtime/freefold.py)."""
     fixed = {chain.index(f) for f in free}
     solved = [j for j in range(len(chain.joints)) if j not in fixed]
     if solved and solved[-1] - solved[0] + 1 != len(solved):
