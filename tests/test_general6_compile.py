@@ -333,3 +333,16 @@ def test_a_free_joint_between_solved_ones_of_an_eight_joint_chain_has_a_note():
     module = compile_robot(Chain("random-8r", joints, np.eye(4)), free=("j3", "j5"))
     assert module.METHOD != "general-6r"
     assert "a free joint between solved joints" in module.PLAN
+
+
+def test_compile_chain_prefers_free_end_joints_to_the_fold():
+    # free end joints keep the six twists fixed (the C elimination); the fold is Python only
+    from ikcompiler import configs
+    from ikcompiler.runtime.freefold import FoldedGeneral6
+
+    chain = _random_7r(3)
+    best = configs.compile_chain(chain)
+    assert best.module.METHOD == "general-6r" and not isinstance(best.module._GENERAL6, FoldedGeneral6)
+    assert best.free in (("j7",), ("j1",))
+    elbow = configs.compile_chain(chain, first_only=True)
+    assert elbow.free == ("j3",) and isinstance(elbow.module._GENERAL6, FoldedGeneral6)
