@@ -689,9 +689,29 @@ class General6:
             Qn, en = self._undamped(Qc[near], Tn[own[near]])
             Qc, err = Qc.copy(), err.copy()
             Qc[near], err[near] = Qn, en
+            err[near] = np.where(self._apart(Qc, own, err, near), err[near], np.inf)
         ok = err <= EXACT
         Qc, own, err = _wrap(Qc[ok], self.prism), own[ok], err[ok]
         return _pack(Qc, own, err, N, self.prism)
+
+    def _apart(self, Q, own, err, fresh):
+        """Of the rows ``fresh`` (finished by :meth:`_undamped`), which are new solutions (a bool per
+        fresh row): exact, farther than ``G6_COLLIDE`` from every other exact row of their target and
+        from every better fresh one.  At an exact double root (the Jaco at all-special poses,
+        sigma_min / sigma_max 1e-10) the pose error is quadratic in the distance, so plain steps from
+        several stalled candidates end 1e-6..4e-5 apart, each exact: one solution, returned once (kept
+        apart: 9 rows at one Jaco pose where there is 1)."""
+        exact = err <= EXACT
+        out = np.zeros(int(fresh.sum()), dtype=bool)
+        where = np.nonzero(fresh)[0]
+        for t in np.unique(own[fresh & exact]):
+            kept = list(np.nonzero((own == t) & exact & ~fresh)[0])
+            mine = [k for k in np.nonzero((own == t) & fresh & exact)[0]]
+            for k in sorted(mine, key=lambda k: err[k]):
+                if not kept or _angle_gap(Q[kept], Q[k], self.prism).max(axis=1).min() > _tol.G6_COLLIDE:
+                    out[np.searchsorted(where, k)] = True
+                    kept.append(k)
+        return out
 
     def _undamped(self, Q, Tn, iters=_tol.G6_UNDAMPED_STEPS):
         """Plain Gauss-Newton steps (the Jacobian's pseudo-inverse, singular values below
