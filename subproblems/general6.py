@@ -126,12 +126,15 @@ class General6Error(SubproblemError):
 @dataclass(frozen=True)
 class Batch:
     """Solutions of N targets: Q (N, 16, 6) joint values in (-pi, pi], valid (N, 16), residual (N, 16)
-    (pose error relative to the size, recomputed by forward kinematics), reachable (N,)."""
+    (pose error relative to the size, recomputed by forward kinematics), reachable (N,), singular (N, 16):
+    the row is an exact solution at a (nearly) singular configuration, a near-double root (smallest over
+    largest singular value of its Jacobian, lengths over the size, below ``VERIFY_SINGULAR``)."""
 
     Q: np.ndarray
     valid: np.ndarray
     residual: np.ndarray
     reachable: np.ndarray
+    singular: np.ndarray | None = None
 
 
 # ----------------------------------------------------------------------------------------------- rigid
@@ -692,7 +695,13 @@ class General6:
             err[near] = np.where(self._apart(Qc, own, err, near), err[near], np.inf)
         ok = err <= EXACT
         Qc, own, err = _wrap(Qc[ok], self.prism), own[ok], err[ok]
-        return _pack(Qc, own, err, N, self.prism)
+        b = _pack(Qc, own, err, N, self.prism)
+        singular = np.zeros_like(b.valid)
+        n, k = np.nonzero(b.valid)
+        if len(n):
+            sv = np.linalg.svd(self._jacobian(b.Q[n, k])[1], compute_uv=False)
+            singular[n, k] = sv[:, -1] < _tol.VERIFY_SINGULAR * sv[:, 0]
+        return dataclasses.replace(b, singular=singular)
 
     def _apart(self, Q, own, err, fresh):
         """Of the rows ``fresh`` (finished by :meth:`_undamped`), which are new solutions (a bool per

@@ -329,7 +329,8 @@ def test_general6_finishes_a_near_double_root_the_truncated_step_left(catalogue)
     3e-11..6e-9 under Newton's truncated step, which never moves along the weak direction, and the
     solver returned no row (before General6._undamped).  The sampled vector must be among its rows,
     every row exact by forward kinematics of the chain (not the solver's), at a near-singular
-    configuration (a near-double root, not an artefact of a regular pose)."""
+    configuration (a near-double root, not an artefact of a regular pose), and flagged so
+    (``Batch.singular``), where a generic pose's rows are not."""
     import numpy as np
 
     from ikcompiler.verify import sample_configurations
@@ -342,10 +343,14 @@ def test_general6_finishes_a_near_double_root_the_truncated_step_left(catalogue)
     sv = np.linalg.svd(chain.space_jacobian(q), compute_uv=False)
     assert sv[-1] / sv[0] < 1e-7, sv  # the pose is still the near-double root this test is about
     T = chain.fk(q)
-    rows = general6.General6(chain.twists, chain.home, chain.scale).solve(T)
+    solver = general6.General6(chain.twists, chain.home, chain.scale)
+    batch = solver.solve_batch(np.stack([T, chain.fk(sample_configurations(chain, 1, 2, 0.0)[0])]))
+    rows = batch.Q[0][batch.valid[0]]
     assert len(rows), "no row at the near-double root"
     gap = np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1)
     assert gap.min() < 1e-6, gap
+    assert batch.singular[0][batch.valid[0]][np.argmin(gap)], "the near-double root is not flagged"
+    assert batch.valid[1].any() and not batch.singular[1].any(), batch  # a generic pose: none flagged
     for row in rows:
         G = chain.fk(row)
         pos = np.linalg.norm(G[:3, 3] - T[:3, 3]) / chain.scale
