@@ -732,8 +732,9 @@ class General6:
         0, 0, pi/2, pi, -pi/2) (sigma_min / sigma_max 7e-9): every candidate stalled at 3e-11..6e-9 and the
         target had no row; plain steps from the nearest (2.5e-3 rad away) reach 4e-16 in three.  Plain
         steps may climb before they converge, so none stops for not improving; a row counts only where
-        its best iterate is exact (docs/general6.md "The hard cases", "Near-double roots").  The doubtful-target decisions are
-        taken before, on ``_newton``'s errors, so no target's arrangements change."""
+        its best iterate is exact (docs/general6.md "The hard cases", "Near-double roots").  The
+        doubtful-target decisions are taken before, on ``_newton``'s errors, so no target's arrangements
+        change."""
         Q = Q.copy()
         best, best_err = Q.copy(), np.full(len(Q), np.inf)
         live = np.arange(len(Q))
@@ -750,7 +751,8 @@ class General6:
             Rt, Tt = np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)
             e = np.concatenate([T[:, :3, 3] - g[:, :3, 3], 0.5 * _cross(Rt, Tt).sum(axis=1)], axis=1)
             with np.errstate(all="ignore"):
-                dq = np.einsum("nij,nj->ni", np.linalg.pinv(np.nan_to_num(J), rcond=_tol.G6_UNDAMPED_RCOND), e)
+                pinv = np.linalg.pinv(np.nan_to_num(J), rcond=_tol.G6_UNDAMPED_RCOND)
+                dq = np.einsum("nij,nj->ni", pinv, e)
                 step = np.abs(dq).max(axis=1)
                 dq *= np.minimum(1.0, 0.5 / np.maximum(step, _tol.TINY))[:, None]
             Q[live] += np.nan_to_num(dq)
