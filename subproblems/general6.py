@@ -126,12 +126,15 @@ class General6Error(SubproblemError):
 @dataclass(frozen=True)
 class Batch:
     """Solutions of N targets: Q (N, 16, 6) joint values in (-pi, pi], valid (N, 16), residual (N, 16)
-    (pose error relative to the size, recomputed by forward kinematics), reachable (N,)."""
+    (pose error relative to the size, recomputed by forward kinematics), reachable (N,), singular (N, 16):
+    the row is an exact solution at a (nearly) singular configuration, a near-double root (smallest over
+    largest singular value of its Jacobian, lengths over the size, below ``VERIFY_SINGULAR``)."""
 
     Q: np.ndarray
     valid: np.ndarray
     residual: np.ndarray
     reachable: np.ndarray
+    singular: np.ndarray | None = None
 
 
 # ----------------------------------------------------------------------------------------------- rigid
@@ -708,9 +711,76 @@ class General6:
                     Qk, ek = self._newton(Qk, Tn[todo[ok_]], iters=3 * NEWTON_ITERS)
                     Qs.append(Qk), owns.append(todo[ok_]), errs.append(ek)
             Qc, own, err = np.concatenate(Qs), np.concatenate(owns), np.concatenate(errs)
+        near = (err > EXACT) & (err < STALLED)  # stalled short of exact: a near-double root's candidates
+        if near.any():
+            Qn, en = self._undamped(Qc[near], Tn[own[near]])
+            Qc, err = Qc.copy(), err.copy()
+            Qc[near], err[near] = Qn, en
+            err[near] = np.where(self._apart(Qc, own, err, near), err[near], np.inf)
         ok = err <= EXACT
         Qc, own, err = _wrap(Qc[ok], self.prism), own[ok], err[ok]
-        return _pack(Qc, own, err, N, self.prism)
+        b = _pack(Qc, own, err, N, self.prism)
+        singular = np.zeros_like(b.valid)
+        n, k = np.nonzero(b.valid)
+        if len(n):
+            sv = np.linalg.svd(self._jacobian(b.Q[n, k])[1], compute_uv=False)
+            singular[n, k] = sv[:, -1] < _tol.VERIFY_SINGULAR * sv[:, 0]
+        return dataclasses.replace(b, singular=singular)
+
+    def _apart(self, Q, own, err, fresh):
+        """Of the rows ``fresh`` (finished by :meth:`_undamped`), which are new solutions (a bool per
+        fresh row): exact, farther than ``G6_COLLIDE`` from every other exact row of their target and
+        from every better fresh one.  At an exact double root (the Jaco at all-special poses,
+        sigma_min / sigma_max 1e-10) the pose error is quadratic in the distance, so plain steps from
+        several stalled candidates end 1e-6..4e-5 apart, each exact: one solution, returned once (kept
+        apart: 9 rows at one Jaco pose where there is 1)."""
+        exact = err <= EXACT
+        out = np.zeros(int(fresh.sum()), dtype=bool)
+        where = np.nonzero(fresh)[0]
+        for t in np.unique(own[fresh & exact]):
+            kept = list(np.nonzero((own == t) & exact & ~fresh)[0])
+            mine = [k for k in np.nonzero((own == t) & fresh & exact)[0]]
+            for k in sorted(mine, key=lambda k: err[k]):
+                if not kept or _angle_gap(Q[kept], Q[k], self.prism).max(axis=1).min() > _tol.G6_COLLIDE:
+                    out[np.searchsorted(where, k)] = True
+                    kept.append(k)
+        return out
+
+    def _undamped(self, Q, Tn, iters=_tol.G6_UNDAMPED_STEPS):
+        """Plain Gauss-Newton steps (the Jacobian's pseudo-inverse, singular values below
+        ``G6_UNDAMPED_RCOND`` of the largest left out; bounded to 0.5) for candidates that
+        :meth:`_newton` left above the precision; returns (best Q, its error).
+
+        At a near-double root the Jacobian's weakest singular value is tiny; ``_newton``'s truncated
+        step (``G6_PINV_RCOND``) then never moves along it.  reachback.urdf perturbed by 1e-5 at q = (pi,
+        0, 0, pi/2, pi, -pi/2) (sigma_min / sigma_max 7e-9): every candidate stalled at 3e-11..6e-9 and the
+        target had no row; plain steps from the nearest (2.5e-3 rad away) reach 4e-16 in three.  Plain
+        steps may climb before they converge, so none stops for not improving; a row counts only where
+        its best iterate is exact (docs/general6.md "The hard cases", "Near-double roots").  The
+        doubtful-target decisions are taken before, on ``_newton``'s errors, so no target's arrangements
+        change."""
+        Q = Q.copy()
+        best, best_err = Q.copy(), np.full(len(Q), np.inf)
+        live = np.arange(len(Q))
+        for it in range(iters + 1):
+            g, J = self._jacobian(Q[live])
+            err = self._error(g, Tn[live])
+            better = err < best_err[live]
+            best[live[better]], best_err[live[better]] = Q[live[better]], err[better]
+            more = np.isfinite(err) & (err > 0.05 * EXACT)
+            live, g, J = live[more], g[more], J[more]
+            if it == iters or not len(live):
+                break
+            T = Tn[live]
+            Rt, Tt = np.swapaxes(g[:, :3, :3], 1, 2), np.swapaxes(T[:, :3, :3], 1, 2)
+            e = np.concatenate([T[:, :3, 3] - g[:, :3, 3], 0.5 * _cross(Rt, Tt).sum(axis=1)], axis=1)
+            with np.errstate(all="ignore"):
+                pinv = np.linalg.pinv(np.nan_to_num(J), rcond=_tol.G6_UNDAMPED_RCOND)
+                dq = np.einsum("nij,nj->ni", pinv, e)
+                step = np.abs(dq).max(axis=1)
+                dq *= np.minimum(1.0, 0.5 / np.maximum(step, _tol.TINY))[:, None]
+            Q[live] += np.nan_to_num(dq)
+        return best, best_err
 
     def solve_batch(self, Ts) -> Batch:
         """Every solution of N targets (N, 4, 4): a :class:`Batch` of up to 16 rows each."""

