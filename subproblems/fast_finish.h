@@ -386,9 +386,9 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         if (flag & IKC_EMPTY) continue;
         err[k] = E[k];
         if (flag & IKC_DEFER) return ikc_hand_back(IKC_WHY_DEFER);
+        if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
         /* an S2-RR lock: ikc_settle_chain's line test settles it (its leaves read FAMILY there) */
         if (flag & IKC_LOCK) return (flag & IKC_FAMILY) ? IKC_FAMILY_MISS : ikc_hand_back(IKC_WHY_DEFER);
-        if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {

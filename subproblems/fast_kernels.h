@@ -337,10 +337,11 @@ static inline void ikc_point_r_cs(const double *w, const double *r, const double
  * representative rep, flagged IKC_LOCK, and its cosine and sine in cs[0], cs[1] (fast._locked_cs). */
 static inline double ikc_locked_cs(double th, int *flag, double rep, double *cs) {
     if (*flag == 0) return th;
+    const double here = rep + 0.0 * th;  /* as fast._locked_cs: -0.0 + 0.0 is +0.0, and a NaN stays */
     *flag = IKC_LOCK;
-    cs[0] = cos(rep);
-    cs[1] = sin(rep);
-    return rep + 0.0 * th;
+    cs[0] = cos(here);
+    cs[1] = sin(here);
+    return here;
 }
 
 /* S2-RR, axes meeting: exp(w1 t1) exp(w2 t2)(p) = q (Paden-Kahan 2).  2 slots x 2 (t1, t2) */

@@ -271,15 +271,17 @@ class Solver:
     def _batch(self, Ts, free, limits, chunk=CHUNK, flags=True):
         """solve_batch_info in the values the chain solves for (see :meth:`_out`); ``flags`` False skips
         the continuum flags set here (solve_batch drops them)."""
-        done = None
+        done = checked = None
         if self.free_ends_native() is not None:
-            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            checked = targets.check_targets(self.robot, Ts)
+            goals, Td, reasons = checked
             init = targets.initial_values(self.robot, len(goals), free)
             done = self._free_ends_batch(goals, Td, init, reasons, limits)
         else:
             done = self._native_batch(Ts, free, limits)
         if done is None:
-            goals, Td, reasons = targets.check_targets(self.robot, Ts)
+            checked = checked or targets.check_targets(self.robot, Ts)
+            goals, Td, reasons = checked
             init = targets.initial_values(self.robot, len(goals), free)
             parts = [targets.without_invalid(self.python_chunk(goals[i:i + chunk], Td[i:i + chunk],
                                                                init[i:i + chunk], limits),
@@ -288,7 +290,7 @@ class Solver:
             done = _joined(parts) if parts else self._empty()
         if flags and self.flags_rows():
             Q, valid, ls, res, cont = done
-            goals = targets.check_targets(self.robot, Ts)[0]
+            goals = (checked or targets.check_targets(self.robot, Ts))[0]
             n, k = np.nonzero(valid)
             cont = cont.copy()
             for i in range(0, len(n), NATIVE_CHUNK):  # in chunks: a Jacobian of every row at once is big

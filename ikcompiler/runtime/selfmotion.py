@@ -45,10 +45,8 @@ def flags(robot, TH, goals, exact_only: bool = False) -> np.ndarray:
     J[:, :3] /= robot.scale
     moving = [k for k in range(J.shape[2]) if k not in robot.free]  # free joints hold their given values
     if len(moving) < J.shape[2]:
-        full = np.zeros((len(TH), J.shape[2], len(moving)))
-        full[:, moving, np.arange(len(moving))] = 1.0  # the moving joints' columns back to every joint
         J = J[:, :, moving]
-        A = robot.A @ full[0]
+        A = robot.A[:, moving]  # the moving joints' columns
     else:
         A = robot.A
     # |det J| = prod(sigma) <= sigma_min |J|_F^5: rows whose determinant rules out a small sigma_min
