@@ -94,6 +94,7 @@ class Catalogue:
     chains: list[ChainEntry] = field(default_factory=list)
     skipped: list[Skipped] = field(default_factory=list)
     files: int = 0
+    paths: list[Path] = field(default_factory=list)  # every URDF read (xacro files as expanded), in order
 
 
 def installed(package: str) -> bool:
@@ -188,7 +189,7 @@ def expand_xacro(path: Path, search_root: Path, out_dir: Path) -> Path:
 
 
 def _tree(path: Path):
-    from ikcompiler.inputs.urdf import parse_xml
+    from ikcompiler.inputs.urdf_xml import parse_xml
 
     root = parse_xml(path)
     if root.tag != "robot":
@@ -326,6 +327,7 @@ def discover(
                     cat.skipped.append(Skipped(package, rel, str(exc).splitlines()[0][:200]))
                     continue
             cat.files += 1
+            cat.paths.append(path)
             found, skipped = chains_in_urdf(path, package, rel)
             cat.skipped.extend(skipped)
             for entry, sig in found:

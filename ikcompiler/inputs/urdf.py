@@ -1,8 +1,8 @@
 """URDF to POE: the chain of moving joints from a base link to a tip link.
 
-The file is read with :mod:`yourdfpy` (its data model only: no meshes, no scene graph).  Before that it
-is parsed strictly with lxml so that malformed XML and malformed joint elements are reported with their
-line numbers instead of being silently "recovered".
+The file is read by :mod:`ikcompiler.inputs.urdf_xml` (lxml, strictly, so that malformed XML and
+malformed joint elements are reported with their line numbers instead of being silently "recovered")
+into typed joint records; this module turns the records into the chain.
 
 Mapping (docs/design.md section 2):
 
@@ -31,123 +31,31 @@ from pathlib import Path
 import numpy as np
 
 from ikcompiler.errors import ChainSelectionError, RobotInputError, UnsupportedJointError
+from ikcompiler.inputs.urdf_xml import UrdfModel, read_urdf
 from ikcompiler.model import Chain, Coupling, Joint
 from subproblems import tolerances as tol
 from subproblems.screw import transform_twist, twist_exp
 
 MOVING = {"revolute": "R", "continuous": "R", "prismatic": "T"}
-KNOWN_TYPES = {"revolute", "continuous", "prismatic", "fixed", "planar", "floating"}
-
-
-def _floats(text: str | None, n: int) -> bool:
-    if text is None:
-        return True
-    parts = text.split()
-    try:
-        return len(parts) == n and all(math.isfinite(float(x)) for x in parts)
-    except ValueError:
-        return False
-
-
-# Errors libxml2 reports that leave the URDF content intact: a prefix such as ``drake:`` on an element
-# URDF ignores anyway (airo-models' Robotiq 2F-85), and an XML declaration with version "0.0" (pybullet's
-# data).  Every other error is fatal.
-HARMLESS_XML_ERRORS = {"NS_ERR_UNDEFINED_NAMESPACE", "ERR_UNKNOWN_VERSION"}
-
-
-def parse_xml(path: Path | str):
-    """The root element of an XML file, parsed strictly except for :data:`HARMLESS_XML_ERRORS`;
-    malformed XML raises :class:`RobotInputError` with the file and line."""
-    from lxml import etree
-
-    src = str(path)
-    parser = etree.XMLParser(remove_blank_text=True, resolve_entities=False, recover=True)
-    try:
-        tree = etree.parse(src, parser)
-    except etree.XMLSyntaxError as exc:  # even recovery failed
-        line = exc.lineno if exc.lineno else None
-        raise RobotInputError(
-            f"malformed XML: {exc.msg}", source=src, where=f"line {line}" if line else None
-        ) from exc
-    except OSError as exc:
-        raise RobotInputError(f"cannot read the file ({exc})", source=src) from exc
-    for err in parser.error_log:
-        if err.type_name not in HARMLESS_XML_ERRORS:
-            raise RobotInputError(f"malformed XML: {err.message}", source=src, where=f"line {err.line}")
-    root = tree.getroot()
-    if root is None:
-        raise RobotInputError("malformed XML: no root element", source=src)
-    return root
-
-
-def _strict_parse(path: Path):
-    """Parse the XML with lxml (strict) and check every joint element; returns the root element."""
-    src = str(path)
-    root = parse_xml(path)
-    if root.tag != "robot":
-        raise RobotInputError(
-            f"the root element is <{root.tag}>, a URDF needs <robot>",
-            source=src,
-            where=f"line {root.sourceline}",
-        )
-    for link in root.findall("link"):
-        if not link.get("name"):
-            raise RobotInputError("<link> without a name", source=src, where=f"line {link.sourceline}")
-    for el in root.findall("joint"):
-        name = el.get("name")
-        where = f"line {el.sourceline}, joint {name!r}"
-        if not name:
-            raise RobotInputError("<joint> without a name", source=src, where=f"line {el.sourceline}")
-        if el.get("type") not in KNOWN_TYPES:
-            raise UnsupportedJointError(
-                f"joint type {el.get('type')!r} is not a URDF joint type ({', '.join(sorted(KNOWN_TYPES))})",
-                source=src,
-                where=where,
-            )
-        for tag in ("parent", "child"):
-            sub = el.find(tag)
-            if sub is None or not sub.get("link"):
-                raise RobotInputError(f"missing <{tag} link=...>", source=src, where=where)
-        checks = [("origin", "xyz", 3), ("origin", "rpy", 3), ("axis", "xyz", 3)]
-        checks += [("limit", "lower", 1), ("limit", "upper", 1)]
-        checks += [("mimic", "multiplier", 1), ("mimic", "offset", 1)]
-        for tag, attr, n in checks:
-            sub = el.find(tag)
-            if sub is not None and not _floats(sub.get(attr), n):
-                raise RobotInputError(
-                    f"<{tag} {attr}={sub.get(attr)!r}> needs {n} finite number(s)",
-                    source=src,
-                    where=f"line {sub.sourceline}, joint {name!r}",
-                )
-        mimic = el.find("mimic")
-        if mimic is not None and not mimic.get("joint"):
-            raise RobotInputError(
-                "<mimic> needs a joint attribute",
-                source=src,
-                where=f"line {mimic.sourceline}, joint {name!r}",
-            )
-    return root
 
 
 def load_urdf(path: Path | str, *, base: str | None = None, tip: str | None = None) -> Chain:
     """Load the chain from link ``base`` to link ``tip`` of a URDF file (defaults: root and sole leaf)."""
-    import yourdfpy
+    return chain_from_model(read_urdf(path), path, base=base, tip=tip)
 
+
+def chain_from_model(
+    model: UrdfModel, path: Path | str, *, base: str | None = None, tip: str | None = None
+) -> Chain:
+    """The chain from ``base`` to ``tip`` of a URDF file's records (:mod:`ikcompiler.inputs.urdf_xml`)."""
     path = Path(path)
     src = str(path)
-    root = _strict_parse(path)
-    lines = {el.get("name"): el.sourceline for el in root.findall("joint")}
-    try:
-        model = yourdfpy.URDF.load(
-            src, build_scene_graph=False, load_meshes=False, load_collision_meshes=False
-        ).robot
-    except Exception as exc:  # yourdfpy raises assorted types; report them as input errors
-        raise RobotInputError(f"yourdfpy could not read the URDF: {exc}", source=src) from exc
+    lines = {j.name: j.line for j in model.joints}
 
     def where(joint) -> str:
         return f"line {lines.get(joint.name, '?')}, joint {joint.name!r}"
 
-    links = [link.name for link in model.links]
+    links = list(model.links)
     link_set = set(links)
     parent_joint: dict[str, object] = {}
     children: dict[str, list] = {name: [] for name in links}
@@ -348,7 +256,7 @@ def _external_masters(joints, couplings, home, joint_by_name, lines, notes, src)
     >>> from ikcompiler.model import Coupling, Joint
     >>> from subproblems.screw import revolute_twist
     >>> j = Joint("pad", "R", revolute_twist([0, 0, 1], [0, 0, 0]), -0.8, 0.0)
-    >>> class M:  # a stand-in for yourdfpy's joint: the external master "finger_joint"
+    >>> class M:  # a stand-in for a UrdfJoint record: the external master "finger_joint"
     ...     type, mimic, limit = "revolute", None, type("L", (), {"lower": 0.0, "upper": 0.8})()
     >>> out, cs, _ = _external_masters([j], [Coupling("pad", "finger_joint", -1.0, 0.0)], np.eye(4),
     ...                                {"finger_joint": M}, {}, [], "g.urdf")
