@@ -175,47 +175,24 @@ def angle_about(m, w, u, v, size2=0.0):
     Returns ``(th, flag)``; :data:`DEFER` when either vector is (nearly) along ``w``, where every angle
     is equally good; "nearly" is relative to the vectors, to ``size2``, the squared size of the
     geometry they come from (a point on an axis up to roundoff has rounding-sized vectors), and to
-    one unit of length (so a geometry of rounding-sized vectors is degenerate too).  Written
-    out component by component: this is the innermost call of every chain, and helper calls cost more
-    than the arithmetic on floats.
+    one unit of length (so a geometry of rounding-sized vectors is degenerate too).  The arithmetic is
+    :func:`angle_about_cs`'s (written out component by component there: the innermost call of every
+    chain, where helper calls cost more than the arithmetic on floats).
     """
-    w0, w1, w2 = w
-    u0, u1, u2 = u
-    v0, v1, v2 = v
-    uw = w0 * u0 + w1 * u1 + w2 * u2
-    vw = w0 * v0 + w1 * v1 + w2 * v2
-    a0, a1, a2 = u0 - uw * w0, u1 - uw * w1, u2 - uw * w2
-    b0, b1, b2 = v0 - vw * w0, v1 - vw * w1, v2 - vw * w2
-    sin_part = w0 * (a1 * b2 - a2 * b1) + w1 * (a2 * b0 - a0 * b2) + w2 * (a0 * b1 - a1 * b0)
-    th = m.atan2(sin_part, a0 * b0 + a1 * b1 + a2 * b2)
-    lim = NEAR2 * (u0 * u0 + u1 * u1 + u2 * u2 + v0 * v0 + v1 * v1 + v2 * v2 + size2 + 1.0)
-    return th, ((a0 * a0 + a1 * a1 + a2 * a2 <= lim) | (b0 * b0 + b1 * b1 + b2 * b2 <= lim)) * DEFER
+    th, flag, _, _ = angle_about_cs(m, w, u, v, size2)  # one arithmetic with the _cs form (and C)
+    return th, flag
 
 
-def trig_roots(m, a, b, c, size, rep=0.0):
-    """Both roots of ``a cos th + b sin th = c`` (clamped to the nearest when ``|c| > rho``).
+def trig_roots_cs(m, a, b, c, size, rep=0.0):
+    """Both roots of ``a cos th + b sin th = c`` (clamped to the nearest when ``|c| > rho``), each with
+    its cosine and sine: ``(th, flag, cos th, sin th)`` twice.
 
     When ``rho = |(a, b)|`` is negligible against ``size`` the equation hardly depends on ``th``: if
     ``c`` is negligible too, every angle solves it (a self-motion): both slots hold the
     representative ``th = rep``, flagged :data:`FAMILY`; otherwise no angle does, or the instance is
-    too close to call: :data:`DEFER`.
-    """
-    rho = m.sqrt(a * a + b * b)
-    phi = m.atan2(b, a)
-    x = c / m.big(rho)
-    delta = m.acos(m.clip1(x))
-    flat = rho <= NEAR * size
-    every = flat & (abs(c) <= NEAR * size)
-    tangent = (abs(x * x - 1.0) <= TANGENT) * (rho > NEAR * size)
-    flag = (flat ^ every) * DEFER | every * FAMILY | tangent * TANGENT_ROOT
-    here = rep + 0.0 * phi
-    return (m.where(every, here, phi + delta), flag), (m.where(every, here, phi - delta), flag)
-
-
-def trig_roots_cs(m, a, b, c, size, rep=0.0):
-    """:func:`trig_roots` with the cosine and sine of each root: ``(th, flag, cos th, sin th)`` twice.
-    The roots are ``phi +- delta``: cos phi = a / rho, sin phi = b / rho (:func:`unit_pair`), cos delta
-    the clipped ``c / rho``, sin delta = sqrt((1 - cos)(1 + cos)) >= 0 (delta = acos in [0, pi])."""
+    too close to call: :data:`DEFER`.  The roots are ``phi +- delta``: cos phi = a / rho,
+    sin phi = b / rho (:func:`unit_pair`), cos delta the clipped ``c / rho``,
+    sin delta = sqrt((1 - cos)(1 + cos)) >= 0 (delta = acos in [0, pi])."""
     rho = m.sqrt(a * a + b * b)
     phi = m.atan2(b, a)
     x = c / m.big(rho)
@@ -245,7 +222,7 @@ def _without_trig(slots, outs: int):
 
 
 def plane_r_cs(m, w, r, p, h, d, rep=0.0):
-    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r); ``rep``: see :func:`trig_roots`.
+    """H-R: ``h . exp(w th)(p) = d`` for a revolute axis (w, r); ``rep``: see :func:`trig_roots_cs`.
     Each slot also holds cos and sin of its angle (``_cs`` kernels; :func:`plane_r` without them)."""
     u = sub(p, r)
     uw = dot(w, u)
@@ -329,7 +306,7 @@ def slide2_turn(m, v1, v2, w, r, p, q, rep=0.0):
     """S2-TTR: ``v1 t1 + v2 t2 + exp(xi3 t3)(p) = q`` with xi3 about the axis (w, r).
 
     Across both slides (the normal ``n = v1 x v2``) they move nothing: ``n . exp(xi3 t3)(p) = n . q``
-    gives t3 (H-R, 2 slots; ``rep``: see :func:`trig_roots`); the slides then take
+    gives t3 (H-R, 2 slots; ``rep``: see :func:`trig_roots_cs`); the slides then take
     ``x = q - exp(xi3 t3)(p)``: ``v1 t1 + v2 t2 = x`` by normal equations.  Defer when the slides are
     (nearly) parallel, where the normal is not defined."""
     n = cross(v1, v2)

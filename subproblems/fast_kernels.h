@@ -175,11 +175,6 @@ static inline void ikc_trig_roots_cs(double a, double b, double c, double size, 
     cs[3] = sp * cd - cp * sd;
 }
 
-static inline void ikc_trig_roots(double a, double b, double c, double size, double rep, double *th, int *f) {
-    double cs[4];
-    ikc_trig_roots_cs(a, b, c, size, rep, th, f, cs);
-}
-
 /* ------------------------------------------------------------------------------------------------
  * the kernels */
 
