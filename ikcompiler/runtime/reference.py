@@ -235,12 +235,15 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         TH = onto_self_motion(robot, TH, owner, cont, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
+    # Newton (onto_self_motion) moves representatives of one self-motion to points that depend on their
+    # starts: two may land ~1e-8 apart, one family point (pybullet's panda at q4 = 0: two rows 8e-9
+    # apart); a pair with a representative in it is one within SPLIT_ROOT (docs/design.md section 11)
     dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
     return _rt.finish(TH, owner, ls, len(goals), twists=robot.twists, kinds=robot.kinds, home=robot.home,
                       independent=robot.independent, targets=goals, scale=robot.scale, tol=robot.tol,
                       slots=robot.slots, error=robot.error, cont=cont,
                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
-                      vary=robot.vary, dedupe=dedupe)
+                      vary=robot.vary, dedupe=dedupe, family_dedupe=_fk.SPLIT_ROOT)
 
 
 def onto_self_motion(robot, TH, owner, cont, goals, limits):
