@@ -52,13 +52,16 @@ def with_tool_roll(chain: Chain) -> Chain:
     return dataclasses.replace(chain, joints=chain.joints + (roll,))
 
 
-def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None) -> Plan:
-    """Search the cheapest subproblem chain for ``chain``; see the module docstring."""
+def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance | None = None,
+                 fold: bool = True) -> Plan:
+    """Search the cheapest subproblem chain for ``chain``; see the module docstring.  ``fold``: a free
+    joint between solved ones may take the general 6R elimination folded at its value
+    (runtime/freefold.py; ``configs.compile_chain`` tries the free choices without it first)."""
     tol = tol or Tolerance()
     if target not in TARGETS:
         raise CompileError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
     if target == "position+direction":
-        plan = compile_plan(with_tool_roll(chain), target="pose", free=free, tol=tol)
+        plan = compile_plan(with_tool_roll(chain), target="pose", free=free, tol=tol, fold=fold)
         note = (
             f"position + direction target: a virtual joint {VIRTUAL_ROLL} about the tool z axis makes it "
             "a pose target; its value is dropped from every solution"
@@ -133,7 +136,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         )
         search_1d = functools.partial(_search_fallback, chain, ctx, couplings, full_lower, full_upper, start,
                                       sizes=(1,))
-        general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol)
+        general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol, fold and FOLD_FREE)
         if general is not None:
             return general
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
@@ -189,6 +192,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
 SEARCH_GRID = {1: 128, 2: 40}
 GENERAL6 = "general-6r"
 USE_GENERAL6 = True  # False: 6R chains without a closed form take the search fallback as before (tests)
+FOLD_FREE = True  # False: no general-6r folded at a free joint between solved ones (benchmarks: before)
 
 
 def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Plan:
@@ -203,7 +207,7 @@ def _search_plan(chain: Chain, target: str, free, geometry, notes, found) -> Pla
                 SEARCH_GRID[len(joints)], tuple(j.name for j in chain.joints))
 
 
-def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol) -> Plan | None:
+def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, tol, may_fold) -> Plan | None:
     """The general 6R elimination (subproblems.general6) for a 6-joint pose target without a closed
     form (prismatic joints where an arrangement puts them on its right side), or None (other chains;
     or a geometry where it degenerates or a prismatic joint sits in the middle: the note says why).
@@ -212,32 +216,51 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     plan is returned instead when it is complete and faster there (ikcompiler.general6_route)."""
     from ikcompiler import general6_route
     from ikcompiler.codegen.csource import general6_native_arrangements
+    from ikcompiler.runtime import freefold
     from subproblems import general6
 
     if not USE_GENERAL6 or target != "pose" or chain.couplings or len(chain.joint_types) - len(free) != 6:
         return None
     solved = free_end_split(chain, free)
+    fold = None
     if solved is None:
-        notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
-                     "solved twists depend on its value (free joints at the chain's ends keep them fixed)")
-        return None
+        fold = _fold_column(chain, free) if may_fold else None
+        if fold is None:
+            notes.append("general 6R elimination not used: a free joint between solved joints makes the six "
+                         "solved twists depend on its value (folded at run time only for seven revolute "
+                         "joints with one free: runtime/freefold.py)")
+            return None
+        solved = [j for j in range(len(chain.joints)) if j != fold]
     try:
-        solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
+        if fold is None:
+            solver = general6.General6(chain.twists[solved], chain.home, chain.scale)
+            arrangements, native = list(solver.usable), general6_native_arrangements(solver)
+        else:  # chosen on the chain folded at a few free values, fixed for every value at run time
+            joint = chain.joints[fold]
+            arrangements = freefold.choose_arrangements(chain.twists, chain.home, chain.scale, fold,
+                                                        joint.lower, joint.upper)
+            six = freefold.folded(chain.twists, chain.home, fold, freefold.CHOICE_VALUES[0])
+            solver = general6.General6(*six, chain.scale, arrangement=arrangements)  # for its notes
+            native = []  # the C elimination does not fold: Python only (the module's NATIVE is False)
     except general6.General6Error as exc:
         notes.append(f"general 6R elimination not used: {exc}")
         return None
     step = General6Step(
         code="G6R",
-        solve=list(range(6)),
-        arrangements=list(solver.usable),
-        native=general6_native_arrangements(solver),
+        solve=list(range(6)) if fold is None else solved,  # folded: the six joints around the free one
+        arrangements=arrangements,
+        native=native,
+        fold=fold,
         rule="Raghavan-Roth / Manocha-Canny elimination: 14 equations, a 12 x 12 matrix quadratic in "
         "the half-angle tangent of one joint, a 24 x 24 eigenproblem; every root polished by Newton "
         "(subproblems.general6, docs/general6.md)",
     )
     names = [chain.joints[j].name for j in solved]
     tried = "; ".join(solver.describe(k, names) for k in solver.usable)
-    if free:
+    if fold is not None:
+        notes.append(f"general 6R elimination on {', '.join(names)}: their twists folded at the free joint "
+                     f"{chain.joints[fold].name}'s value (runtime/freefold.py; Python only)")
+    elif free:
         notes.append(f"general 6R elimination on {', '.join(names)}: the free joint(s) {', '.join(free)} "
                      "at the chain's ends move the target, not the six twists")
     all_names = tuple(j.name for j in chain.joints)
@@ -248,14 +271,17 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         return Plan(chain.name, tuple(chain.independent_names), chain.joint_types, target, GENERAL6, (step,),
                     tuple(free), False, 0, geometry, told, 0.0, all_names=all_names)
 
-    found = search_1d() if not free else None  # the route's measurement runs free of free joints
+    # measured against the 1-D search free of free joints, or with one folded free joint (its values
+    # those of the sample); free end joints keep general-6r unmeasured
+    found = search_1d() if not free or fold is not None else None
     if found is None:
         return general_plan()
     # both measured as their modules run (the C chain where it builds, docs/general6.md "When it is used")
     searched = _search_plan(chain, target, free, geometry, notes, found)
     module = load_module(plan_source(searched, chain, tol=tol), _module_name(chain.name))
     general = load_module(plan_source(general_plan(), chain, tol=tol), _module_name(chain.name))
-    verdict = general6_route.compare(chain, module, general, searched.method)
+    verdict = general6_route.compare(chain, module, general, searched.method,
+                                     free=[chain.index(f) for f in free])
     if verdict.keep_search:
         return dataclasses.replace(searched, notes=(*notes, verdict.note))
     return general_plan((verdict.note,))
@@ -276,11 +302,20 @@ def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:
             "chain's self-motion, not a complete set of the true robot's isolated solutions",)
 
 
+def _fold_column(chain: Chain, free) -> int | None:
+    """The chain index of the one free joint of a seven-revolute chain, which the general 6R elimination
+    folds at run time (runtime/freefold.py), or None (other chains)."""
+    if chain.joint_types != "R" * 7 or len(free) != 1 or chain.couplings:
+        return None
+    return chain.index(free[0])
+
+
 def free_end_split(chain: Chain, free) -> list[int] | None:
     """The joints the general 6R elimination solves when ``free`` joints are given: every other joint,
     provided the free ones sit before or after all of them (then ``P X(q) S M = T`` is a 6R problem of
     fixed twists with the target ``P^-1 T M^-1 S^-1 M``: runtime.reference.general6_rows); None when a
-    free joint lies between solved ones (the solved twists after it would turn with its value)."""
+    free joint lies between solved ones (the solved twists after it turn with its value: folded at run
+    time where ``_fold_column`` allows, runtime/freefold.py)."""
     fixed = {chain.index(f) for f in free}
     solved = [j for j in range(len(chain.joints)) if j not in fixed]
     if solved and solved[-1] - solved[0] + 1 != len(solved):

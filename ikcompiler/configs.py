@@ -144,25 +144,48 @@ def free_candidates(chain: Chain) -> list[tuple[str, ...]]:
     return picks
 
 
-def compile_chain(chain: Chain, **options) -> Compiled:
+def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled:
     """Compile ``chain`` for the target its joint count allows: a full pose (up to 6 independent joints;
     fewer are solved from a sufficient subset of the equations and checked against the whole pose),
     with free joints beyond 6: the first choice of :func:`free_candidates` that compiles closed form,
-    else the first that takes the complete general 6R elimination (free joints at the chain's ends),
-    else the first."""
-    from ikcompiler.compiler import GENERAL6, compile_robot
+    else the first that takes the complete general 6R elimination with its free joints at the chain's
+    ends (fixed twists: the C elimination), else the first with a free joint folded into it (Python
+    only: runtime/freefold.py; baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms
+    with the elbow), else the first.  ``first_only``: the first choice alone (the third joint, as a user
+    naming it free; ``benchmarks/real_robots.py --first-free``)."""
+    from ikcompiler.compiler import (
+        GENERAL6,
+        _module_name,
+        compile_plan,
+        free_end_split,
+        load_module,
+        plan_source,
+    )
 
     t0 = time.perf_counter()
-    first = general = None
-    for free in free_candidates(chain):
-        module = compile_robot(chain, target="pose", free=free, **options)
+
+    def compiled(free, fold: bool):
+        plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
+        return load_module(plan_source(plan, chain, **options), _module_name(chain.name))
+
+    first = general = folded = None
+    searched = []
+    for free in free_candidates(chain)[:1] if first_only else free_candidates(chain):
+        module = compiled(free, fold=False)  # the fold measured only where nothing else is complete
         if first is None:
             first = (module, free)
         if module.METHOD == "closed-form":
             return Compiled(module, "pose", free, time.perf_counter() - t0)
         if module.METHOD == GENERAL6 and general is None:
             general = (module, free)
-    module, free = general or first
+        if free_end_split(chain, free) is None:  # a free joint between solved ones: the fold may apply
+            searched.append(free)
+    for free in searched if general is None else ():
+        module = compiled(free, fold=True)
+        if module.METHOD == GENERAL6:
+            folded = (module, free)
+            break
+    module, free = general or folded or first
     return Compiled(module, "pose", free, time.perf_counter() - t0)
 
 

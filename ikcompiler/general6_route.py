@@ -76,7 +76,7 @@ def _cpu(call):
     return out, time.process_time() - t
 
 
-def compare(chain, search_module, general_module, method: str) -> Verdict:
+def compare(chain, search_module, general_module, method: str, free=()) -> Verdict:
     """Measure the 1-D search module (``search_module``, ``method`` e.g. '1d-search') against the
     general-6r module ``general_module`` on the sample poses of ``chain``, each through its own
     ``solve_batch`` (limits off): the path each module runs, native where its C chain builds (the
@@ -87,15 +87,22 @@ def compare(chain, search_module, general_module, method: str) -> Verdict:
     missed 21 of 1,000 ``ikc verify`` poses the search recovers).  First on FIRST poses, and on the
     rest only while the search is still the choice (a slow search, 26 ms a pose on a general TTRRRR
     arm, is not run 64 times); a search that misses a sampled vector gives general-6r without timing
-    it (on the Jaco its one doubtful target of the first 8 took ~0.1 s of compile time)."""
+    it (on the Jaco its one doubtful target of the first 8 took ~0.1 s of compile time).
+
+    ``free``: chain indices of free joints (no couplings: chain and JOINT_NAMES agree), given their
+    sampled values (a general-6r plan folded at its free joint, runtime/freefold.py)."""
     Q = sample_joints(chain)
     T = chain.fk_batch(Q)
-    search_module.solve_batch(T[:1], limits=False)  # builds (or loads) the native library
+
+    def solve(module, part):
+        return module.solve_batch(T[part], *(Q[part, j] for j in free), limits=False)
+
+    solve(search_module, slice(0, 1))  # builds (or loads) the native library
     warm = False
     n = hit = total = covered = g_hit = g_total = g_covered = 0
     spent = np.zeros(2)  # process CPU: search, general
     for part in (slice(0, FIRST), slice(FIRST, len(Q))):
-        (S, V), t_search = _cpu(lambda part=part: search_module.solve_batch(T[part], limits=False))
+        (S, V), t_search = _cpu(lambda part=part: solve(search_module, part))
         spent[0] += t_search
         q = Q[part]
         n += len(q)
@@ -108,9 +115,9 @@ def compare(chain, search_module, general_module, method: str) -> Verdict:
             return Verdict(False, f"general 6R elimination chosen over the {method} (incomplete on the "
                                   f"sample): {numbers}")
         if not warm:
-            general_module.solve_batch(T[:1], limits=False)  # its native library too
+            solve(general_module, slice(0, 1))  # its native library too
             warm = True
-        (G, W), t_general = _cpu(lambda part=part: general_module.solve_batch(T[part], limits=False))
+        (G, W), t_general = _cpu(lambda part=part: solve(general_module, part))
         spent[1] += t_general
         for k in range(len(q)):
             s_rows, g_rows = S[k][V[k]], G[k][W[k]]

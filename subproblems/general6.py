@@ -299,6 +299,24 @@ def _grid_ab(arr: _Arrangement, W, R):
     return _inv(Xb) @ _inv(Xa)
 
 
+class _Arrangements:
+    """The arrangements of a revolute chain, each built when first read (indexable as the list is)."""
+
+    def __init__(self, make, count: int):
+        self._make, self._count, self._built = make, count, {}
+
+    def __getitem__(self, k: int) -> _Arrangement:
+        if k not in self._built:
+            self._built[k] = self._make(k)
+        return self._built[k]
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __iter__(self):
+        return (self[k] for k in range(self._count))
+
+
 class General6:
     """A prepared general 6R solver for one robot; see the module docstring.
 
@@ -333,15 +351,21 @@ class General6:
         # given the arrangements to use (a generated module), only those are built
         wanted = None if arrangement is None else {int(k) for k in np.atleast_1d(arrangement)}
         layouts = [(sign, conj) for conj in range(3) for sign in (1.0, -1.0)]
-        self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
-                     if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any()
-                     and (wanted is None or k in wanted) else None
-                     for k, (sign, conj) in enumerate(layouts)]
+        if wanted is not None and not self.prism.any():
+            # given arrangements of a revolute chain: each built on first use (~2 ms each; a chain
+            # folded at a new free value, runtime/freefold.py, mostly needs only the first)
+            self._arr = _Arrangements(lambda k: _arrangement(self.w, self.r, *layouts[k], self.prism),
+                                      len(layouts))
+        else:
+            self._arr = [_arrangement(self.w, self.r, sign, conj, self.prism)
+                         if not self.prism[[_arrangement_order(sign, conj)[k] for k in (2, 5)]].any()
+                         and (wanted is None or k in wanted) else None
+                         for k, (sign, conj) in enumerate(layouts)]
         if self.prism.any():
             Gn = self._probe_targets()  # one draw for every arrangement's structural measurements
             self._arr = [self._present_columns(a, Gn) if a is not None else None for a in self._arr]
             self._arr = [self._regular_variant(a, Gn) if a is not None else None for a in self._arr]
-        if all(a is None for a in self._arr):
+        if isinstance(self._arr, list) and all(a is None for a in self._arr):
             k = int(np.nonzero(self.prism)[0][0])
             raise General6Error(
                 f"general6: joint {k + 1} is prismatic and no joint order of the chain or of a rotated or "

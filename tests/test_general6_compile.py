@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from ikcompiler import compile_robot, load_robot
+from ikcompiler import verify as verify_mod
 from ikcompiler.compiler import compile_source
 from ikcompiler.model import Chain, Joint
 from ikcompiler.verify import verify
@@ -296,8 +297,52 @@ def test_a_free_joint_at_either_end_leaves_a_general_6r_problem(free):
         assert gap.min(axis=1).max() < 1e-9, n
 
 
-def test_a_free_joint_between_solved_ones_keeps_the_search_with_a_note():
+@pytest.mark.parametrize("free", ["j3", "j4"])
+def test_a_free_joint_between_solved_ones_folds_the_six_twists(free):
+    # E = exp(xi_f q_f): the twists after the free joint become Ad_E xi_k, one 6R chain per free value
+    # (runtime/freefold.py), its arrangements chosen at compile time; no closed form for any free joint
     chain = _random_7r(3)
-    module = compile_robot(chain, free=("j4",))
+    module = compile_robot(chain, free=(free,))
+    assert module.METHOD == "general-6r" and module.FREE_JOINTS == (free,)
+    assert module.NATIVE is False  # the C elimination does not fold (Python only)
+    assert "folded at the free joint" in module.PLAN
+    k = chain.independent_names.index(free)
+    random = np.random.default_rng(6).uniform(-math.pi, math.pi, size=(30, 7))
+    special = verify_mod.sample_configurations(chain, 30, seed=7, special=0.5)
+    special[:4, k] = (0.0, 0.5 * math.pi, -0.5 * math.pi, math.pi)  # the free joint special too
+    Q = np.concatenate([random, special])
+    T = chain.fk_batch(Q)
+    S, V = module.solve_batch(T, Q[:, k])
+    for n in range(len(Q)):
+        rows = S[n][V[n]]
+        assert len(rows), n
+        assert np.all(rows[:, k] == Q[n, k])  # the free value as given
+        d = np.abs(np.angle(np.exp(1j * (rows - Q[n])))).max(axis=1)
+        assert d.min() < 1e-6, (n, Q[n])
+        G = chain.fk_batch(rows)
+        assert np.linalg.norm(G[:, :3, 3] - T[n, :3, 3], axis=1).max() <= 1e-12 * chain.scale
+        assert np.linalg.norm(G[:, :3, :3] - T[n, :3, :3], axis=(1, 2)).max() <= 1e-12
+    for n in (0, 30):
+        assert len(module.solve(T[n], Q[n, k])) == V[n].sum()
+
+
+def test_a_free_joint_between_solved_ones_of_an_eight_joint_chain_has_a_note():
+    rng = np.random.default_rng(8)
+    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)),
+                         -math.pi, math.pi) for i in range(8))
+    module = compile_robot(Chain("random-8r", joints, np.eye(4)), free=("j3", "j5"))
     assert module.METHOD != "general-6r"
     assert "a free joint between solved joints" in module.PLAN
+
+
+def test_compile_chain_prefers_free_end_joints_to_the_fold():
+    # free end joints keep the six twists fixed (the C elimination); the fold is Python only
+    from ikcompiler import configs
+    from ikcompiler.runtime.freefold import FoldedGeneral6
+
+    chain = _random_7r(3)
+    best = configs.compile_chain(chain)
+    assert best.module.METHOD == "general-6r" and not isinstance(best.module._GENERAL6, FoldedGeneral6)
+    assert best.free in (("j7",), ("j1",))
+    elbow = configs.compile_chain(chain, first_only=True)
+    assert elbow.free == ("j3",) and isinstance(elbow.module._GENERAL6, FoldedGeneral6)

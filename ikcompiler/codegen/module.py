@@ -43,6 +43,7 @@ IMPORTS = (
     ("_rt.", "from subproblems import plan_runtime as _rt"),
     ("_sel.", "from subproblems import select as _sel"),
     ("_runtime.", "from ikcompiler import runtime as _runtime"),
+    ("_fold.", "from ikcompiler.runtime import freefold as _fold"),
 )
 
 
@@ -165,7 +166,13 @@ def generate(plan, chain, *, slots: int, version: str, scale: float, tol: float,
         out.append("_PLAN_TWISTS = _TWISTS\n")
     out.append(f"_KINDS = {chain.joint_types!r}\n")
     out.append(f"_HOME = np.array({_array(chain.home)})  # g_st(0)\n")
-    if plan.method == "general-6r":
+    if plan.method == "general-6r" and plan.steps[0].get("fold") is not None:
+        out.append("# General 6R elimination of the six joints around the free one, folded at its value\n")
+        out.append("# (runtime/freefold.py); arrangements chosen at compile time.  Python only.\n")
+        out.append(f"_GENERAL6 = _fold.FoldedGeneral6(_TWISTS, _HOME, {_num(scale)}, "
+                   f"column={plan.steps[0]['fold']}, "
+                   f"arrangement={_literal(list(plan.steps[0]['arrangements']))})\n")
+    elif plan.method == "general-6r":
         out.append("# General 6R elimination (subproblems.general6); arrangements chosen at compile time.\n")
         fixed = {chain.index(f) for f in plan.free}
         solved = [j for j in range(len(chain.joints)) if j not in fixed]

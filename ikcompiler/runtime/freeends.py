@@ -58,10 +58,13 @@ class NativeFreeEnds:
     def bind(cls, robot):
         """The C build for ``robot`` (a general-6r module with free end joints), or None."""
         from ikcompiler.codegen.csource import general6_c_source
+        from ikcompiler.runtime.freefold import FoldedGeneral6
         from subproblems import native
 
+        if robot.general6 is None or isinstance(robot.general6, FoldedGeneral6):  # folded: Python only
+            return None
         split = FreeEnds(robot)
-        if robot.general6 is None or len(split.solved) != 6 or robot.couplings:
+        if len(split.solved) != 6 or robot.couplings:
             return None
         pos = [robot.independent.index(j) for j in split.solved]
         source = general6_c_source(robot.general6, kinds="".join(robot.joint_types[p] for p in pos),

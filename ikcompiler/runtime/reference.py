@@ -77,7 +77,7 @@ def true_general6(robot):
     except ImportError:
         return None
     if freefold.eligible(robot):  # a 7-joint arm with one free joint
-        return freefold.FoldedGeneral6(robot)
+        return freefold.FoldedGeneral6.from_robot(robot)
     if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
         return None
     try:
@@ -88,10 +88,13 @@ def true_general6(robot):
 
 def general6_rows(robot, goals, init):
     """The general 6R elimination's exact rows of N targets: (TH (M, chain joints), owner (M,)).
-    Free joints sit at the chain's ends (the compiler takes general-6r only then): they move the
-    target of the six solved joints (runtime.freeends; docs/design.md section 5, "General 6R")."""
+    Free joints at the chain's ends move the target of the six solved joints (runtime.freeends); a free
+    joint between solved ones folds their twists at its value (runtime.freefold; docs/design.md
+    section 5, "General 6R")."""
     if not robot.free:
         return robot.general6.rows(goals)
+    if isinstance(robot.general6, freefold.FoldedGeneral6):  # a free joint between solved ones
+        return robot.general6.rows(goals, init[:, robot.general6.column])
     from ikcompiler.runtime.freeends import FreeEnds
 
     split = FreeEnds(robot)

@@ -297,12 +297,15 @@ class NumericalStep(Step):
 class General6Step(Step):
     """The general 6R elimination (subproblems.general6) on the whole chain, trying the elimination
     ``arrangements`` in order; ``native``: those the C elimination runs, in the same order
-    (``codegen.csource.general6_native_arrangements``; empty: the module has no C chain)."""
+    (``codegen.csource.general6_native_arrangements``; empty: the module has no C chain); ``fold``: the
+    chain index of a free joint between solved joints, whose value folds the twists after it
+    (runtime/freefold.py), or None (free joints, if any, at the chain's ends)."""
 
     kind: ClassVar[str] = "G6R"
     solve: tuple[int, ...]
     arrangements: tuple[int, ...]
     native: tuple[int, ...] = ()
+    fold: int | None = None
 
     @property
     def slots(self) -> int:
