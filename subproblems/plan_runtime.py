@@ -369,6 +369,7 @@ def finish(
     b=None,
     vary=None,
     dedupe=None,
+    family_dedupe=None,
 ):
     """Check every candidate against its target, represent, remove duplicates, pack into slots.
 
@@ -382,7 +383,10 @@ def finish(
     are rebuilt from them first.  A row is exact when its error is at most ``tol * scale``; exact rows
     come first in each slot row.  ``dedupe``: the joint distance within which two rows of a target are
     one (default 1e-9 of max(1, scale); the search fallbacks pass ``fast.SPLIT_ROOT``: Newton from two
-    seeds of one double root stops on a flat valley up to ~1e-7 apart).
+    seeds of one double root stops on a flat valley up to ~1e-7 apart).  ``family_dedupe``: the same for
+    a pair of which one row or both are on a self-motion (``cont``; default ``dedupe``): Newton moves a
+    representative onto its family at a point that depends on where it starts, and two of one family
+    may land ~1e-8 apart (docs/design.md section 10, "Duplicate rows").
     """
     dof = len(independent)
     Q = np.zeros((N, slots, dof))
@@ -424,7 +428,10 @@ def finish(
     diff = cand[:, :, None, :] - cand[:, None, :, :]
     for c, k in enumerate(ind_kinds):
         diff[..., c] = angle_distance(diff[..., c], k == "R")
-    same = np.abs(diff).max(axis=3) <= (DUPLICATE_ROWS * max(1.0, scale) if dedupe is None else dedupe)
+    tol = DUPLICATE_ROWS * max(1.0, scale) if dedupe is None else dedupe
+    if family_dedupe is not None:
+        tol = np.where(ccont[:, :, None] | ccont[:, None, :], family_dedupe, tol)
+    same = np.abs(diff).max(axis=3) <= tol
     earlier = np.tril(np.ones((C, C), dtype=bool), k=-1)
     dup = np.any(same & earlier & cval[:, None, :], axis=2)
     keep = cval & ~dup

@@ -238,12 +238,17 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         TH = onto_self_motion(robot, TH, owner, cont, goals, limits)
         if limits:
             TH = clamped_onto_limits(robot, TH, owner, goals)
-    dedupe = _fk.SPLIT_ROOT if robot.search or robot.method == "numerical" else None
+    # Rows Newton carried to where they are (a search's, a snapped plan's: the Python snapped route
+    # merges them within SPLIT_ROOT too) and representatives onto_self_motion moved along their family
+    # stop where their starts lead: two copies of one solution may land ~1e-8 apart (pybullet's panda
+    # at q4 = 0: two rows 8e-9 apart; pr2 perturbed by 1e-6: 7e-9).  docs/design.md section 11.
+    moved = robot.search or robot.method == "numerical" or robot.polish
+    dedupe = _fk.SPLIT_ROOT if moved else None
     return _rt.finish(TH, owner, ls, len(goals), twists=robot.twists, kinds=robot.kinds, home=robot.home,
                       independent=robot.independent, targets=goals, scale=robot.scale, tol=robot.tol,
                       slots=robot.slots, error=robot.error, cont=cont,
                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
-                      vary=robot.vary, dedupe=dedupe)
+                      vary=robot.vary, dedupe=dedupe, family_dedupe=_fk.SPLIT_ROOT)
 
 
 def onto_self_motion(robot, TH, owner, cont, goals, limits):
