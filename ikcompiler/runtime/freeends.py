@@ -47,12 +47,11 @@ class NativeFreeEnds:
     the C calls exact misses the precision on the whole robot (the moved target's error is the whole
     robot's up to the right factor ``M^-1 S M``)."""
 
-    def __init__(self, robot, native):
-        self.split = FreeEnds(robot)
+    def __init__(self, robot, native, split: FreeEnds):
+        self.split = split
         self.robot = robot
         self.native = native
-        pos = [robot.independent.index(j) for j in self.split.solved]  # JOINT_NAMES positions
-        self.positions = pos
+        self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
 
     @classmethod
     def bind(cls, robot):
@@ -66,14 +65,14 @@ class NativeFreeEnds:
         split = FreeEnds(robot)
         if len(split.solved) != 6 or robot.couplings:
             return None
-        pos = [robot.independent.index(j) for j in split.solved]
+        pos = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
         source = general6_c_source(robot.general6, kinds="".join(robot.joint_types[p] for p in pos),
                                    lower=robot.lower[pos], upper=robot.upper[pos], target="pose",
                                    scale=robot.scale, tol=robot.tol, slots=robot.slots,
                                    twists=robot.twists[split.solved], home=robot.home, A=np.eye(6),
                                    b=np.zeros(6))
         chain = source and native.bind(source, dof=6, slots=robot.slots, nfree=0, target="pose")
-        return cls(robot, chain) if chain is not None else None
+        return cls(robot, chain, split) if chain is not None else None
 
     def _as_given(self, init, limits) -> np.ndarray:
         """(N,) whether every free value comes back as given: its own representative, inside its limits."""
