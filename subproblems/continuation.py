@@ -56,7 +56,7 @@ RESOLVED = tolerances.PRECISION / SEPARATE  # the precision contract (docs/desig
 SNAPPED_LEAF = tolerances.EXACT
 STOP = tolerances.FINISH_MARGIN  # plain Newton steps stop at this fraction of the precision
 DOUBLE_ROOT_NEWTON = 30  # undamped steps at a double root (each halves the distance; see _double_root)
-PSEUDO_INVERSE = 1e-13  # singular values below this times the largest are left out of those steps
+PSEUDO_INVERSE = tolerances.SINGULAR_CUTOFF  # singular values below this times the largest are left out
 
 
 def _lines(twists):

@@ -401,7 +401,8 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         for (int j = 0; j < dof; j++)
             if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
         int held[dof], status = ikc_represent(rb, w, limits, held);
-        if (status == IKC_CLAMPED) {
+        const int was_exact = err[k] <= exact_tol, clamped = status == IKC_CLAMPED;
+        if (clamped) {
             /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
              * the other joints with it held, as reference.clamped_onto_limits; then the row as returned */
             ikc_newton_steps(rb, g, w, IKC_CLAMPED_NEWTON, 1, held);
@@ -414,6 +415,10 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         const int ok = status != IKC_OUTSIDE;
         if (status == IKC_ADJUSTED) err[k] = ikc_measure(rb, g, w);  /* the values as returned */
         inexact[k] = !(err[k] <= exact_tol);
+        /* an exact row that the clamp left above the precision: at a singular configuration the damped
+         * steps stall there, Python's Robot.singular_newton takes undamped ones (docs/design.md
+         * section 10, "Newton at a singular configuration"; pybullet's xarm6 at q5 = pi) */
+        if (clamped && ok && was_exact && inexact[k]) return ikc_hand_back(IKC_WHY_CLAMPED);
         if (flag & IKC_FAMILY) {  /* a self-motion needs one exact representative inside the limits */
             family_any = 1;
             if (ok && !inexact[k]) family_exact = 1;

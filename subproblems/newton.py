@@ -84,6 +84,9 @@ def gauss_newton_step(J, e, hold=(), damping=NEWTON_DAMPING, cutoff=None):
     if cutoff is not None:
         U, S, Vt = np.linalg.svd(Js, full_matrices=False)
         inv = np.where(S > cutoff * S[:, :1], 1.0 / np.maximum(S, TINY), 0.0)
-        return np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
+        dq = np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e))
+        if len(hold):  # a held column is zero, but its entry of V is only ~1e-17, and col is TINY
+            dq[:, list(hold)] = 0.0
+        return dq / col
     JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
     return np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col

@@ -446,19 +446,22 @@ def finish(
     return Q, valid, LS, RES, CONT
 
 
-def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4, hold=()):
+def polish(TH, targets, *, twists, home, A, b, independent, target="pose", iters=4, hold=(), cutoff=None):
     """Damped Gauss-Newton on the independent joints of every row toward its target (M, 4, 4).
 
     Corrects solutions of snapped near-relations and seeds of the numerical fallback.  Rows that do
     not converge stay where they end; the final check flags them.  ``hold``: positions in
     ``independent`` of joints that keep their values (free joints: the caller chose them).
+    ``cutoff``: undamped pseudo-inverse steps instead (``newton.gauss_newton_step``), for rows at a
+    rank-deficient Jacobian that the damped steps leave above the precision (docs/design.md section 10,
+    "Newton at a singular configuration").
     """
     Q = TH[:, list(independent)].copy()
     twists = np.asarray(twists, dtype=float)
     for _ in range(iters):  # the step: subproblems/newton.py
         G, J = _newton.tool_jacobian(twists, Q @ A.T + b, home, A)
         e, rows = _newton.residual(G, targets, target)
-        Q = Q + _newton.gauss_newton_step(J[:, rows, :], e, hold)
+        Q = Q + _newton.gauss_newton_step(J[:, rows, :], e, hold, cutoff=cutoff)
     return Q @ A.T + b
 
 

@@ -239,6 +239,11 @@ PI_SNAP = 1e-13
 DUPLICATE_ROWS = 1e-9
 #: Levenberg-Marquardt damping of the finish's Newton steps (on ``J^T J`` with unit columns; absolute).
 NEWTON_DAMPING = 1e-12
+#: Undamped Newton steps at a singular configuration (the pseudo-inverse of the unit-column Jacobian)
+#: leave out the singular values below this times the largest: the damping above halves every step
+#: along a direction whose singular value is below its square root (1e-6), so those rows stall just
+#: above the precision (docs/design.md section 10, "Newton at a singular configuration").
+SINGULAR_CUTOFF = 1e-13
 
 # --------------------------------------------------------------------- continuation (continuation.py)
 

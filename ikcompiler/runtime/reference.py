@@ -26,6 +26,7 @@ FINISH_MARGIN = _tol.FINISH_MARGIN  # as the C finish: on to well inside the pre
 # puma560.urdf (rtb-data) at q5 = 0; Newton's damped steps do not move along it (docs/calibrated.md).
 SELF_MOTION_OFFSETS = np.arange(-31, 33) * (np.pi / 32)
 SELF_MOTION_NEWTON = 5  # Newton steps at each offset (across the family: it converges fast)
+CLAMPED_NEWTON = 3  # damped Newton steps on a row with a value clamped onto its limit (the C finish's too)
 
 
 def correct(robot, TH, owner, goals, general6, family):
@@ -342,5 +343,9 @@ def clamped_onto_limits(robot, TH, owner, goals):
     for pattern in np.unique(clamped[rows], axis=0):
         sel = np.nonzero(rows & (clamped == pattern).all(axis=1))[0]
         hold = tuple(robot.free) + tuple(int(j) for j in np.nonzero(pattern)[0])
-        TH[sel] = robot.newton(TH[sel], goals[owner[sel]], 3, hold=hold)
+        # at a singular configuration the damped steps stall above the precision: singular_newton's
+        # steps after them (pybullet's xarm6 at q5 = pi, its limit pi + 2e-13; docs/design.md section 10)
+        TH[sel] = robot.newton_until_exact(TH[sel], goals[owner[sel]], CLAMPED_NEWTON, FINISH_MARGIN,
+                                           rows=np.ones(len(sel), dtype=bool), per_round=CLAMPED_NEWTON,
+                                           hold=hold)
     return TH

@@ -18,6 +18,11 @@ from subproblems import plan_runtime as _rt
 from subproblems import tolerances as _tol
 
 
+# Undamped Newton steps at most on a row the damped ones left above the precision (Robot.singular_newton):
+# each halves the distance to a double root at worst, and converges quadratically along a weak direction
+SINGULAR_NEWTON = 12
+
+
 @dataclass(frozen=True, eq=False)
 class Robot:
     joint_names: tuple
@@ -103,27 +108,60 @@ class Robot:
         return _rt.fk_batch(self.twists, q @ self.A.T + self.B, self.home)[0]
 
     def newton_until_exact(self, TH, goals, iters: int, margin: float = _tol.CONTINUUM_MARGIN, *,
-                           rows=None, per_round: int = 4) -> np.ndarray:
+                           rows=None, per_round: int = 4, hold=None) -> np.ndarray:
         """Newton steps as :meth:`newton`, up to ``iters``, in rounds of ``per_round`` on the rows still
         missing by more than ``margin`` of the precision: a row already exact takes none (a self-motion's
         representative usually is: then 60 steps on it only cost time, about 5 ms a pose).  ``rows``
-        (a mask): the rows to work on, instead of all those missing by more than the margin."""
+        (a mask): the rows to work on, instead of all those missing by more than the margin.  The rows
+        the damped steps leave above the precision then get :meth:`singular_newton`'s steps."""
         TH = np.array(TH, dtype=float)
         stop = margin * self.tol * self.scale
         if rows is None:
             rows = self.error(_rt.fk_batch(self.twists, np.nan_to_num(TH), self.home), goals) > stop
         active = np.array(rows, dtype=bool)
         done = 0
+        err = np.zeros(0)
         while active.any() and done < iters:
             k = min(per_round, iters - done)
-            TH[active] = self.newton(TH[active], goals[active], k)
+            TH[active] = self.newton(TH[active], goals[active], k, hold)
             done += k
             err = self.error(_rt.fk_batch(self.twists, TH[active], self.home), goals[active])
-            active[np.nonzero(active)[0][~(err > stop)]] = False  # on, or given up (NaN)
+            settled = ~(err > stop)  # on, or given up (NaN)
+            if done < iters:
+                active[np.nonzero(active)[0][settled]] = False
+        if done and active.any():  # the rows of the last round still above the precision
+            left = np.nonzero(active)[0][err > self.tol * self.scale]
+            if len(left):
+                TH[left] = self.singular_newton(TH[left], goals[left], hold)
         return TH
 
-    def newton(self, TH, goals, iters: int, hold=None) -> np.ndarray:
-        """Newton steps on the true robot for candidate rows TH toward their goals (free joints held)."""
+    def singular_newton(self, TH, goals, hold=None, iters: int = SINGULAR_NEWTON) -> np.ndarray:
+        """Rows TH that damped Newton steps left above the precision, after up to ``iters`` undamped
+        pseudo-inverse steps (``tolerances.SINGULAR_CUTOFF``) where those bring them to it; the others
+        as given (nothing is lost: a row above the precision is no exact solution).
+
+        At a singular configuration the damping (``NEWTON_DAMPING``, 1e-12 on unit columns) halves each
+        step along a direction whose singular value is near 1e-6: pybullet's xarm6 at q = (0, -pi/2,
+        -pi/2, pi, pi, pi/2) (its q5 limit pi + 2e-13, the self-motion's representative 2e-11 past it,
+        clamped onto it) stalled at 2.3e-12 of the size after 3 damped steps; undamped steps reach 3e-16
+        in 3 (docs/design.md section 10, "Newton at a singular configuration")."""
+        TH = np.array(TH, dtype=float)
+        X = TH.copy()
+        live = np.arange(len(X))
+        stop = _tol.FINISH_MARGIN * self.tol * self.scale
+        for _ in range(iters):
+            X[live] = self.newton(X[live], goals[live], 1, hold, cutoff=_tol.SINGULAR_CUTOFF)
+            err = self.error(_rt.fk_batch(self.twists, np.nan_to_num(X[live]), self.home), goals[live])
+            live = live[err > stop]  # on, or given up (NaN: dropped below)
+            if not len(live):
+                break
+        err = self.error(_rt.fk_batch(self.twists, np.nan_to_num(X), self.home), goals)
+        take = np.isfinite(X).all(axis=1) & (err <= self.tol * self.scale)
+        return np.where(take[:, None], X, TH)
+
+    def newton(self, TH, goals, iters: int, hold=None, cutoff=None) -> np.ndarray:
+        """Newton steps on the true robot for candidate rows TH toward their goals (free joints held;
+        ``cutoff``: undamped pseudo-inverse steps, plan_runtime.polish)."""
         return _rt.polish(TH, goals, twists=self.twists, home=self.home, A=self.A, b=self.B,
                           independent=self.vary, target=self.solve_target, iters=iters,
-                          hold=self.free if hold is None else hold)
+                          hold=self.free if hold is None else hold, cutoff=cutoff)
