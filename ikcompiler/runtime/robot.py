@@ -17,7 +17,6 @@ import numpy as np
 from subproblems import plan_runtime as _rt
 from subproblems import tolerances as _tol
 
-
 # Undamped Newton steps at most on a row the damped ones left above the precision (Robot.singular_newton):
 # each halves the distance to a double root at worst, and converges quadratically along a weak direction
 SINGULAR_NEWTON = 12
