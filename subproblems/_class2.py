@@ -281,7 +281,26 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
         )
         del kept[j]  # kept is sorted by residual: j has the larger one
     kept.sort(key=lambda s: tuple(s[1]))
-    return [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
+    out = [Solution(tuple(float(a) for a in th), continuum=continuum or free) for _, th, free in kept]
+    if near_rows_active():
+        out += _near_rows(kinds, [k[1] for k in kept], scored, scale, max_solutions(code) - len(out))
+    return out
+
+
+def _near_rows(kinds: str, kept, scored, scale: float, room: int) -> list[Solution]:
+    """Up to ``room`` least-squares rows among ``scored`` ``(residual, th, free)``: inexact ones within
+    ``FAR_TOL`` of the size (polished), lowest residual first, none within ``DEDUP_TOL`` of a kept row
+    or of each other (:func:`near_miss_rows`)."""
+    out: list = []
+    taken = list(kept)
+    for r, th, _ in sorted(scored, key=lambda s: s[0]):
+        if len(out) >= room:
+            break
+        distinct = all(joint_distance(kinds, th, k) > DEDUP_TOL for k in taken)
+        if EXACT_TOL * scale < r <= FAR_TOL * scale and distinct:
+            out.append(Solution(tuple(float(a) for a in th), ls=True))
+            taken.append(th)
+    return out
 
 
 def _tangent_points(kinds: str, twists, p, q, kept, scale: float) -> list:
@@ -956,6 +975,11 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     ar = np.arange(N)
     q_best, free_best = Cand[ar, best], cfree[ar, best]
 
+    near_miss = None
+    if near_rows_active():  # near-miss least-squares rows, for near_miss_rows (appended below)
+        near_miss = (Cand.copy(), res.copy(), any_exact & ((res > EXACT_TOL * scale[:, None])
+                                                           & (res <= FAR_TOL * scale[:, None])).any(axis=1))
+
     # --- exact rows first (lowest residual first), then deduplicate the few columns that hold them
     order = np.argsort(np.where(exact, res, np.inf), axis=1, kind="stable")
     Ce = max(1, int(exact.sum(axis=1).max()))
@@ -1027,7 +1051,21 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     free &= valid
     cont = inst_cont | free.any(axis=1)
     Q = np.where(valid[..., None], Q, 0.0)
+    if near_miss is not None:
+        _add_near_rows(kinds, Q, valid, ls, near_miss, scale)
     return BatchResult(code, Q, valid, ls, cont)
+
+
+def _add_near_rows(kinds: str, Q, valid, ls, near, scale) -> None:
+    """:func:`_near_rows` for the batch path: in place, into the free slots of the instances that have
+    exact rows and near-miss candidates (``near``: candidates, residuals and that mask)."""
+    Cand, res, has = near
+    for n in np.flatnonzero(has):
+        kept = [Q[n, k] for k in np.flatnonzero(valid[n])]
+        scored = [(res[n, c], Cand[n, c], False) for c in np.flatnonzero(np.isfinite(res[n]))]
+        for s in _near_rows(kinds, kept, scored, scale[n], int((~valid[n]).sum())):
+            k = int(np.argmin(valid[n]))
+            Q[n, k], valid[n, k], ls[n, k] = s.q, True, True
 
 
 def inverted_batch(tw) -> np.ndarray:
@@ -1111,6 +1149,33 @@ _INDEPENDENT: ContextVar[bool] = ContextVar("subproblems_class2_independent_path
 def agreement_active() -> bool:
     """True unless the caller is inside :func:`independent_paths` (in this thread or task)."""
     return not _INDEPENDENT.get()
+
+
+# Whether the class II solvers also return their near-miss least-squares rows beside exact ones, in the
+# current context: a snapped plan's steps (docs/calibrated.md, "Rescue seeds").
+_NEAR_ROWS: ContextVar[bool] = ContextVar("subproblems_class2_near_rows", default=False)
+
+
+def near_rows_active() -> bool:
+    """True inside :func:`near_miss_rows` (in this thread or task)."""
+    return _NEAR_ROWS.get()
+
+
+@contextmanager
+def near_miss_rows():
+    """Within this block an instance with exact rows also returns its polished candidates that miss by
+    at most ``FAR_TOL`` of its size, flagged least-squares, in the slots the exact rows leave free.
+
+    Without it such candidates are dropped once a row is exact.  A snapped plan needs them: a pair of
+    complex roots of the snapped robot's eliminant, near a fold, is a pair of real solutions of the
+    true robot; the continuation seeds Newton from least-squares leaves that nearly reach the target
+    and finds them (talos_full_v2.urdf perturbed by 1e-3: S2-RRR with 2 exact rows and a complex pair
+    at residual 5.2e-5, the true robot 8 solutions, 4 returned; docs/calibrated.md)."""
+    token = _NEAR_ROWS.set(True)
+    try:
+        yield
+    finally:
+        _NEAR_ROWS.reset(token)
 
 
 @contextmanager

@@ -5,6 +5,7 @@ within an explicit memory budget.
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ import numpy as np
 from ikcompiler.runtime.reference import SEARCH_NEWTON, twin_seeds
 from subproblems import fast as _fk
 from subproblems import tolerances as _tol
+from subproblems._class2 import near_miss_rows
 
 # Bytes one search instance (a target at one grid value, through the fast chain) may hold at its peak:
 # an estimate with margin (its leaves are L x (n + 2) floats, the chain's temporaries a few hundred
@@ -23,9 +25,16 @@ SEED_ERROR = _tol.SEARCH_SEED_ERROR  # search seeds missing by more (of the size
 def leaves(robot, goals, init, searched=()):
     """Leaves of the fast chain for N targets as arrays: Q (N, L, n), error (N, L), flag (N, L)."""
     free = tuple(init[:, robot.independent[pos]] for pos in robot.free) + tuple(searched)
-    with np.errstate(all="ignore"):  # degenerate instances may divide by ~0; their defer flag is set
+    # a snapped plan's reference steps keep their near-miss least-squares rows: seeds of the true
+    # robot's solutions that the snapped one lacks (reference.candidates)
+    with np.errstate(all="ignore"), _near_rows(robot):  # degenerate instances may divide by ~0: deferred
         found = robot.fast_chain(_fk.ARRAY, _fk.goal_columns(goals, robot.target), free)
     return _fk.leaf_arrays(found, len(goals), len(robot.joint_names))
+
+
+def _near_rows(robot):
+    """subproblems._class2.near_miss_rows on a snapped plan, else nothing."""
+    return near_miss_rows() if robot.polish else contextlib.nullcontext()
 
 
 def search_candidates(robot, goals, init, budget: int):

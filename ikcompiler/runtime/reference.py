@@ -8,6 +8,8 @@ fast chain (Python or C) hands back.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from ikcompiler.runtime import freefold, selfmotion
@@ -15,6 +17,7 @@ from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
 from subproblems import tolerances as _tol
+from subproblems._class2 import near_miss_rows
 
 CONTINUUM_NEWTON = 60  # Newton steps pulling a self-motion's representative onto the family
 SEARCH_NEWTON = 8  # Newton steps on the search's seeds
@@ -130,10 +133,14 @@ def candidates(robot, goals, Td, init, correct, alternative=None, leaves=None):
                                    robot.n_groups, init)
         TH, owner = twin_seeds(robot, robot.newton(TH, goals[owner], SEARCH_NEWTON), owner, goals)
         return TH, owner, *_no_flags(len(TH))
-    TH, owner, ls, _, cont = _rt.run_plan(robot.steps, robot.plan_twists, robot.kinds, Td,
-                                          robot.couplings, robot.n_groups, init)
-    if robot.alt_steps:
-        TH, owner, ls, cont = with_alternative(robot, Td, init, TH, owner, ls, cont, alternative)
+    # a snapped plan's steps keep their near-miss least-squares rows beside the exact ones: a complex
+    # pair of the snapped robot near a fold is a real pair of the true one, which the continuation's
+    # seeds find from them (talos_full_v2.urdf at 1e-3; subproblems._class2.near_miss_rows)
+    with near_miss_rows() if robot.polish else contextlib.nullcontext():
+        TH, owner, ls, _, cont = _rt.run_plan(robot.steps, robot.plan_twists, robot.kinds, Td,
+                                              robot.couplings, robot.n_groups, init)
+        if robot.alt_steps:
+            TH, owner, ls, cont = with_alternative(robot, Td, init, TH, owner, ls, cont, alternative)
     if leaves is not None:
         TH, owner, ls, cont = _with_leaves(TH, owner, ls, cont, *leaves)
     if cont.any():
