@@ -15,14 +15,11 @@ import pytest
 from ikcompiler import compile_robot, load_robot
 from ikcompiler.verify import verify
 
-_RHINO_SELF_MOTION = pytest.mark.xfail(strict=True, reason=(
-    "precision gap at self-motions (rhino, parallel axes lined up at special angles): on 3 of 2000 "
-    "poses (seed 0) Newton at the rank-deficient Jacobian brings the representatives only to 9e-11..6e-10 "
-    "of the size; the 1e-12 precision contract flags them least-squares (self_motion_unsolved 3; they "
-    "passed at the former 1e-9)"))
 
-
-@pytest.mark.parametrize("name", ["puma560", "ur5", "prob", pytest.param("rhino", marks=_RHINO_SELF_MOTION)])
+# rhino was a strict xfail (3 of 2000 poses: representatives of a self-motion at 9e-11..6e-10 of the
+# size after the damped Newton steps at the rank-deficient Jacobian); the undamped final steps bring
+# them to the precision (runtime.Robot.singular_newton; docs/design.md section 10)
+@pytest.mark.parametrize("name", ["puma560", "ur5", "prob", "rhino"])
 def test_no_pose_missed_on_two_thousand_samples(name):
     chain = load_robot(name)
     module = compile_robot(chain)
