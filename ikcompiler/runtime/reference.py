@@ -95,9 +95,7 @@ def general6_rows(robot, goals, init):
         return robot.general6.rows(goals)
     if isinstance(robot.general6, freefold.FoldedGeneral6):  # a free joint between solved ones
         return robot.general6.rows(goals, init[:, robot.general6.column])
-    from ikcompiler.runtime.freeends import FreeEnds
-
-    split = FreeEnds(robot)
+    split = robot.free_ends
     Q, owner = robot.general6.rows(split.targets(goals, init))
     return split.rows(Q, init[owner]), owner
 
