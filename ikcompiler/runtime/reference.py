@@ -36,9 +36,7 @@ def correct(robot, TH, owner, goals, general6, family):
     representatives of a self-motion of the snapped robot.  Returns (TH, owner, continuum): the
     representatives of a self-motion among the rows are those the true robot leaves unresolved."""
     report = {}
-    held = np.asarray(TH)  # the free joints' values of each target, before the rows change
-    order = np.argsort(owner, kind="stable")
-    held_owner = np.asarray(owner)[order]
+    held, held_owner = np.asarray(TH), np.asarray(owner)  # the free joints' values, before rows change
     TH, owner = _ct.correct(TH, goals[owner], owner, twists0=robot.plan_twists, twists1=robot.twists,
                             home=robot.home, A=robot.A, b=robot.B, independent=robot.vary,
                             kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free,
@@ -53,7 +51,8 @@ def correct(robot, TH, owner, goals, general6, family):
     solver = general6() if len(doubt) else None
     if solver is not None:
         if robot.free_joints:  # folded at each target's free value, held in its rows (freefold.py)
-            first = np.searchsorted(held_owner, doubt)
+            order = np.argsort(held_owner, kind="stable")
+            first = np.searchsorted(held_owner[order], doubt)
             TH2, own2 = solver.rows(goals[doubt], held[order[first], solver.column])
         else:
             TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
