@@ -13,8 +13,9 @@ Rules, in chain order:
 * points: each maximal run of three or more consecutive revolute axes that nearly meet in one point is
   moved to pass exactly through their least-squares common point (each axis keeps its direction and
   moves perpendicularly to it); two runs may share an axis (an elbow and a wrist point on one forearm
-  axis): the later run's point is then taken on the shared axis, which stays put; then each other consecutive pair that nearly meets has one axis (not
-  in such a run) shifted parallel to itself through the other axis's nearest point.
+  axis): the later run's point is then taken on the shared axis, which stays put; then each other
+  consecutive pair that nearly meets has one axis (not in such a run) shifted parallel to itself
+  through the other axis's nearest point.
 """
 
 from __future__ import annotations
