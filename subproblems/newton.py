@@ -84,8 +84,8 @@ def gauss_newton_step(J, e, hold=(), damping=NEWTON_DAMPING, cutoff=None):
     if cutoff is not None:
         # Only the columns that move the tool: the SVD of a zero column (a held one) gives its entries
         # of V a roundoff of ~1e-17, not 0, which the division by its TINY norm turned into a step of
-        # ~1e283 rad on the free joint, an overflow in the next step's Jacobian (pr2.urdf perturbed by
-        # 1e-6; the row was given up instead of settled).
+        # ~1e290 rad on the free joint, an overflow in the next step's Jacobian (pr2.urdf perturbed by
+        # 1e-6; docs/design.md section 5, "Snapping").
         live = ~(col <= TINY)
         dq = np.zeros(col.shape)
         for pattern in np.unique(live, axis=0):

@@ -305,10 +305,10 @@ class Solver:
 
     def _free_as_given(self, parts, free, limits):
         """Rows (Q, valid, ls, res, cont) of N targets with each free joint's column set to the value the
-        user gave, not to the 2 pi alias the finish represents it by (docs/design.md section 6): a free
-        value is a command, as given (pr2's upper-arm roll at -3.22 inside its limits [-3.9, 0.8] came
-        back as 3.06, outside them).  With ``limits`` a target whose given free value lies outside its
-        joint's limits has no valid row (solve_info names the joint among the excluded)."""
+        user gave, not to the 2 pi alias the finish represents it by: a free value is a command, as given
+        (docs/design.md section 5, "Redundant robots"; pr2's upper-arm roll at -3.22, inside its limits
+        [-3.9, 0.8], came back as 3.06, outside them).  With ``limits`` a target whose given free value
+        lies outside its joint's limits has no valid row (solve_info names the joint among the excluded)."""
         r = self.robot
         Q, valid, ls, res, cont = parts
         if not len(Q):
