@@ -147,8 +147,9 @@ def test_clamped_row_at_a_singular_configuration_is_brought_to_the_precision(xar
 
 
 def test_pseudo_inverse_step_keeps_held_columns():
-    """A held column is zeroed, but the SVD's right vectors carry ~1e-15 in it, and its column norm is
-    the TINY floor: the undamped step must give it exactly 0 (it gave ~1e285)."""
+    """A held column (clamped onto a limit) gets exactly no undamped step, and the other columns the
+    step of the chain without it (the SVD of a zero column leaves ~1e-15 in its entries of V, which the
+    TINY column floor turned into ~1e285)."""
     rng = np.random.default_rng(4)
     J = rng.normal(size=(30, 6, 6))
     e = rng.normal(size=(30, 6)) * 1e-9
