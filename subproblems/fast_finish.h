@@ -612,8 +612,13 @@ static double ikc_joint_step(const ikc_robot *rb, int j, double a, double b) {
     return rb->revolute[j] ? ikc_wrap(a - b) : a - b;
 }
 
-/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above). */
-static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s) {
+static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const double *p0, const double *s);
+
+/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above).  With
+ * g (the goal; not NULL for a line whose leaves are flagged a tangent root, exact there), a point with a
+ * second null direction counts where that direction is a double root's (ikc_tangent_line_alone at the
+ * point: Newton steps off it come back to the line). */
+static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s, const double *g) {
     const int dof = rb->dof;
     int moves = 0;
     for (int j = 0; j < dof; j++) moves |= s[j] != 0.0;
@@ -622,7 +627,7 @@ static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s
         double t = (p == 0 ? 0.0 : (p == 1 ? 1.0 : -1.0)) * IKC_TWO_PI / 3.0, q[dof], sig[2];
         for (int j = 0; j < dof; j++) q[j] = q0[j] + s[j] * t;
         ikc_two_weakest(rb, q, sig);
-        if (!(sig[1] >= IKC_LINE_RANK)) return 0;
+        if (!(sig[1] >= IKC_LINE_RANK) && !(g != NULL && ikc_tangent_line_alone(rb, g, q, s))) return 0;
     }
     return 1;
 }
@@ -770,17 +775,19 @@ static int ikc_lock_leaves(ikc_chain_fn chain, const double *g, const double *fr
 }
 
 /* The straight-line verdict of family leaf q0 (its leaf at rep = 0) with slopes s: -2 where it is not
- * shown a line alone (a tangent line: its exact point near q0 is found first); else ikc_line_in_limits's
- * 0 (the line misses the limits), 1 (*t: the middle of its widest in-limit stretch) or -1. */
+ * shown a line alone (a tangent line: its exact point near q0 is found first; `root`: an exact line whose
+ * leaves are flagged a tangent root, see ikc_line_alone); else ikc_line_in_limits's 0 (the line misses
+ * the limits), 1 (*t: the middle of its widest in-limit stretch) or -1. */
 static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *q0, const double *s,
-                            int tangent, double *t) {
+                            int tangent, int root, double *t) {
     const int dof = rb->dof;
     double p0[dof];
     for (int c = 0; c < dof; c++) p0[c] = q0[c];
     if (tangent && !(ikc_newton(rb, g, p0, 15) <= rb->tol * rb->scale &&
                      ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
         return -2;
-    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s))) return -2;
+    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
+        return -2;
     const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
     *t = 0.0;
     return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
@@ -803,10 +810,11 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     /* the leaves of every other representative (RQ, RE, RF: rep r at r - 1), kept for the polish */
     double RQ[(IKC_REPS - 1) * L * dof], RE[(IKC_REPS - 1) * L], B[L * dof], EB[L], Q0[L * dof], E0[L],
         S[L * dof];
-    int RF[(IKC_REPS - 1) * L], line[L];
+    int RF[(IKC_REPS - 1) * L], line[L], F0[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
         for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
         E0[j] = E[j];
+        F0[j] = F[j];
         EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
         /* a candidate straight line: exact at rep = 0, or a tangent root there (its slopes come from the
          * first other rep) */
@@ -849,7 +857,7 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         verdict[j] = -3;
         VT[j] = 0.0;
         if (line[j] && !(E0[j] <= exact_tol)) {
-            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, VT + j);
+            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, 0, VT + j);
             if (verdict[j] == 0) F[j] |= IKC_EMPTY;
         }
     }
@@ -885,7 +893,8 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         if (!lock && E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
         double t = VT[j];
         const int found = verdict[j] != -3 ? verdict[j]
-                          : line[j] ? ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, &t) : -2;
+                          : line[j] ? ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0,
+                                                       F0[j] & IKC_TANGENT_ROOT, &t) : -2;
         if (found != -2) {
             if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
                 F[j] |= IKC_EMPTY;

@@ -424,13 +424,15 @@ def joint_step(rb: FinishRobot, j: int, a: float, b: float) -> float:
     return wrap(a - b) if rb.revolute[j] else a - b
 
 
-def line_alone(rb: FinishRobot, q0, s) -> bool:
-    """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3."""
+def line_alone(rb: FinishRobot, q0, s, g=None) -> bool:
+    """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3.  With ``g`` (the goal; a
+    line whose leaves are a tangent root, exact there), a point with a second null direction counts
+    where that direction is a double root's (:func:`tangent_line_alone` at the point)."""
     if not any(x != 0.0 for x in s):
         return False
     for t in (0.0, TWO_PI / 3.0, -1.0 * TWO_PI / 3.0):
         q = [q0[j] + s[j] * t for j in range(rb.dof)]
-        if not two_weakest(rb, q)[1] >= LINE_RANK:
+        if not two_weakest(rb, q)[1] >= LINE_RANK and not (g is not None and tangent_line_alone(rb, g, q, s)):
             return False
     return True
 
@@ -555,15 +557,16 @@ def _plain_family(flag) -> bool:
     return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
 
 
-def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool):
+def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
-    a line alone (a tangent line: its exact point near q0 is found first), else :func:`line_in_limits`'s
-    0, 1 or -1 (ikc_line_verdict)."""
+    a line alone (a tangent line: its exact point near q0 is found first; ``root``: an exact line whose
+    leaves are flagged a tangent root, see :func:`line_alone`), else :func:`line_in_limits`'s 0, 1 or -1
+    (ikc_line_verdict)."""
     p0 = list(q0)
     if tangent and not (newton_steps(rb, g, p0, 15) <= rb.tol * rb.scale
                         and row_distance(rb, p0, q0) <= TANGENT_MARGIN):
         return -2, 0.0
-    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s)):
+    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
         return -2, 0.0
     slack = TANGENT_MARGIN if tangent else LIMIT_EPS
     found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
@@ -594,7 +597,7 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     Q0 = [list(row) for row in Q]
     B = [list(row) for row in Q]
     EB = [E[j] if (not limits or row_inside(rb, Q[j])) else math.inf for j in range(n)]
-    E0 = list(E)
+    E0, F0 = list(E), list(F)
     line = [limits and _plain_family(F[j])
             and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
@@ -654,7 +657,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
         if j in verdict:
             found, t = verdict[j]
         else:
-            found, t = line_verdict(rb, g, Q0[j], S[j], False) if line[j] else (-2, 0.0)
+            found, t = (line_verdict(rb, g, Q0[j], S[j], False, bool(F0[j] & _fk.TANGENT_ROOT)) if line[j]
+                        else (-2, 0.0))
         if found != -2:
             if found == 0:
                 F[j] |= _fk.EMPTY
