@@ -746,6 +746,89 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
     return 1;
 }
 
+#define IKC_PLANE_PROBE 0.5  /* the step along a plane's second direction (radians, or over the size) */
+#define IKC_PLANE_FIXED 1e-6 /* a joint neither (unit) direction of the plane moves */
+
+/* The unit null vector n (of the two weakest, V's first columns) least along the unit f, made orthogonal
+ * to it; returns its squared length before that (0 when none). */
+static double ikc_null_across(int m, const double *V, const double *f, double *n) {
+    double best = 0.0;
+    for (int v = 0; v < 2; v++) {
+        double d = 0.0, w[m], len = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
+        if (len > best) {
+            best = len;
+            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
+        }
+    }
+    return best;
+}
+
+/* Whether value x of joint j (or an alias) lies inside its limits widened by the slack. */
+static int ikc_joint_inside(const ikc_robot *rb, int j, double x, double slack, double slide_slack) {
+    const double sl = rb->revolute[j] ? slack : slide_slack;
+    double lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
+    if (rb->revolute[j]) {
+        if (hi - lo >= IKC_TWO_PI) return 1;
+        x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);
+    }
+    return lo <= x && x <= hi;
+}
+
+/* Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone of
+ * which a joint that neither of its directions moves lies outside its limits: the Jacobian's null space
+ * at p0 has exactly two directions, the line's f and n; the points p0 +- IKC_PLANE_PROBE n are exact (a
+ * sheet of solutions: Newton keeps them off the line, where a double root's would come back), keep
+ * that joint's value and have two null directions again.  Near each of those points the solutions
+ * are that sheet, so the self-motion keeps the joint where it misses its limits: no solution
+ * (docs/design.md section 6; panda's stretched elbow at q4 = 0 with joints 1, 3 and 5 coaxial). */
+static int ikc_plane_misses(const ikc_robot *rb, const double *g, const double *p0, const double *s,
+                            double slack, double slide_slack) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 3 || !(lam[1] < floor && lam[2] >= floor)) return 0;
+    double f[m], fn = 0.0, n[m];
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);
+    if (!(ikc_null_across(m, V, f, n) > 0.25)) return 0;
+    int out[m], nout = 0;
+    for (int a = 0; a < m; a++)
+        if (fabs(f[a]) <= IKC_PLANE_FIXED && fabs(n[a]) <= IKC_PLANE_FIXED &&
+            !ikc_joint_inside(rb, col[a], p0[col[a]], slack, slide_slack))
+            out[nout++] = a;
+    if (!nout) return 0;
+    const double exact = rb->tol * rb->scale;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
+        }
+        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
+        for (int k = 0; k < nout; k++)
+            if (!(fabs(d[out[k]]) <= IKC_LINE_FIT)) return 0;
+        int colx[dof];
+        double lamx[dof];
+        ikc_jtj_eigen(rb, x, colx, lamx, NULL);
+        if (!(lamx[1] < floor && lamx[2] >= floor)) return 0;
+    }
+    return 1;
+}
+
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
  * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
  * representative that is exact and inside the limits (the family's interval of reachable values may
@@ -786,9 +869,10 @@ static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *
     if (tangent && !(ikc_newton(rb, g, p0, 15) <= rb->tol * rb->scale &&
                      ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
         return -2;
-    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
-        return -2;
     const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
+        /* not a line alone: a plane alone that misses the limits has no solution either */
+        return ikc_plane_misses(rb, g, p0, s, slack, tangent ? slack * rb->scale : slack) ? 0 : -2;
     *t = 0.0;
     return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
 }

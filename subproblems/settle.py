@@ -557,6 +557,92 @@ def _plain_family(flag) -> bool:
     return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
 
 
+PLANE_PROBE = 0.5  # IKC_PLANE_PROBE: the step along a plane's second direction (radians, or over the size)
+PLANE_FIXED = 1e-6  # IKC_PLANE_FIXED: a joint neither direction of the plane moves (unit direction)
+
+
+def _null_across(rb: FinishRobot, col, V, f):
+    """The unit null vector (of the two weakest, V's first columns) least along the unit f, made
+    orthogonal to it, and its squared length before that (ikc_null_across)."""
+    m = len(col)
+    n, best = None, 0.0
+    for v in range(2):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        w = [V[a][v] - d * f[a] for a in range(m)]
+        length = 0.0
+        for a in range(m):
+            length += w[a] * w[a]
+        if length > best:
+            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    return n, best
+
+
+def _joint_inside(rb: FinishRobot, j: int, x: float, slack: float, slide_slack: float) -> bool:
+    """Whether value x of joint j (or an alias) lies inside its limits widened by the slack."""
+    sl = slack if rb.revolute[j] else slide_slack
+    lo, hi = rb.lower[j] - sl, rb.upper[j] + sl
+    if rb.revolute[j]:
+        if hi - lo >= TWO_PI:
+            return True
+        x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
+    return lo <= x <= hi
+
+
+def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) -> bool:
+    """Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone
+    of which a joint that neither of its directions moves lies outside its limits: the Jacobian's null
+    space at p0 has exactly two directions, the line's f and n; the points p0 +- PLANE_PROBE n are
+    exact (a sheet of solutions: Newton keeps them off the line, where a double root's would come
+    back), keep that joint's value and have two null directions again.  Near each of those points the
+    solutions are that sheet, so the self-motion keeps the joint where it misses its limits: no
+    solution (ikc_plane_misses)."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 3 or not (lam[1] < floor and lam[2] >= floor):
+        return False
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    n, best = _null_across(rb, col, V, f)
+    if not best > 0.25:
+        return False
+    out = [a for a in range(m) if abs(f[a]) <= PLANE_FIXED and abs(n[a]) <= PLANE_FIXED
+           and not _joint_inside(rb, col[a], p0[col[a]], slack, slide_slack)]
+    if not out:
+        return False
+    exact = rb.tol * rb.scale
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * PLANE_PROBE * n[a] * u
+        if not newton_steps(rb, g, x, 15) <= exact:
+            return False
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) >= 0.5 * PLANE_PROBE:
+            return False  # back towards the line: no sheet
+        for a in out:
+            if not abs(d[a]) <= LINE_FIT:
+                return False
+        _, lam_x, _ = jtj_eigen(rb, x)
+        if not (lam_x[1] < floor and lam_x[2] >= floor):
+            return False
+    return True
+
+
 def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
     a line alone (a tangent line: its exact point near q0 is found first; ``root``: an exact line whose
@@ -566,9 +652,10 @@ def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     if tangent and not (newton_steps(rb, g, p0, 15) <= rb.tol * rb.scale
                         and row_distance(rb, p0, q0) <= TANGENT_MARGIN):
         return -2, 0.0
-    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
-        return -2, 0.0
     slack = TANGENT_MARGIN if tangent else LIMIT_EPS
+    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
+        # not a line alone: a plane alone that misses the limits has no solution either
+        return (0 if plane_misses(rb, g, p0, s, slack, slack * rb.scale if tangent else slack) else -2), 0.0
     found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
     return found, (0.0 if t is None else t)
 
