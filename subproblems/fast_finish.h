@@ -378,9 +378,10 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
     const int m = n > 0 ? n : 1;
-    int rows[m], inexact[m];
-    double W[m * dof], err[m];
+    int rows[m], inexact[m], polished[m];
+    double W[m * dof], err[m], P[m * dof], PE[m];
     int count = 0, family_any = 0, family_exact = 0;
+    for (int k = 0; k < n; k++) polished[k] = 0;
     for (int k = 0; k < n; k++) {
         int flag = F[k];
         if (flag & IKC_EMPTY) continue;
@@ -392,9 +393,24 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
-            /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
-            err[k] = ikc_newton(rb, g, w, 15);
+            /* up to 15 steps (they stop once converged): at a double root Newton is only linear; a copy
+             * of a leaf polished already (equal values and error: a tangent root's) takes its polish */
+            int before = -1;
+            for (int b = 0; b < k && before < 0; b++) {
+                int equal = polished[b] && E[b] == E[k];
+                for (int j = 0; j < dof && equal; j++) equal = Q[b * dof + j] == Q[k * dof + j];
+                if (equal) before = b;
+            }
+            if (before >= 0) {
+                for (int j = 0; j < dof; j++) w[j] = P[before * dof + j];
+                err[k] = PE[before];
+            } else {
+                err[k] = ikc_newton(rb, g, w, 15);
+            }
             if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
+            polished[k] = 1;
+            for (int j = 0; j < dof; j++) P[k * dof + j] = w[j];
+            PE[k] = err[k];
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
@@ -695,6 +711,9 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 
 #define IKC_TANGENT_MARGIN 1e-3  /* a tangent line's leaves lie this close to the line (radians) */
 #define IKC_TANGENT_PROBE 1e-3   /* the step off the line along the second null direction */
+/* Newton steps from a probe: a double root's halve the distance each, and 4 halvings bring it inside
+ * the tenth of the probe that the test asks (8: a margin of 16) */
+#define IKC_TANGENT_PROBE_STEPS 8
 
 /* A self-motion line whose leaves are a tangent root (two roots of one step coincide: located to about
  * sqrt(eps)) has, at its exact point p0 (Newton-polished), a Jacobian null space of two directions: the
@@ -733,7 +752,7 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
             const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
             x[col[a]] += side * IKC_TANGENT_PROBE * n[a] * u;
         }
-        ikc_newton(rb, g, x, 15);
+        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
         double d[m], along = 0.0, off = 0.0;
         for (int a = 0; a < m; a++) {
             const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
@@ -877,6 +896,27 @@ static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *
     return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
 }
 
+/* The earlier leaf k < j whose line verdict j can take (-1 when none): asked already, the same test
+ * (tangent, root) and slopes, and leaf values equal (a tangent line's: within IKC_SPLIT_ROOT, where the
+ * finish takes two copies of a tangent root for one solution) -- ikc_line_verdict depends on those
+ * alone, and a double root's split copies would each pay for its Newton steps and probes again. */
+static int ikc_given_verdict(const ikc_robot *rb, int j, const int *verdict, const int *line,
+                             const double *Q0, const double *S, const int *tangent, const int *root) {
+    const int dof = rb->dof;
+    for (int k = 0; k < j; k++) {
+        if (verdict[k] == -3 || !line[k] || tangent[k] != tangent[j] || root[k] != root[j]) continue;
+        int same = 1;
+        for (int c = 0; c < dof && same; c++) same = S[k * dof + c] == S[j * dof + c];
+        if (!same) continue;
+        if (tangent[j])
+            same = ikc_row_distance(rb, Q0 + k * dof, Q0 + j * dof) <= IKC_SPLIT_ROOT;
+        else
+            for (int c = 0; c < dof && same; c++) same = Q0[k * dof + c] == Q0[j * dof + c];
+        if (same) return k;
+    }
+    return -1;
+}
+
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont,
                             int try_alt) {
@@ -935,13 +975,22 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     }
     /* A tangent line shown to miss the limits has no solution: decided before its representatives are
      * polished (docs/design.md section 6: each polish is 8 Newton steps, moot there). */
-    int verdict[L];  /* ikc_line_verdict of a tangent line (its t in VT), or -3 where not yet asked */
+    int verdict[L];  /* ikc_line_verdict of a line (its t in VT), or -3 where not yet asked */
+    int tangent[L], root[L];
     double VT[L];
     for (int j = 0; j < n; j++) {
         verdict[j] = -3;
         VT[j] = 0.0;
-        if (line[j] && !(E0[j] <= exact_tol)) {
-            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, 0, VT + j);
+        tangent[j] = !(E0[j] <= exact_tol);
+        root[j] = (F0[j] & IKC_TANGENT_ROOT) != 0;
+    }
+    for (int j = 0; j < n; j++) {
+        if (line[j] && tangent[j]) {
+            const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+            if (k >= 0)
+                verdict[j] = verdict[k], VT[j] = VT[k];
+            else
+                verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, 0, VT + j);
             if (verdict[j] == 0) F[j] |= IKC_EMPTY;
         }
     }
@@ -976,9 +1025,17 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         const int lock = F[j] & IKC_LOCK;  /* exact or not, a lock needs its line */
         if (!lock && E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
         double t = VT[j];
-        const int found = verdict[j] != -3 ? verdict[j]
-                          : line[j] ? ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0,
-                                                       F0[j] & IKC_TANGENT_ROOT, &t) : -2;
+        int found = -2;
+        if (verdict[j] != -3) {
+            found = verdict[j];
+        } else if (line[j]) {
+            const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+            if (k >= 0)
+                found = verdict[k], t = VT[k];
+            else
+                found = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, root[j], &t);
+            verdict[j] = found, VT[j] = t;
+        }
         if (found != -2) {
             if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
                 F[j] |= IKC_EMPTY;

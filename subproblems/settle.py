@@ -287,6 +287,7 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
     exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
     same = 1e-9 * (rb.scale if rb.scale > 1.0 else 1.0)
     kept_rows, inexact, err, W = [], {}, {}, {}
+    polished = {}  # k -> (row, error) after the Newton steps
     family_any = family_exact = False
     for k, flag in enumerate(F):
         if flag & _fk.EMPTY:
@@ -298,9 +299,15 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
             return FAMILY_MISS if flag & _fk.FAMILY else PYTHON
         w = list(Q[k])
         if exact_tol < err[k] < near:
-            err[k] = newton_steps(rb, g, w, 15)
+            # a copy of a leaf polished already (equal values and error: a tangent root's) takes its polish
+            before = next((b for b in polished if E[b] == E[k] and list(Q[b]) == w), None)
+            if before is not None:
+                w, err[k] = list(polished[before][0]), polished[before][1]
+            else:
+                err[k] = newton_steps(rb, g, w, 15)
             if err[k] != err[k]:
                 return PYTHON
+            polished[k] = (list(w), err[k])
             same = SPLIT_ROOT
         if flag & _fk.TANGENT_ROOT:
             same = SPLIT_ROOT
@@ -484,6 +491,9 @@ def line_in_limits(rb: FinishRobot, q0, s, slack: float, slide_slack: float):
 
 TANGENT_MARGIN = 1e-3  # IKC_TANGENT_MARGIN
 TANGENT_PROBE = 1e-3  # IKC_TANGENT_PROBE
+# IKC_TANGENT_PROBE_STEPS: Newton steps from a probe; a double root's halve the distance each, and 4
+# halvings bring it inside the tenth of the probe that the test asks (8: a margin of 16)
+TANGENT_PROBE_STEPS = 8
 
 
 def row_distance(rb: FinishRobot, x, y) -> float:
@@ -537,7 +547,7 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
         for a in range(m):
             u = 1.0 if rb.revolute[col[a]] else rb.scale
             x[col[a]] += side * TANGENT_PROBE * n[a] * u
-        newton_steps(rb, g, x, 15)
+        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
         d, along = [], 0.0
         for a in range(m):
             u = 1.0 if rb.revolute[col[a]] else rb.scale
@@ -660,6 +670,18 @@ def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     return found, (0.0 if t is None else t)
 
 
+def _given_verdict(rb: FinishRobot, verdict, j, line, Q0, S, tangent, root):
+    """The verdict already given to an earlier leaf of the same line: the same test and slopes, and leaf
+    values equal (a tangent line's: within SPLIT_ROOT, where the finish takes two copies of a tangent
+    root for one solution).  :func:`line_verdict` depends on those alone, and a double root's split
+    copies would each pay for its Newton steps and probes again (ikc_given_verdict); or None."""
+    for k in range(j):
+        if k in verdict and line[k] and tangent[k] == tangent[j] and root[k] == root[j] and S[k] == S[j] \
+                and (row_distance(rb, Q0[k], Q0[j]) <= SPLIT_ROOT if tangent[j] else Q0[k] == Q0[j]):
+            return verdict[k]
+    return None
+
+
 def _reps():
     """(r, rep) of the other representatives, in the C's order: pi/8, -pi/8, pi/4, -pi/4, ... pi."""
     for r in range(1, REPS):
@@ -714,9 +736,12 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                 line[j] = fits
     # a tangent line shown to miss the limits has no solution: decided before the polish (moot there)
     verdict = {}
+    tangent = [not E0[j] <= exact_tol for j in range(n)]
+    root = [bool(F0[j] & _fk.TANGENT_ROOT) for j in range(n)]
     for j in range(n):
-        if line[j] and not E0[j] <= exact_tol:
-            verdict[j] = line_verdict(rb, g, Q0[j], S[j], True)
+        if line[j] and tangent[j]:
+            verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+                or line_verdict(rb, g, Q0[j], S[j], True)
             if verdict[j][0] == 0:
                 F[j] |= _fk.EMPTY
     for r, _rep in _reps():
@@ -743,9 +768,11 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
             continue
         if j in verdict:
             found, t = verdict[j]
+        elif line[j]:
+            found, t = verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+                or line_verdict(rb, g, Q0[j], S[j], False, root[j])
         else:
-            found, t = (line_verdict(rb, g, Q0[j], S[j], False, bool(F0[j] & _fk.TANGENT_ROOT)) if line[j]
-                        else (-2, 0.0))
+            found, t = -2, 0.0
         if found != -2:
             if found == 0:
                 F[j] |= _fk.EMPTY
