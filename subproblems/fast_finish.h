@@ -648,19 +648,39 @@ static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s
     return 1;
 }
 
+/* The unit null vector n (of the two weakest, V's first columns) least along the unit f, made orthogonal
+ * to it; returns its squared length before that (0 when none). */
+static double ikc_null_across(int m, const double *V, const double *f, double *n) {
+    double best = 0.0;
+    for (int v = 0; v < 2; v++) {
+        double d = 0.0, w[m], len = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
+        if (len > best) {
+            best = len;
+            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
+        }
+    }
+    return best;
+}
+
+/* Whether value x of joint j (or an alias) lies inside its limits widened by the slack. */
+static int ikc_joint_inside(const ikc_robot *rb, int j, double x, double slack, double slide_slack) {
+    const double sl = rb->revolute[j] ? slack : slide_slack;
+    double lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
+    if (rb->revolute[j]) {
+        if (hi - lo >= IKC_TWO_PI) return 1;
+        x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
+    }
+    return lo <= x && x <= hi;
+}
+
 /* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`,
  * `slide_slack` for a prismatic joint). */
 static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack,
                            double slide_slack) {
-    for (int j = 0; j < rb->dof; j++) {
-        const double sl = rb->revolute[j] ? slack : slide_slack;
-        double x = q0[j] + s[j] * t, lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
-        if (rb->revolute[j]) {
-            if (hi - lo >= IKC_TWO_PI) continue;
-            x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
-        }
-        if (!(lo <= x && x <= hi)) return 0;
-    }
+    for (int j = 0; j < rb->dof; j++)
+        if (!ikc_joint_inside(rb, j, q0[j] + s[j] * t, slack, slide_slack)) return 0;
     return 1;
 }
 
@@ -734,17 +754,8 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
     for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
     if (!(fn > 0.0)) return 0;
     for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);  /* revolute: scaled and joint units agree */
-    double n[m], best = 0.0;
-    for (int v = 0; v < 2; v++) {  /* the null vector least along f, made orthogonal to it */
-        double d = 0.0, w[m], len = 0.0;
-        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
-        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
-        if (len > best) {
-            best = len;
-            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
-        }
-    }
-    if (!(best > 0.25)) return 0;
+    double n[m];
+    if (!(ikc_null_across(m, V, f, n) > 0.25)) return 0;
     for (int side = -1; side <= 1; side += 2) {
         double x[dof];
         for (int j = 0; j < dof; j++) x[j] = p0[j];
@@ -767,33 +778,6 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
 
 #define IKC_PLANE_PROBE 0.5  /* the step along a plane's second direction (radians, or over the size) */
 #define IKC_PLANE_FIXED 1e-6 /* a joint neither (unit) direction of the plane moves */
-
-/* The unit null vector n (of the two weakest, V's first columns) least along the unit f, made orthogonal
- * to it; returns its squared length before that (0 when none). */
-static double ikc_null_across(int m, const double *V, const double *f, double *n) {
-    double best = 0.0;
-    for (int v = 0; v < 2; v++) {
-        double d = 0.0, w[m], len = 0.0;
-        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
-        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
-        if (len > best) {
-            best = len;
-            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
-        }
-    }
-    return best;
-}
-
-/* Whether value x of joint j (or an alias) lies inside its limits widened by the slack. */
-static int ikc_joint_inside(const ikc_robot *rb, int j, double x, double slack, double slide_slack) {
-    const double sl = rb->revolute[j] ? slack : slide_slack;
-    double lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
-    if (rb->revolute[j]) {
-        if (hi - lo >= IKC_TWO_PI) return 1;
-        x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);
-    }
-    return lo <= x && x <= hi;
-}
 
 /* Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone of
  * which a joint that neither of its directions moves lies outside its limits: the Jacobian's null space

@@ -444,17 +444,37 @@ def line_alone(rb: FinishRobot, q0, s, g=None) -> bool:
     return True
 
 
+def _null_across(rb: FinishRobot, col, V, f):
+    """The unit null vector (of the two weakest, V's first columns) least along the unit f, made
+    orthogonal to it, and its squared length before that (ikc_null_across)."""
+    m = len(col)
+    n, best = None, 0.0
+    for v in range(2):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        w = [V[a][v] - d * f[a] for a in range(m)]
+        length = 0.0
+        for a in range(m):
+            length += w[a] * w[a]
+        if length > best:
+            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    return n, best
+
+
+def _joint_inside(rb: FinishRobot, j: int, x: float, slack: float, slide_slack: float) -> bool:
+    """Whether value x of joint j (or an alias) lies inside its limits widened by the slack."""
+    sl = slack if rb.revolute[j] else slide_slack
+    lo, hi = rb.lower[j] - sl, rb.upper[j] + sl
+    if rb.revolute[j]:
+        if hi - lo >= TWO_PI:
+            return True
+        x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
+    return lo <= x <= hi
+
+
 def line_inside(rb: FinishRobot, q0, s, t: float, slack: float, slide_slack: float) -> bool:
-    for j in range(rb.dof):
-        sl = slack if rb.revolute[j] else slide_slack
-        x, lo, hi = q0[j] + s[j] * t, rb.lower[j] - sl, rb.upper[j] + sl
-        if rb.revolute[j]:
-            if hi - lo >= TWO_PI:
-                continue
-            x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
-        if not (lo <= x <= hi):
-            return False
-    return True
+    return all(_joint_inside(rb, j, q0[j] + s[j] * t, slack, slide_slack) for j in range(rb.dof))
 
 
 def line_in_limits(rb: FinishRobot, q0, s, slack: float, slide_slack: float):
@@ -529,17 +549,7 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
     if not fn > 0.0:
         return False
     f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
-    n, best = None, 0.0
-    for v in range(2):
-        d = 0.0
-        for a in range(m):
-            d += V[a][v] * f[a]
-        w = [V[a][v] - d * f[a] for a in range(m)]
-        length = 0.0
-        for a in range(m):
-            length += w[a] * w[a]
-        if length > best:
-            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    n, best = _null_across(rb, col, V, f)
     if not best > 0.25:
         return False
     for side in (-1, 1):
@@ -569,35 +579,6 @@ def _plain_family(flag) -> bool:
 
 PLANE_PROBE = 0.5  # IKC_PLANE_PROBE: the step along a plane's second direction (radians, or over the size)
 PLANE_FIXED = 1e-6  # IKC_PLANE_FIXED: a joint neither direction of the plane moves (unit direction)
-
-
-def _null_across(rb: FinishRobot, col, V, f):
-    """The unit null vector (of the two weakest, V's first columns) least along the unit f, made
-    orthogonal to it, and its squared length before that (ikc_null_across)."""
-    m = len(col)
-    n, best = None, 0.0
-    for v in range(2):
-        d = 0.0
-        for a in range(m):
-            d += V[a][v] * f[a]
-        w = [V[a][v] - d * f[a] for a in range(m)]
-        length = 0.0
-        for a in range(m):
-            length += w[a] * w[a]
-        if length > best:
-            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
-    return n, best
-
-
-def _joint_inside(rb: FinishRobot, j: int, x: float, slack: float, slide_slack: float) -> bool:
-    """Whether value x of joint j (or an alias) lies inside its limits widened by the slack."""
-    sl = slack if rb.revolute[j] else slide_slack
-    lo, hi = rb.lower[j] - sl, rb.upper[j] + sl
-    if rb.revolute[j]:
-        if hi - lo >= TWO_PI:
-            return True
-        x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
-    return lo <= x <= hi
 
 
 def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) -> bool:
