@@ -115,8 +115,12 @@ def _functions(profile: Path, poses: int, top: int = 14) -> list[tuple[str, floa
         if "libm" in lib or name.startswith("__ieee754"):
             name = f"libm {name}"
         rows.append((name, n))
-    solve = sum(n for _, n in rows) or 1
-    return [(name, n / poses, n / solve) for name, n in rows[:top]]
+    merged: dict[str, int] = {}  # one name, several entries (libm's atan2 and its inlined fenv part)
+    for name, n in rows:
+        merged[name] = merged.get(name, 0) + n
+    solve = sum(merged.values()) or 1
+    heaviest = sorted(merged.items(), key=lambda item: -item[1])[:top]
+    return [(name, n / poses, n / solve) for name, n in heaviest]
 
 
 def count(root: Path, label: str, poses: int, driver: Path, tmp: Path, profile: bool = False) -> dict:
