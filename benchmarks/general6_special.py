@@ -16,7 +16,8 @@ from {0, +-pi/2, pi}) and 300 taught (special values inside the limits).  For ea
 * for the first ``--profile`` handed-back special poses, a ``cProfile`` of ``solve``: the top functions
   by cumulative time, per pose.
 
-``python benchmarks/general6_special.py`` writes ``benchmarks/results/general6_special.md``.  The
+``python benchmarks/general6_special.py`` writes ``benchmarks/results/general6_special.md`` (``--out``
+another file: ``general6_special_main.md`` holds the run on main before the eigenvalue path in C).  The
 machine is shared: wall times carry its load (written with the results); the counts do not.
 """
 
@@ -115,6 +116,7 @@ def _profile(module, targets) -> list[str]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--profile", type=int, default=20, help="handed-back special poses profiled")
+    ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args(argv)
     load = os.getloadavg()
     _, module, _ = sp._setup("jaco")
@@ -154,13 +156,14 @@ def main(argv=None) -> int:
         print(lines[-1], file=sys.stderr, flush=True)
         if label == "special":
             profiled = T[np.nonzero(back)[0][:args.profile]]
-    lines += ["", f"## Profile: `solve` of the first {len(profiled)} handed-back special poses", "",
-              "`cProfile`, per pose (the profiler's overhead included); the runtime's and general6.py's "
-              "functions by cumulative time.", ""]
-    module.solve(profiled[0])
-    lines += _profile(module, profiled)
-    OUT.write_text("\n".join(lines) + "\n")
-    print(f"wrote {OUT}", file=sys.stderr)
+    if len(profiled):
+        lines += ["", f"## Profile: `solve` of the first {len(profiled)} handed-back special poses", "",
+                  "`cProfile`, per pose (the profiler's overhead included); the runtime's and general6.py's "
+                  "functions by cumulative time.", ""]
+        module.solve(profiled[0])
+        lines += _profile(module, profiled)
+    Path(args.out).write_text("\n".join(lines) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
 
