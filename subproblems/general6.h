@@ -1207,6 +1207,10 @@ static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int 
 static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
                            int *F) {
     if (rb->dof != 6 || rb->nfree) return -1;  /* the six solved joints alone (g6_truncated_newton) */
+    for (int j = 0; j < 6; j++)  /* revolute chains only: a prismatic pencil's real spurious roots and
+                                  * absent columns are not treated here (a modular RRRRTT lost 2 of 10
+                                  * verify poses): its doubtful targets stay Python's */
+        if (G->prism[j]) return -1;
     const double exact = rb->tol * rb->scale;
     double P[6 * G6_POOL], PE[G6_POOL];
     int np = 0, answered = 0;
