@@ -2,7 +2,7 @@
 
 One command::
 
-    python benchmarks/batch_instructions.py [--robots NAME ...] [--poses N] [--against DIR]
+    python benchmarks/batch_instructions.py [--robots NAME ...] [--poses N] [--against DIR] [--profile]
 
 Why instructions: on a shared, loaded machine the wall and CPU times of a batch move by 1.5x between
 runs, so before/after comparisons of the C runtime (docs/design.md section 14) are made on callgrind's
@@ -11,6 +11,8 @@ the batch poses of compare.py (same sampler and seed, ``--poses`` of them) are s
 compiled chain through ``ikc_solve_many`` in one thread, from a small C driver (built here with ``cc``)
 that loads the chain's shared library, so nothing of Python is counted.  ``--against DIR`` counts the
 same poses on another checkout (e.g. the main worktree) in the same run, for a before/after table.
+``--profile`` adds, per robot, where this checkout's instructions go: callgrind's exclusive counts per
+function (``callgrind_annotate``), a pose's share of each, libm's functions named as such.
 
 Needs valgrind on the PATH.  Writes ``benchmarks/results/batch_instructions.md``; progress to stderr.
 """
@@ -29,7 +31,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
-ROBOTS = ("puma560", "ur5", "kr6_r700", "prob", "kinova")
+ROBOTS = ("puma560", "ur5", "kr6_r700", "prob", "irb140", "kinova")
 
 DRIVER = r"""
 #include <dlfcn.h>
@@ -85,21 +87,54 @@ def log(msg: str) -> None:
     print(f"[batch_instructions {time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
 
 
-def _instructions(driver: Path, lib: str, poses: Path, solve: bool) -> tuple[int, int]:
-    out = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", str(driver), lib,
+def _instructions(driver: Path, lib: str, poses: Path, solve: bool,
+                  out: str = "/dev/null") -> tuple[int, int]:
+    out = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(driver), lib,
                           str(poses), "1" if solve else "0"], capture_output=True, text=True, check=True)
     refs = re.search(r"I\s+refs:\s+([\d,]+)", out.stderr)
     return int(refs.group(1).replace(",", "")), int(out.stdout.strip() or 0)
 
 
-def count(root: Path, label: str, poses: int, driver: Path, tmp: Path) -> dict:
+def _functions(profile: Path, poses: int, top: int = 14) -> list[tuple[str, float, float]]:
+    """(function, instructions a pose, share of the solve) of the heaviest functions, exclusive counts."""
+    text = subprocess.run(["callgrind_annotate", "--inclusive=no", str(profile)], capture_output=True,
+                          text=True, check=True).stdout
+    rows, total = [], None
+    for line in text.splitlines():
+        m = re.match(r"\s*([\d,]+)\s+(?:\(\s*[\d.]+%\)\s+)?(.*)$", line)
+        if not m:
+            continue
+        n, what = int(m.group(1).replace(",", "")), m.group(2)
+        if "PROGRAM TOTALS" in what:
+            total = n
+            continue
+        if total is None or ":" not in what:
+            continue
+        name = what.split(":", 1)[1].split(" [")[0]
+        lib = what.rsplit("/", 1)[-1].rstrip("]") if "[" in what else ""
+        if "libm" in lib or name.startswith("__ieee754"):
+            name = f"libm {name}"
+        rows.append((name, n))
+    merged: dict[str, int] = {}  # one name, several entries (libm's atan2 and its inlined fenv part)
+    for name, n in rows:
+        merged[name] = merged.get(name, 0) + n
+    solve = sum(merged.values()) or 1
+    heaviest = sorted(merged.items(), key=lambda item: -item[1])[:top]
+    return [(name, n / poses, n / solve) for name, n in heaviest]
+
+
+def count(root: Path, label: str, poses: int, driver: Path, tmp: Path, profile: bool = False) -> dict:
     """Instructions a pose (the driver's fixed cost, counted without the solve, taken off) and rows."""
     data = tmp / f"{label}.{abs(hash(str(root)))}.poses"
     lib = subprocess.run([sys.executable, "-c", LIBRARY, str(root), label, str(poses), str(data)],
                          capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1]
-    total, rows = _instructions(driver, lib, data, True)
+    out = tmp / f"{label}.callgrind" if profile else Path("/dev/null")
+    total, rows = _instructions(driver, lib, data, True, str(out))
     fixed, _ = _instructions(driver, lib, data, False)
-    return {"per_pose": (total - fixed) / poses, "rows": rows}
+    result = {"per_pose": (total - fixed) / poses, "rows": rows}
+    if profile:
+        result["functions"] = _functions(out, poses)
+    return result
 
 
 def main(argv=None) -> int:
@@ -107,6 +142,7 @@ def main(argv=None) -> int:
     ap.add_argument("--robots", nargs="*", default=list(ROBOTS))
     ap.add_argument("--poses", type=int, default=2000)
     ap.add_argument("--against", help="another checkout, counted on the same poses (before/after)")
+    ap.add_argument("--profile", action="store_true", help="where the instructions go, per function")
     ap.add_argument("--out", default=str(RESULTS / "batch_instructions.md"))
     opts = ap.parse_args(argv)
     if shutil.which("valgrind") is None:
@@ -124,7 +160,7 @@ def main(argv=None) -> int:
             row = [label]
             for root in roots:
                 log(f"{label}: {root}")
-                row.append(count(root, label, opts.poses, driver, tmp))
+                row.append(count(root, label, opts.poses, driver, tmp, opts.profile and root == ROOT))
             table.append(row)
     head = ["robot", "instructions a pose", "rows"]
     if opts.against:
@@ -134,7 +170,8 @@ def main(argv=None) -> int:
         "# Instructions a pose of the C batch path (chain + finish)",
         "",
         f"`python benchmarks/batch_instructions.py --poses {opts.poses}"
-        + (f" --against {opts.against}`" if opts.against else "`")
+        + (f" --against {opts.against}" if opts.against else "")
+        + (" --profile" if opts.profile else "") + "`"
         + f" ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}): callgrind instructions of"
         " `ikc_solve_many` in one thread on compare.py's batch poses (a quarter of the joint values at"
         " 0, +-pi/2, pi), the driver's fixed cost taken off; rows: solutions returned in all.",
@@ -151,6 +188,13 @@ def main(argv=None) -> int:
                          f" {now['rows']} | {before['rows']} |")
         else:
             lines.append(f"| {row[0]} | {now['per_pose']:,.0f} | {now['rows']} |")
+    for row in table:
+        if "functions" not in row[1]:
+            continue
+        lines += ["", f"## Where {row[0]}'s instructions go (this checkout; exclusive counts)",
+                  "",
+                  "| function | instructions a pose | share |", "|---|---|---|"]
+        lines += [f"| `{name}` | {n:,.0f} | {share:.1%} |" for name, n, share in row[1]["functions"]]
     Path(opts.out).write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

@@ -8,7 +8,8 @@ robot, how many poses have the same set in both (rows matched to 1e-6: revolute 
 prismatic ones over the size), how many differ only in the representatives of a self-motion line
 (flagged continuum: each old representative on a new one's line, found from the Jacobian's null
 direction, and the other way round) and lists the others.  Run ``--write`` before and after a change, from
-the two trees (``PYTHONPATH``), then ``--compare``.
+the two trees (``PYTHONPATH``), then ``--compare``.  ``--tol 1e-9 --strict``: rows matched to 1e-9 and no
+other representatives allowed (the same rows, as sets).  The exit status is 1 when any pose differs.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ def robot_sets(name: str) -> dict:
     out = {"kinds": module.JOINT_TYPES, "scale": float(module.SCALE)}
     for label, Q in (("special", special), ("taught", taught)):
         T = sp._targets(module, Q)
-        rows, cont = [], []
+        rows, cont, info_rows = [], [], []  # solve's rows; their continuum flags; solve_info's rows + ls
         for i in range(len(T)):
             free = tuple(Q[i, free_cols])
             R = np.asarray(module.solve(T[i], *free)).reshape(-1, len(module.JOINT_TYPES))
@@ -44,7 +45,8 @@ def robot_sets(name: str) -> dict:
                               for q, c in zip(info.q, info.continuum))) for r in R]
             rows.append(R.tolist())
             cont.append(flags)
-        out[label], out[label + "_continuum"] = rows, cont
+            info_rows.append([[*r, bool(ls)] for r, ls in zip(np.asarray(info.q).tolist(), info.ls)])
+        out[label], out[label + "_continuum"], out[label + "_info"] = rows, cont, info_rows
     return out
 
 
@@ -56,11 +58,12 @@ def _distance(a, b, kinds, scale) -> float:
     return float(d.max()) if d.size else 0.0
 
 
-def same_set(A, B, kinds, scale) -> bool:
+def same_set(A, B, kinds, scale, tol=None) -> bool:
+    tol = MATCH if tol is None else tol
     if len(A) != len(B):
         return False
-    return all(any(_distance(a, b, kinds, scale) <= MATCH for b in B) for a in A) and \
-        all(any(_distance(a, b, kinds, scale) <= MATCH for a in A) for b in B)
+    return all(any(_distance(a, b, kinds, scale) <= tol for b in B) for a in A) and \
+        all(any(_distance(a, b, kinds, scale) <= tol for a in A) for b in B)
 
 
 def _null_slopes(module, q):
@@ -91,9 +94,9 @@ def _on_line(a, b, s) -> bool:
     return False
 
 
-def compare(fa: str, fb: str) -> int:
-    """Isolated rows must be the same; rows on a self-motion may be other representatives of the
-    same line (each old one on a new one's line and the other way round)."""
+def compare(fa: str, fb: str, tol: float = MATCH, strict: bool = False) -> int:
+    """Isolated rows must be the same (to ``tol``); rows on a self-motion may be other representatives
+    of the same line (each old one on a new one's line and the other way round), unless ``strict``."""
     A, B = json.loads(Path(fa).read_text()), json.loads(Path(fb).read_text())
     differ = 0
     for name in sorted(A):
@@ -105,14 +108,15 @@ def compare(fa: str, fb: str) -> int:
         for label in ("special", "taught"):
             bad, moved = [], []
             for i, (x, y) in enumerate(zip(a[label], b[label])):
-                if same_set(x, y, a["kinds"], a["scale"]):
+                if same_set(x, y, a["kinds"], a["scale"], tol):
                     continue
                 cx, cy = a[label + "_continuum"][i], b[label + "_continuum"][i]
                 iso_x = [r for r, c in zip(x, cx) if not c]
                 iso_y = [r for r, c in zip(y, cy) if not c]
                 fam_x = [r for r, c in zip(x, cx) if c]
                 fam_y = [r for r, c in zip(y, cy) if c]
-                ok = same_set(iso_x, iso_y, a["kinds"], a["scale"]) and bool(fam_x) == bool(fam_y)
+                ok = not strict and same_set(iso_x, iso_y, a["kinds"], a["scale"], tol) \
+                    and bool(fam_x) == bool(fam_y)
                 if ok and fam_x:
                     if module is None:
                         module = sp._setup(name)[1]
@@ -123,6 +127,14 @@ def compare(fa: str, fb: str) -> int:
                     ok = ok and all(any(_on_line(r, q, s) for q, s in lines[len(fam_x):]) for r in fam_x) \
                         and all(any(_on_line(r, q, s) for q, s in lines[:len(fam_x)]) for r in fam_y)
                 (moved if ok else bad).append(i)
+            if strict and label + "_info" in a and label + "_info" in b:
+                # solve_info's rows too (least-squares ones included), each with its ls flag
+                for i, (x, y) in enumerate(zip(a[label + "_info"], b[label + "_info"])):
+                    same = len(x) == len(y) and all(
+                        same_set([r[:-1] for r in x if r[-1] == ls], [r[:-1] for r in y if r[-1] == ls],
+                                 a["kinds"], a["scale"], tol) for ls in (True, False))
+                    if not same and i not in bad:
+                        bad.append(i)
             differ += len(bad)
             n = len(a[label])
             print(f"{name:14s} {label:8s} same {n - len(bad) - len(moved)}/{n}, other representatives of "
@@ -137,9 +149,11 @@ def main(argv=None) -> int:
     ap.add_argument("--write")
     ap.add_argument("--robots", nargs="*")
     ap.add_argument("--compare", nargs=2)
+    ap.add_argument("--tol", type=float, default=MATCH, help="rows match to this (default %(default)g)")
+    ap.add_argument("--strict", action="store_true", help="no other representatives of a self-motion")
     args = ap.parse_args(argv)
     if args.compare:
-        return compare(*args.compare)
+        return compare(*args.compare, tol=args.tol, strict=args.strict)
     from ikcompiler.inputs.zoo import zoo_names
 
     names = args.robots or zoo_names()

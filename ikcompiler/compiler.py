@@ -247,7 +247,7 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
         return None
     step = General6Step(
         code="G6R",
-        solve=list(range(6)) if fold is None else solved,  # folded: the six joints around the free one
+        solve=list(solved),  # chain indices of the six eliminated joints (free ends or a folded one left out)
         arrangements=arrangements,
         native=native,
         fold=fold,

@@ -14,7 +14,7 @@ recomputed here from forward kinematics and the limits (nothing is taken from th
 * outside limits: a returned row with a value outside its joint's limits *as returned* (no modulo);
   non-canonical: a revolute value that is not its representative in (-pi, pi] (a value within
   ``subproblems.fast.PI_SNAP`` above -pi counts as -pi) although that representative lies inside the
-  limits;
+  limits, or a free joint's value that is not the one given;
 * duplicate: two returned rows of one pose closer than the recovery tolerance (as returned, modulo 2 pi);
 * self-motion: not recovered, but a returned row is flagged ``continuum`` and the Jacobian at the
   sampled vector is rank-deficient (smallest normalised singular value below :data:`SINGULAR`);
@@ -178,11 +178,17 @@ def _errors(chain, target: str, Gs, G) -> np.ndarray:
     return target_error(Gs, np.asarray(G)[None], target, chain.scale) / chain.scale
 
 
-def _limit_checks(rows, kinds, lower, upper):
-    """(outside, non_canonical) counts of returned rows, checked as returned."""
+def _limit_checks(rows, kinds, lower, upper, given=None):
+    """(outside, non_canonical) counts of returned rows, checked as returned.  ``given``: {column: value}
+    of the free joints, whose value is the user's as given (never an alias): one that differs counts as
+    non-canonical."""
+    given = given or {}
     outside = ((rows < lower) | (rows > upper)).any(axis=1)
     non_canonical = np.zeros(len(rows), dtype=bool)
     for c, k in enumerate(kinds):
+        if c in given:
+            non_canonical |= rows[:, c] != given[c]
+            continue
         if k != "R":
             continue
         v = rows[:, c]
@@ -217,7 +223,7 @@ def verify(
     errs, recovered, solutions, self_motion, unsolved, double_root = [], 0, 0, 0, 0, 0
     wrong = imprecise = outside = non_canonical = duplicates = 0
     for i in range(samples):
-        o, n = _limit_checks(S[i][filled[i]], kinds, lower, upper)
+        o, n = _limit_checks(S[i][filled[i]], kinds, lower, upper, {p: Q[i, p] for p in free_pos})
         outside, non_canonical = outside + o, non_canonical + n
         sols = S[i][valid[i]]
         solutions += len(sols)

@@ -378,9 +378,10 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
     const int m = n > 0 ? n : 1;
-    int rows[m], inexact[m];
-    double W[m * dof], err[m];
+    int rows[m], inexact[m], polished[m];
+    double W[m * dof], err[m], P[m * dof], PE[m];
     int count = 0, family_any = 0, family_exact = 0;
+    for (int k = 0; k < n; k++) polished[k] = 0;
     for (int k = 0; k < n; k++) {
         int flag = F[k];
         if (flag & IKC_EMPTY) continue;
@@ -392,9 +393,24 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         double *w = W + k * dof;
         for (int j = 0; j < dof; j++) w[j] = Q[k * dof + j];
         if (exact_tol < err[k] && err[k] < near) {
-            /* up to 15 steps (they stop once converged): at a double root Newton is only linear */
-            err[k] = ikc_newton(rb, g, w, 15);
+            /* up to 15 steps (they stop once converged): at a double root Newton is only linear; a copy
+             * of a leaf polished already (equal values and error: a tangent root's) takes its polish */
+            int before = -1;
+            for (int b = 0; b < k && before < 0; b++) {
+                int equal = polished[b] && E[b] == E[k];
+                for (int j = 0; j < dof && equal; j++) equal = Q[b * dof + j] == Q[k * dof + j];
+                if (equal) before = b;
+            }
+            if (before >= 0) {
+                for (int j = 0; j < dof; j++) w[j] = P[before * dof + j];
+                err[k] = PE[before];
+            } else {
+                err[k] = ikc_newton(rb, g, w, 15);
+            }
             if (err[k] != err[k]) return ikc_hand_back(IKC_WHY_NAN);
+            polished[k] = 1;
+            for (int j = 0; j < dof; j++) P[k * dof + j] = w[j];
+            PE[k] = err[k];
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
@@ -612,8 +628,13 @@ static double ikc_joint_step(const ikc_robot *rb, int j, double a, double b) {
     return rb->revolute[j] ? ikc_wrap(a - b) : a - b;
 }
 
-/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above). */
-static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s) {
+static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const double *p0, const double *s);
+
+/* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above).  With
+ * g (the goal; not NULL for a line whose leaves are flagged a tangent root, exact there), a point with a
+ * second null direction counts where that direction is a double root's (ikc_tangent_line_alone at the
+ * point: Newton steps off it come back to the line). */
+static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s, const double *g) {
     const int dof = rb->dof;
     int moves = 0;
     for (int j = 0; j < dof; j++) moves |= s[j] != 0.0;
@@ -622,24 +643,44 @@ static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s
         double t = (p == 0 ? 0.0 : (p == 1 ? 1.0 : -1.0)) * IKC_TWO_PI / 3.0, q[dof], sig[2];
         for (int j = 0; j < dof; j++) q[j] = q0[j] + s[j] * t;
         ikc_two_weakest(rb, q, sig);
-        if (!(sig[1] >= IKC_LINE_RANK)) return 0;
+        if (!(sig[1] >= IKC_LINE_RANK) && !(g != NULL && ikc_tangent_line_alone(rb, g, q, s))) return 0;
     }
     return 1;
+}
+
+/* The unit null vector n (of the two weakest, V's first columns) least along the unit f, made orthogonal
+ * to it; returns its squared length before that (0 when none). */
+static double ikc_null_across(int m, const double *V, const double *f, double *n) {
+    double best = 0.0;
+    for (int v = 0; v < 2; v++) {
+        double d = 0.0, w[m], len = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
+        if (len > best) {
+            best = len;
+            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
+        }
+    }
+    return best;
+}
+
+/* Whether value x of joint j (or an alias) lies inside its limits widened by the slack. */
+static int ikc_joint_inside(const ikc_robot *rb, int j, double x, double slack, double slide_slack) {
+    const double sl = rb->revolute[j] ? slack : slide_slack;
+    double lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
+    if (rb->revolute[j]) {
+        if (hi - lo >= IKC_TWO_PI) return 1;
+        x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
+    }
+    return lo <= x && x <= hi;
 }
 
 /* Whether t lies inside the limits of every joint on the line q0 + s t (bounds widened by `slack`,
  * `slide_slack` for a prismatic joint). */
 static int ikc_line_inside(const ikc_robot *rb, const double *q0, const double *s, double t, double slack,
                            double slide_slack) {
-    for (int j = 0; j < rb->dof; j++) {
-        const double sl = rb->revolute[j] ? slack : slide_slack;
-        double x = q0[j] + s[j] * t, lo = rb->lower[j] - sl, hi = rb->upper[j] + sl;
-        if (rb->revolute[j]) {
-            if (hi - lo >= IKC_TWO_PI) continue;
-            x = lo + fmod(fmod(x - lo, IKC_TWO_PI) + IKC_TWO_PI, IKC_TWO_PI);  /* the alias at or above lo */
-        }
-        if (!(lo <= x && x <= hi)) return 0;
-    }
+    for (int j = 0; j < rb->dof; j++)
+        if (!ikc_joint_inside(rb, j, q0[j] + s[j] * t, slack, slide_slack)) return 0;
     return 1;
 }
 
@@ -690,6 +731,9 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
 
 #define IKC_TANGENT_MARGIN 1e-3  /* a tangent line's leaves lie this close to the line (radians) */
 #define IKC_TANGENT_PROBE 1e-3   /* the step off the line along the second null direction */
+/* Newton steps from a probe: a double root's halve the distance each, and 4 halvings bring it inside
+ * the tenth of the probe that the test asks (8: a margin of 16) */
+#define IKC_TANGENT_PROBE_STEPS 8
 
 /* A self-motion line whose leaves are a tangent root (two roots of one step coincide: located to about
  * sqrt(eps)) has, at its exact point p0 (Newton-polished), a Jacobian null space of two directions: the
@@ -710,17 +754,8 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
     for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
     if (!(fn > 0.0)) return 0;
     for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);  /* revolute: scaled and joint units agree */
-    double n[m], best = 0.0;
-    for (int v = 0; v < 2; v++) {  /* the null vector least along f, made orthogonal to it */
-        double d = 0.0, w[m], len = 0.0;
-        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
-        for (int a = 0; a < m; a++) w[a] = V[a * m + v] - d * f[a], len += w[a] * w[a];
-        if (len > best) {
-            best = len;
-            for (int a = 0; a < m; a++) n[a] = w[a] / sqrt(len);
-        }
-    }
-    if (!(best > 0.25)) return 0;
+    double n[m];
+    if (!(ikc_null_across(m, V, f, n) > 0.25)) return 0;
     for (int side = -1; side <= 1; side += 2) {
         double x[dof];
         for (int j = 0; j < dof; j++) x[j] = p0[j];
@@ -728,7 +763,7 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
             const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
             x[col[a]] += side * IKC_TANGENT_PROBE * n[a] * u;
         }
-        ikc_newton(rb, g, x, 15);
+        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
         double d[m], along = 0.0, off = 0.0;
         for (int a = 0; a < m; a++) {
             const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
@@ -737,6 +772,62 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
         }
         for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
         if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the line: a sheet */
+    }
+    return 1;
+}
+
+#define IKC_PLANE_PROBE 0.5  /* the step along a plane's second direction (radians, or over the size) */
+#define IKC_PLANE_FIXED 1e-6 /* a joint neither (unit) direction of the plane moves */
+
+/* Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone of
+ * which a joint that neither of its directions moves lies outside its limits: the Jacobian's null space
+ * at p0 has exactly two directions, the line's f and n; the points p0 +- IKC_PLANE_PROBE n are exact (a
+ * sheet of solutions: Newton keeps them off the line, where a double root's would come back), keep
+ * that joint's value and have two null directions again.  Near each of those points the solutions
+ * are that sheet, so the self-motion keeps the joint where it misses its limits: no solution
+ * (docs/design.md section 6; panda's stretched elbow at q4 = 0 with joints 1, 3 and 5 coaxial). */
+static int ikc_plane_misses(const ikc_robot *rb, const double *g, const double *p0, const double *s,
+                            double slack, double slide_slack) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 3 || !(lam[1] < floor && lam[2] >= floor)) return 0;
+    double f[m], fn = 0.0, n[m];
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);
+    if (!(ikc_null_across(m, V, f, n) > 0.25)) return 0;
+    int out[m], nout = 0;
+    for (int a = 0; a < m; a++)
+        if (fabs(f[a]) <= IKC_PLANE_FIXED && fabs(n[a]) <= IKC_PLANE_FIXED &&
+            !ikc_joint_inside(rb, col[a], p0[col[a]], slack, slide_slack))
+            out[nout++] = a;
+    if (!nout) return 0;
+    const double exact = rb->tol * rb->scale;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
+        }
+        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
+        for (int k = 0; k < nout; k++)
+            if (!(fabs(d[out[k]]) <= IKC_LINE_FIT)) return 0;
+        int colx[dof];
+        double lamx[dof];
+        ikc_jtj_eigen(rb, x, colx, lamx, NULL);
+        if (!(lamx[1] < floor && lamx[2] >= floor)) return 0;
     }
     return 1;
 }
@@ -770,20 +861,44 @@ static int ikc_lock_leaves(ikc_chain_fn chain, const double *g, const double *fr
 }
 
 /* The straight-line verdict of family leaf q0 (its leaf at rep = 0) with slopes s: -2 where it is not
- * shown a line alone (a tangent line: its exact point near q0 is found first); else ikc_line_in_limits's
- * 0 (the line misses the limits), 1 (*t: the middle of its widest in-limit stretch) or -1. */
+ * shown a line alone (a tangent line: its exact point near q0 is found first; `root`: an exact line whose
+ * leaves are flagged a tangent root, see ikc_line_alone); else ikc_line_in_limits's 0 (the line misses
+ * the limits), 1 (*t: the middle of its widest in-limit stretch) or -1. */
 static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *q0, const double *s,
-                            int tangent, double *t) {
+                            int tangent, int root, double *t) {
     const int dof = rb->dof;
     double p0[dof];
     for (int c = 0; c < dof; c++) p0[c] = q0[c];
     if (tangent && !(ikc_newton(rb, g, p0, 15) <= rb->tol * rb->scale &&
                      ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
         return -2;
-    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s))) return -2;
     const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+    if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
+        /* not a line alone: a plane alone that misses the limits has no solution either */
+        return ikc_plane_misses(rb, g, p0, s, slack, tangent ? slack * rb->scale : slack) ? 0 : -2;
     *t = 0.0;
     return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
+}
+
+/* The earlier leaf k < j whose line verdict j can take (-1 when none): asked already, the same test
+ * (tangent, root) and slopes, and leaf values equal (a tangent line's: within IKC_SPLIT_ROOT, where the
+ * finish takes two copies of a tangent root for one solution) -- ikc_line_verdict depends on those
+ * alone, and a double root's split copies would each pay for its Newton steps and probes again. */
+static int ikc_given_verdict(const ikc_robot *rb, int j, const int *verdict, const int *line,
+                             const double *Q0, const double *S, const int *tangent, const int *root) {
+    const int dof = rb->dof;
+    for (int k = 0; k < j; k++) {
+        if (verdict[k] == -3 || !line[k] || tangent[k] != tangent[j] || root[k] != root[j]) continue;
+        int same = 1;
+        for (int c = 0; c < dof && same; c++) same = S[k * dof + c] == S[j * dof + c];
+        if (!same) continue;
+        if (tangent[j])
+            same = ikc_row_distance(rb, Q0 + k * dof, Q0 + j * dof) <= IKC_SPLIT_ROOT;
+        else
+            for (int c = 0; c < dof && same; c++) same = Q0[k * dof + c] == Q0[j * dof + c];
+        if (same) return k;
+    }
+    return -1;
 }
 
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
@@ -803,10 +918,11 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     /* the leaves of every other representative (RQ, RE, RF: rep r at r - 1), kept for the polish */
     double RQ[(IKC_REPS - 1) * L * dof], RE[(IKC_REPS - 1) * L], B[L * dof], EB[L], Q0[L * dof], E0[L],
         S[L * dof];
-    int RF[(IKC_REPS - 1) * L], line[L];
+    int RF[(IKC_REPS - 1) * L], line[L], F0[L];
     for (int j = 0; j < n; j++) {  /* best variant so far, inside the limits (none yet: EB = inf) */
         for (int c = 0; c < dof; c++) B[j * dof + c] = Q0[j * dof + c] = Q[j * dof + c];
         E0[j] = E[j];
+        F0[j] = F[j];
         EB[j] = (!limits || ikc_row_inside(rb, Q + j * dof)) ? E[j] : INFINITY;
         /* a candidate straight line: exact at rep = 0, or a tangent root there (its slopes come from the
          * first other rep) */
@@ -843,13 +959,22 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
     }
     /* A tangent line shown to miss the limits has no solution: decided before its representatives are
      * polished (docs/design.md section 6: each polish is 8 Newton steps, moot there). */
-    int verdict[L];  /* ikc_line_verdict of a tangent line (its t in VT), or -3 where not yet asked */
+    int verdict[L];  /* ikc_line_verdict of a line (its t in VT), or -3 where not yet asked */
+    int tangent[L], root[L];
     double VT[L];
     for (int j = 0; j < n; j++) {
         verdict[j] = -3;
         VT[j] = 0.0;
-        if (line[j] && !(E0[j] <= exact_tol)) {
-            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, VT + j);
+        tangent[j] = !(E0[j] <= exact_tol);
+        root[j] = (F0[j] & IKC_TANGENT_ROOT) != 0;
+    }
+    for (int j = 0; j < n; j++) {
+        if (line[j] && tangent[j]) {
+            const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+            if (k >= 0)
+                verdict[j] = verdict[k], VT[j] = VT[k];
+            else
+                verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, 0, VT + j);
             if (verdict[j] == 0) F[j] |= IKC_EMPTY;
         }
     }
@@ -884,8 +1009,17 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         const int lock = F[j] & IKC_LOCK;  /* exact or not, a lock needs its line */
         if (!lock && E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;
         double t = VT[j];
-        const int found = verdict[j] != -3 ? verdict[j]
-                          : line[j] ? ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, &t) : -2;
+        int found = -2;
+        if (verdict[j] != -3) {
+            found = verdict[j];
+        } else if (line[j]) {
+            const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+            if (k >= 0)
+                found = verdict[k], t = VT[k];
+            else
+                found = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, root[j], &t);
+            verdict[j] = found, VT[j] = t;
+        }
         if (found != -2) {
             if (found == 0) {  /* the whole self-motion lies outside the limits: no solution here */
                 F[j] |= IKC_EMPTY;

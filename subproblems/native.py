@@ -16,7 +16,8 @@ The finish is compiled once per machine into its own cached shared library and e
 against it (:func:`build`; docs/design.md, section 14): a new robot costs only its chain's build.
 
 Settings (environment): ``IKC_NATIVE=0`` disables the native backend; ``IKC_CACHE`` names the cache
-directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); ``CC`` the compiler.
+directory (default ``$XDG_CACHE_HOME/ikcompiler`` or ``~/.cache/ikcompiler``); ``CC`` the compiler;
+``IKC_SIMD=0`` leaves out the processor's flags (:func:`machine_flags`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import ctypes
 import functools
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
 import tempfile
@@ -32,11 +34,13 @@ from pathlib import Path
 
 # -ffp-contract=off: no fused multiply-adds, so C rounds like the Python path; -fno-math-errno lets
 # sqrt inline (errno is never read).  No -ffast-math: NaN and infinity checks must keep working.
-FLAGS = ("-O2", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
+# -O3: 2-4% fewer instructions in the finish, the same bits (docs/design.md section 14, "Compiler
+# flags"); the finish is compiled once per machine, so its compile time does not count.
+FLAGS = ("-O3", "-std=c99", "-ffp-contract=off", "-fno-math-errno", "-fPIC", "-shared", "-pthread")
 # A chain alone, against the shared finish (split build, below), without the second (post register
 # allocation) instruction scheduling: 10% of the compiler's instructions on puma560's chain, no
 # measured cost in batch time on this out-of-order CPU, the same bits (docs/design.md section 14).
-CHAIN_FLAGS = FLAGS + ("-fno-schedule-insns2",)
+CHAIN_FLAGS = ("-O2",) + FLAGS[1:] + ("-fno-schedule-insns2",)
 # A function of a chain that runs rarely (the plan's alternative chain: only where the chain cannot
 # settle a target) is declared COLD: GCC compiles it at -O1 and as cold code, 7% of the compiler's
 # instructions on puma560's chain (docs/design.md section 14).  The rounding is the same at every -O
@@ -79,6 +83,32 @@ def cache_dir() -> Path:
         return Path(env)
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "ikcompiler"
+
+
+def machine_flags() -> tuple[str, ...]:
+    """Flags for this machine's processor, added to every build (and so to every cache key: a library
+    built with them is never found by a machine without them): ``-mavx2`` on an x86-64 processor with
+    AVX2 (read from /proc/cpuinfo; elsewhere none).  AVX2 without FMA changes no rounding (each vector
+    lane is the scalar IEEE operation, and -ffp-contract=off forbids contraction): the same bits, with
+    the arithmetic of a chain in 3-operand and 4-wide instructions (docs/design.md section 14,
+    "Compiler flags").  ``IKC_SIMD=0`` in the environment leaves them out."""
+    if os.environ.get("IKC_SIMD", "1").strip().lower() in ("0", "false", "no", "off"):
+        return ()
+    return _cpu_flags()
+
+
+@functools.lru_cache(maxsize=1)
+def _cpu_flags() -> tuple[str, ...]:
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return ()
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("flags"):
+                    return ("-mavx2",) if "avx2" in line.split() else ()
+    except OSError:
+        pass
+    return ()
 
 
 @functools.lru_cache(maxsize=8)
@@ -171,11 +201,12 @@ def _chain_prelude() -> str:
     return kernels_source() + "\n" + "\n".join(lines) + "\n"
 
 
-def _finish_library(cc: str, cc_id: str, directory: Path) -> Path | None:
+def _finish_library(cc: str, cc_id: str, directory: Path, machine: tuple[str, ...] = ()) -> Path | None:
     """The cached shared finish library (built on first use), or None when the split build fails."""
     text = _finish_library_source()
-    target = directory / f"ikc_finish_{_key(text, cc_id, ' '.join(FLAGS))}.so"
-    return target if _compile(cc, FLAGS, text, target) else None
+    flags = FLAGS + machine
+    target = directory / f"ikc_finish_{_key(text, cc_id, ' '.join(flags))}.so"
+    return target if _compile(cc, flags, text, target) else None
 
 
 def build(source: str, *, include_kernels: bool = True) -> Path | None:
@@ -183,7 +214,16 @@ def build(source: str, *, include_kernels: bool = True) -> Path | None:
 
     With the kernels, the chain is built alone against the shared finish library (compiled once);
     where that split build fails (a compiler without ``__typeof__`` or symbol aliases) the whole text
-    is compiled in one piece, as before."""
+    is compiled in one piece, as before.  Every build has :func:`machine_flags`; a compiler that
+    refuses them builds without."""
+    machine = machine_flags()
+    path = _build(source, include_kernels, machine)
+    if path is None and machine:
+        path = _build(source, include_kernels, ())
+    return path
+
+
+def _build(source: str, include_kernels: bool, machine: tuple[str, ...]) -> Path | None:
     global last_error
     cc = compiler()
     if cc is None:
@@ -201,15 +241,17 @@ def build(source: str, *, include_kernels: bool = True) -> Path | None:
         last_error = f"cannot create a cache directory ({exc}); set IKC_CACHE to a writable one"
         return None
     if include_kernels:
-        finish = _finish_library(cc, cc_id, directory)
+        finish = _finish_library(cc, cc_id, directory, machine)
         if finish is not None:
             text = _chain_prelude() + source
-            target = directory / f"ikc_{_key(text, cc_id, ' '.join(CHAIN_FLAGS), str(finish))}.so"
-            if _compile(cc, CHAIN_FLAGS, text, target, extra=(str(finish),)):
+            flags = CHAIN_FLAGS + machine
+            target = directory / f"ikc_{_key(text, cc_id, ' '.join(flags), str(finish))}.so"
+            if _compile(cc, flags, text, target, extra=(str(finish),)):
                 return target
     text = (kernels + "\n" if include_kernels else "") + source
-    target = directory / f"ikc_{_key(text, cc_id, ' '.join(FLAGS))}.so"
-    return target if _compile(cc, FLAGS, text, target) else None
+    flags = FLAGS + machine
+    target = directory / f"ikc_{_key(text, cc_id, ' '.join(flags))}.so"
+    return target if _compile(cc, flags, text, target) else None
 
 
 def load(source: str) -> ctypes.CDLL | None:

@@ -82,8 +82,21 @@ def gauss_newton_step(J, e, hold=(), damping=NEWTON_DAMPING, cutoff=None):
     col = np.maximum(np.linalg.norm(J, axis=1), TINY)
     Js = J / col[:, None, :]
     if cutoff is not None:
-        U, S, Vt = np.linalg.svd(Js, full_matrices=False)
-        inv = np.where(S > cutoff * S[:, :1], 1.0 / np.maximum(S, TINY), 0.0)
-        return np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e)) / col
+        # Only the columns that move the tool: the SVD of a zero column (a held one) gives its entries
+        # of V a roundoff of ~1e-17, not 0, which the division by its TINY norm turned into a step of
+        # ~1e290 rad on the free joint, an overflow in the next step's Jacobian (pr2.urdf perturbed by
+        # 1e-6; docs/design.md section 5, "Snapping").
+        live = ~(col <= TINY)
+        dq = np.zeros(col.shape)
+        for pattern in np.unique(live, axis=0):
+            rows = np.nonzero((live == pattern).all(axis=1))[0]
+            cols = np.nonzero(pattern)[0]
+            if not len(cols):
+                continue
+            U, S, Vt = np.linalg.svd(Js[np.ix_(rows, np.arange(Js.shape[1]), cols)], full_matrices=False)
+            inv = np.where(S > cutoff * S[:, :1], 1.0 / np.maximum(S, TINY), 0.0)
+            step = np.einsum("mji,mj->mi", Vt, inv * np.einsum("mkj,mk->mj", U, e[rows]))
+            dq[np.ix_(rows, cols)] = step / col[np.ix_(rows, cols)]
+        return dq
     JtJ = np.einsum("mki,mkj->mij", Js, Js) + damping * np.eye(Js.shape[2])
     return np.linalg.solve(JtJ, np.einsum("mki,mk->mi", Js, e)[..., None])[..., 0] / col

@@ -287,6 +287,7 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
     exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
     same = 1e-9 * (rb.scale if rb.scale > 1.0 else 1.0)
     kept_rows, inexact, err, W = [], {}, {}, {}
+    polished = {}  # k -> (row, error) after the Newton steps
     family_any = family_exact = False
     for k, flag in enumerate(F):
         if flag & _fk.EMPTY:
@@ -298,9 +299,15 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
             return FAMILY_MISS if flag & _fk.FAMILY else PYTHON
         w = list(Q[k])
         if exact_tol < err[k] < near:
-            err[k] = newton_steps(rb, g, w, 15)
+            # a copy of a leaf polished already (equal values and error: a tangent root's) takes its polish
+            before = next((b for b in polished if E[b] == E[k] and list(Q[b]) == w), None)
+            if before is not None:
+                w, err[k] = list(polished[before][0]), polished[before][1]
+            else:
+                err[k] = newton_steps(rb, g, w, 15)
             if err[k] != err[k]:
                 return PYTHON
+            polished[k] = (list(w), err[k])
             same = SPLIT_ROOT
         if flag & _fk.TANGENT_ROOT:
             same = SPLIT_ROOT
@@ -424,28 +431,50 @@ def joint_step(rb: FinishRobot, j: int, a: float, b: float) -> float:
     return wrap(a - b) if rb.revolute[j] else a - b
 
 
-def line_alone(rb: FinishRobot, q0, s) -> bool:
-    """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3."""
+def line_alone(rb: FinishRobot, q0, s, g=None) -> bool:
+    """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3.  With ``g`` (the goal; a
+    line whose leaves are a tangent root, exact there), a point with a second null direction counts
+    where that direction is a double root's (:func:`tangent_line_alone` at the point)."""
     if not any(x != 0.0 for x in s):
         return False
     for t in (0.0, TWO_PI / 3.0, -1.0 * TWO_PI / 3.0):
         q = [q0[j] + s[j] * t for j in range(rb.dof)]
-        if not two_weakest(rb, q)[1] >= LINE_RANK:
+        if not two_weakest(rb, q)[1] >= LINE_RANK and not (g is not None and tangent_line_alone(rb, g, q, s)):
             return False
     return True
+
+
+def _null_across(rb: FinishRobot, col, V, f):
+    """The unit null vector (of the two weakest, V's first columns) least along the unit f, made
+    orthogonal to it, and its squared length before that (ikc_null_across)."""
+    m = len(col)
+    n, best = None, 0.0
+    for v in range(2):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        w = [V[a][v] - d * f[a] for a in range(m)]
+        length = 0.0
+        for a in range(m):
+            length += w[a] * w[a]
+        if length > best:
+            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    return n, best
+
+
+def _joint_inside(rb: FinishRobot, j: int, x: float, slack: float, slide_slack: float) -> bool:
+    """Whether value x of joint j (or an alias) lies inside its limits widened by the slack."""
+    sl = slack if rb.revolute[j] else slide_slack
+    lo, hi = rb.lower[j] - sl, rb.upper[j] + sl
+    if rb.revolute[j]:
+        if hi - lo >= TWO_PI:
+            return True
+        x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
+    return lo <= x <= hi
 
 
 def line_inside(rb: FinishRobot, q0, s, t: float, slack: float, slide_slack: float) -> bool:
-    for j in range(rb.dof):
-        sl = slack if rb.revolute[j] else slide_slack
-        x, lo, hi = q0[j] + s[j] * t, rb.lower[j] - sl, rb.upper[j] + sl
-        if rb.revolute[j]:
-            if hi - lo >= TWO_PI:
-                continue
-            x = lo + math.fmod(math.fmod(x - lo, TWO_PI) + TWO_PI, TWO_PI)
-        if not (lo <= x <= hi):
-            return False
-    return True
+    return all(_joint_inside(rb, j, q0[j] + s[j] * t, slack, slide_slack) for j in range(rb.dof))
 
 
 def line_in_limits(rb: FinishRobot, q0, s, slack: float, slide_slack: float):
@@ -482,6 +511,9 @@ def line_in_limits(rb: FinishRobot, q0, s, slack: float, slide_slack: float):
 
 TANGENT_MARGIN = 1e-3  # IKC_TANGENT_MARGIN
 TANGENT_PROBE = 1e-3  # IKC_TANGENT_PROBE
+# IKC_TANGENT_PROBE_STEPS: Newton steps from a probe; a double root's halve the distance each, and 4
+# halvings bring it inside the tenth of the probe that the test asks (8: a margin of 16)
+TANGENT_PROBE_STEPS = 8
 
 
 def row_distance(rb: FinishRobot, x, y) -> float:
@@ -517,17 +549,7 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
     if not fn > 0.0:
         return False
     f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
-    n, best = None, 0.0
-    for v in range(2):
-        d = 0.0
-        for a in range(m):
-            d += V[a][v] * f[a]
-        w = [V[a][v] - d * f[a] for a in range(m)]
-        length = 0.0
-        for a in range(m):
-            length += w[a] * w[a]
-        if length > best:
-            best, n = length, [w[a] / math.sqrt(length) for a in range(m)]
+    n, best = _null_across(rb, col, V, f)
     if not best > 0.25:
         return False
     for side in (-1, 1):
@@ -535,7 +557,7 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
         for a in range(m):
             u = 1.0 if rb.revolute[col[a]] else rb.scale
             x[col[a]] += side * TANGENT_PROBE * n[a] * u
-        newton_steps(rb, g, x, 15)
+        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
         d, along = [], 0.0
         for a in range(m):
             u = 1.0 if rb.revolute[col[a]] else rb.scale
@@ -555,19 +577,90 @@ def _plain_family(flag) -> bool:
     return bool(flag & _fk.FAMILY) and not flag & (_fk.DEFER | _fk.EMPTY)
 
 
-def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool):
+PLANE_PROBE = 0.5  # IKC_PLANE_PROBE: the step along a plane's second direction (radians, or over the size)
+PLANE_FIXED = 1e-6  # IKC_PLANE_FIXED: a joint neither direction of the plane moves (unit direction)
+
+
+def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) -> bool:
+    """Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone
+    of which a joint that neither of its directions moves lies outside its limits: the Jacobian's null
+    space at p0 has exactly two directions, the line's f and n; the points p0 +- PLANE_PROBE n are
+    exact (a sheet of solutions: Newton keeps them off the line, where a double root's would come
+    back), keep that joint's value and have two null directions again.  Near each of those points the
+    solutions are that sheet, so the self-motion keeps the joint where it misses its limits: no
+    solution (ikc_plane_misses)."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 3 or not (lam[1] < floor and lam[2] >= floor):
+        return False
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    n, best = _null_across(rb, col, V, f)
+    if not best > 0.25:
+        return False
+    out = [a for a in range(m) if abs(f[a]) <= PLANE_FIXED and abs(n[a]) <= PLANE_FIXED
+           and not _joint_inside(rb, col[a], p0[col[a]], slack, slide_slack)]
+    if not out:
+        return False
+    exact = rb.tol * rb.scale
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * PLANE_PROBE * n[a] * u
+        if not newton_steps(rb, g, x, 15) <= exact:
+            return False
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) >= 0.5 * PLANE_PROBE:
+            return False  # back towards the line: no sheet
+        for a in out:
+            if not abs(d[a]) <= LINE_FIT:
+                return False
+        _, lam_x, _ = jtj_eigen(rb, x)
+        if not (lam_x[1] < floor and lam_x[2] >= floor):
+            return False
+    return True
+
+
+def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
-    a line alone (a tangent line: its exact point near q0 is found first), else :func:`line_in_limits`'s
-    0, 1 or -1 (ikc_line_verdict)."""
+    a line alone (a tangent line: its exact point near q0 is found first; ``root``: an exact line whose
+    leaves are flagged a tangent root, see :func:`line_alone`), else :func:`line_in_limits`'s 0, 1 or -1
+    (ikc_line_verdict)."""
     p0 = list(q0)
     if tangent and not (newton_steps(rb, g, p0, 15) <= rb.tol * rb.scale
                         and row_distance(rb, p0, q0) <= TANGENT_MARGIN):
         return -2, 0.0
-    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s)):
-        return -2, 0.0
     slack = TANGENT_MARGIN if tangent else LIMIT_EPS
+    if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
+        # not a line alone: a plane alone that misses the limits has no solution either
+        return (0 if plane_misses(rb, g, p0, s, slack, slack * rb.scale if tangent else slack) else -2), 0.0
     found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
     return found, (0.0 if t is None else t)
+
+
+def _given_verdict(rb: FinishRobot, verdict, j, line, Q0, S, tangent, root):
+    """The verdict already given to an earlier leaf of the same line: the same test and slopes, and leaf
+    values equal (a tangent line's: within SPLIT_ROOT, where the finish takes two copies of a tangent
+    root for one solution).  :func:`line_verdict` depends on those alone, and a double root's split
+    copies would each pay for its Newton steps and probes again (ikc_given_verdict); or None."""
+    for k in range(j):
+        if k in verdict and line[k] and tangent[k] == tangent[j] and root[k] == root[j] and S[k] == S[j] \
+                and (row_distance(rb, Q0[k], Q0[j]) <= SPLIT_ROOT if tangent[j] else Q0[k] == Q0[j]):
+            return verdict[k]
+    return None
 
 
 def _reps():
@@ -594,7 +687,7 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     Q0 = [list(row) for row in Q]
     B = [list(row) for row in Q]
     EB = [E[j] if (not limits or row_inside(rb, Q[j])) else math.inf for j in range(n)]
-    E0 = list(E)
+    E0, F0 = list(E), list(F)
     line = [limits and _plain_family(F[j])
             and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
@@ -624,9 +717,12 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                 line[j] = fits
     # a tangent line shown to miss the limits has no solution: decided before the polish (moot there)
     verdict = {}
+    tangent = [not E0[j] <= exact_tol for j in range(n)]
+    root = [bool(F0[j] & _fk.TANGENT_ROOT) for j in range(n)]
     for j in range(n):
-        if line[j] and not E0[j] <= exact_tol:
-            verdict[j] = line_verdict(rb, g, Q0[j], S[j], True)
+        if line[j] and tangent[j]:
+            verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+                or line_verdict(rb, g, Q0[j], S[j], True)
             if verdict[j][0] == 0:
                 F[j] |= _fk.EMPTY
     for r, _rep in _reps():
@@ -653,8 +749,11 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
             continue
         if j in verdict:
             found, t = verdict[j]
+        elif line[j]:
+            found, t = verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+                or line_verdict(rb, g, Q0[j], S[j], False, root[j])
         else:
-            found, t = line_verdict(rb, g, Q0[j], S[j], False) if line[j] else (-2, 0.0)
+            found, t = -2, 0.0
         if found != -2:
             if found == 0:
                 F[j] |= _fk.EMPTY

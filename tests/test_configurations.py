@@ -98,3 +98,28 @@ def test_zoo_sample_compiles_and_verifies(kinds, geometry, seed):
         assert rep.wrong == 0 and rep.batch_mismatch == 0, text
         if not redundant:
             assert rep.recovered == rep.poses - rep.self_motion, text
+
+
+def test_a_gimbal_family_fixed_by_the_position_gives_every_point():
+    # modular TRRRT (seed 0): q2 and q4 turn about parallel axes, q3 about one across them.  At q3 = pi
+    # the O-RRR wrist locks (only q2 - q4 is fixed by the rotation); the two slides cannot follow the
+    # circle the lock family draws, so the position picks two isolated points of it.  The chain's
+    # representative was one of them, returned flagged a self-motion at sigma_min 0.05, and the
+    # sampled vector (the other) was missing (reference.resolved_families).
+    chain = configs.modular_chain("TRRRT", seed=0, geometry="modular")
+    module = configs.compile_chain(chain).module
+    Q = np.array([[-0.027901, np.pi, np.pi, 0.0, -0.142612], [0.134874, np.pi, np.pi, 0.0, 0.281955]])
+    S, filled, ls, _, cont = module.solve_batch_info(chain.fk_batch(Q))
+    for n, q in enumerate(Q):
+        valid = filled[n] & ~ls[n]
+        rows = S[n][valid]
+        gap = np.abs(np.angle(np.exp(1j * (rows - q))))
+        gap[:, [0, 4]] = np.abs(rows - q)[:, [0, 4]]  # the slides
+        assert gap.max(axis=1).min() < 1e-9, (q, rows)
+        assert len(rows) >= 2 and not cont[n][valid].any(), (rows, cont[n][valid])  # isolated points
+        single = module.solve_info(chain.fk(q))
+        assert len(single.q) == len(rows) and not np.any(single.continuum)
+        G = chain.fk_batch(rows)
+        T = chain.fk(q)
+        assert np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1).max() <= 1e-12 * chain.scale
+        assert np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)).max() <= 1e-12

@@ -270,6 +270,8 @@ def test_a_free_joint_at_either_end_leaves_a_general_6r_problem(free):
     chain = _random_7r(3)
     module = compile_robot(chain, free=(free,))
     assert module.METHOD == "general-6r" and module.FREE_JOINTS == (free,)
+    eliminated = [f"j{i}" for i in range(1, 8) if f"j{i}" != free]
+    assert f"G6R in ({', '.join(eliminated)})" in module.PLAN  # the explain line names the six solved joints
     Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(25, 7))
     T = chain.fk_batch(Q)
     k = chain.independent_names.index(free)

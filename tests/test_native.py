@@ -461,6 +461,61 @@ def test_the_cold_alternative_chain_gives_the_answers_of_o2(name, monkeypatch, t
             assert np.array_equal(x, y, equal_nan=True)
 
 
+@pytest.mark.parametrize("name", ["puma560", "ur5", "prob"])
+def test_the_build_flags_give_the_answers_of_plain_o2(name, monkeypatch, tmp_path):
+    """The finish at -O3 and every build with the processor's flags (native.machine_flags: -mavx2 where
+    the CPU has AVX2; docs/design.md section 14, "Compiler flags") give the rows of the plain -O2 build
+    bit for bit, limits on and off, on poses of which a third of the joint values are special."""
+    module, chain, split = _compiled(name)
+    assert split is not None
+    source = csource.native_source(vars(module))
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    shape = dict(dof=len(module.JOINT_TYPES), slots=module.MAX_SOLUTIONS, nfree=0, target="pose")
+    monkeypatch.setattr(native, "_loaded", {})
+    now = native.bind(source, **shape)
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "FLAGS", ("-O2",) + native.FLAGS[1:])
+    monkeypatch.setenv("IKC_SIMD", "0")
+    plain = native.bind(source, **shape)
+    assert now is not None and plain is not None, native.last_error
+    assert len(list(tmp_path.glob("ikc_finish_*.so"))) == 2  # two finish libraries: the flags differ
+    _, Ts, _ = _poses(module, chain, 400, seed=29, special=0.35)
+    for limits in (True, False):
+        a, b = now.many(Ts, np.zeros((len(Ts), 0)), limits), plain.many(Ts, np.zeros((len(Ts), 0)), limits)
+        for x, y in zip([*a[0], a[1]], [*b[0], b[1]]):
+            assert np.array_equal(x, y, equal_nan=True)
+
+
+def test_machine_flags_are_the_processors_and_can_be_left_out(monkeypatch):
+    monkeypatch.delenv("IKC_SIMD", raising=False)
+    flags = native.machine_flags()
+    assert flags in ((), ("-mavx2",))
+    try:
+        text = open("/proc/cpuinfo").read()
+    except OSError:
+        text = ""
+    has_avx2 = any(line.startswith("flags") and "avx2" in line.split() for line in text.splitlines())
+    assert (flags == ("-mavx2",)) == (has_avx2 and native.platform.machine().lower() in ("x86_64", "amd64"))
+    monkeypatch.setenv("IKC_SIMD", "0")
+    assert native.machine_flags() == ()
+
+
+def test_a_compiler_refusing_the_machine_flags_builds_without_them(monkeypatch, tmp_path):
+    """native.build retries without machine_flags when the compiler rejects them."""
+    module, _, split = _compiled("puma560")
+    assert split is not None
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.delenv("IKC_SIMD", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "_cpu_flags", lambda: ("-mno-such-flag-ikc",))
+    path = native.build(csource.native_source(vars(module)))
+    assert path is not None, native.last_error
+    keys = {p.name for p in tmp_path.glob("ikc_*.so")}
+    assert len(keys) == 2  # the finish and the chain, both built without the refused flag
+
+
 # --- 7. the generated C --------------------------------------------------------------------------------
 
 

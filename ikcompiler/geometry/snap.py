@@ -12,16 +12,21 @@ Rules, in chain order:
   revolute axis takes that axis's direction (sign kept);
 * points: each maximal run of three or more consecutive revolute axes that nearly meet in one point is
   moved to pass exactly through their least-squares common point (each axis keeps its direction and
-  moves perpendicularly to it); then each other consecutive pair that nearly meets has one axis (not
-  in such a run) shifted parallel to itself through the other axis's nearest point.
+  moves perpendicularly to it); two runs may share an axis (an elbow and a wrist point on one forearm
+  axis): the later run's point is then taken on the shared axis, which stays put; then each other
+  consecutive pair that nearly meets has one axis (not in such a run) shifted parallel to itself
+  through the other axis's nearest point.
 """
 
 from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from ikcompiler.geometry.relations import Tolerance, lines_meet, parallel_miss, twist_line
 from ikcompiler.model import Chain, Joint
+from subproblems import tolerances
 from subproblems.screw import prismatic_twist, revolute_twist
 
 ROUNDS = 4  # snapping rounds at most (each round only moves relations within the snap tolerance)
@@ -81,7 +86,7 @@ def _snap_once(chain: Chain, tol: Tolerance, run_factor: float = 1.0) -> tuple[C
                 dirs[i] = dirs[k] * (1.0 if dirs[i] @ dirs[k] > 0 else -1.0)
                 notes.append(f"{names[i]} snapped parallel to {names[k]} (missed by {miss:.1e} rad)")
                 break
-    run_of = [-1] * chain.n  # which snapped run of three or more concurrent axes a joint belongs to
+    runs: list[list[int]] = []  # snapped runs of three or more concurrent axes
     i = 0
     while i < chain.n:
         run = [i]
@@ -91,31 +96,42 @@ def _snap_once(chain: Chain, tol: Tolerance, run_factor: float = 1.0) -> tuple[C
             if x is None or miss > run_factor * tol.snap:
                 break
             run = cand
-        if len(run) >= 3:
-            x, miss = lines_meet([(dirs[j], points[j]) for j in run], chain.scale)
-            for j in run:
-                run_of[j] = run[0]
+        if len(run) < 3:
+            i += 1
+            continue
+        # Runs may share their end axis (pr2's arm: upper-arm roll, elbow and forearm roll meet at the
+        # elbow; forearm roll, wrist flex and roll at the wrist).  The shared axis already passes
+        # through the earlier run's point: this run's point is taken on it and the axis stays put, so
+        # that both relations hold on the snapped robot.  Before, the second run was never looked at:
+        # pr2.urdf perturbed by 1e-6 kept a wrist that missed one point by 3.4e-7, the planner took it
+        # for spherical, and one wrist branch of every arm branch was lost (117 of 230 poses recovered).
+        shared = [j for j in run if any(j in r for r in runs)]
+        x, miss = _run_point(run, shared, dirs, points, chain.scale)
+        if x is not None and miss <= run_factor * tol.snap:
+            runs.append(run)
             if miss > tol.exact:
                 for j in run:
-                    points[j] = x
+                    if j not in shared:
+                        points[j] = x
                 notes.append(
                     f"axes of {', '.join(names[j] for j in run)} snapped to meet at one point "
                     f"(missed by {miss:.1e} of the robot's size)"
                 )
-        # a run of three or more is done; a shorter one may end where the next run starts (j3 meets
-        # j4, and j4, j5, j6 form the wrist): try again from the next joint
-        i = run[-1] + 1 if len(run) >= 3 else i + 1
+        # the next run may start at this run's last axis (a shorter one may end there too: j3 meets
+        # j4, and j4, j5, j6 form the wrist)
+        i = run[-1]
     # Consecutive pairs that nearly meet outside such runs (UR-type wrists: 4-5 and 5-6 meet, not all
     # three): shift one axis (one not in a snapped run) parallel to itself through the other's point.
+    in_run = [any(j in r for r in runs) for j in range(chain.n)]
     for i in range(chain.n - 1):
         j = i + 1
-        if chain.joints[i].kind != "R" or chain.joints[j].kind != "R" or run_of[i] == run_of[j] != -1:
+        if chain.joints[i].kind != "R" or chain.joints[j].kind != "R" or any(i in r and j in r for r in runs):
             continue
         x, miss = lines_meet([(dirs[i], points[i]), (dirs[j], points[j])], chain.scale)
         if x is None or not tol.exact < miss <= tol.snap:
             continue
-        mover, keeper = (j, i) if run_of[j] == -1 else (i, j)
-        if run_of[mover] != -1:
+        mover, keeper = (j, i) if not in_run[j] else (i, j)
+        if in_run[mover]:
             continue
         d, r = dirs[keeper], points[keeper]
         points[mover] = r + d * float(d @ (x - r))
@@ -129,6 +145,29 @@ def _snap_once(chain: Chain, tol: Tolerance, run_factor: float = 1.0) -> tuple[C
         for j, d, p in zip(chain.joints, dirs, points)
     )
     return dataclasses.replace(chain, joints=joints), notes
+
+
+def _run_point(run, shared, dirs, points, scale):
+    """The common point of a run of concurrent axes and the largest distance of an axis to it (/scale):
+    the least-squares point of all the run's lines, or, when some axes are ``shared`` with an earlier
+    run (they already pass through its point and must not move), the point on the shared axis nearest
+    the other lines in the least-squares sense.  (None, inf) where it is not unique."""
+    lines = [(dirs[j], points[j]) for j in run]
+    if not shared:
+        return lines_meet(lines, scale)
+    d, r = dirs[shared[0]], points[shared[0]]
+    a = b = 0.0
+    for j in run:
+        if j in shared:
+            continue
+        P = np.eye(3) - np.outer(dirs[j], dirs[j])
+        a += float((P @ d) @ (P @ d))
+        b += float((P @ d) @ (P @ (r - points[j])))
+    if a * tolerances.LINES_MEET_CONDITION <= 1.0:  # the others (nearly) parallel to the shared axis
+        return None, np.inf
+    x = r - d * (b / a)
+    miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - p))) for w, p in lines)
+    return x, miss / scale
 
 
 __all__ = ["REDUCED_RUN_FACTOR", "ROUNDS", "snap_chain", "twist_line"]

@@ -196,6 +196,8 @@ class Solver:
         """(q, residual, ls, continuum) of one target, exact rows first; with ``exact_only`` just the
         exact rows' q (``solve``'s answer)."""
         found = self._rows(T, free, limits, exact_only)
+        if self.robot.free:
+            found = _unpack(self._free_as_given(_packed(found, exact_only), free, limits), exact_only)
         if exact_only or not self.flags_rows():
             return found
         q, res, ls, cont = found
@@ -266,7 +268,7 @@ class Solver:
         the joint limits LOWER..UPPER are left out (a revolute value counts in any 2 pi representation).
         """
         Q, *rest = self._batch(Ts, self._free_in(free), limits, chunk, flags=True)
-        return (self._out(Q), *rest)
+        return (self._out(Q, free), *rest)
 
     def _batch(self, Ts, free, limits, chunk=CHUNK, flags=True):
         """solve_batch_info in the values the chain solves for (see :meth:`_out`); ``flags`` False skips
@@ -288,6 +290,8 @@ class Solver:
                                              reasons[i:i + chunk])
                      for i in range(0, len(goals), chunk)]
             done = _joined(parts) if parts else self._empty()
+        if self.robot.free:
+            done = self._free_as_given(done, free, limits)
         if flags and self.flags_rows():
             Q, valid, ls, res, cont = done
             goals = (checked or targets.check_targets(self.robot, Ts))[0]
@@ -298,6 +302,25 @@ class Solver:
                 cont[rows] |= self.row_flags(Q[rows], ~ls[rows], goals[rows[0]])
             done = (Q, valid, ls, res, cont)
         return done
+
+    def _free_as_given(self, parts, free, limits):
+        """Rows (Q, valid, ls, res, cont) of N targets with each free joint's column set to the value the
+        user gave, not to the 2 pi alias the finish represents it by: a free value is a command, as given
+        (docs/design.md section 5, "Redundant robots"; pr2's upper-arm roll at -3.22, inside its limits
+        [-3.9, 0.8], came back as 3.06, outside them).  With ``limits`` a target whose given free value
+        lies outside its joint's limits has no valid row (solve_info names the joint among the excluded)."""
+        r = self.robot
+        Q, valid, ls, res, cont = parts
+        if not len(Q):
+            return parts
+        given = targets.free_columns(r, targets.initial_values(r, len(Q), free))  # (N, n_free)
+        Q = np.array(Q)
+        pos = list(r.free)
+        Q[:, :, pos] = np.where(valid[:, :, None], given[:, None, :], Q[:, :, pos])
+        if limits:
+            inside = ((given >= r.lower[pos]) & (given <= r.upper[pos])).all(axis=1)
+            valid = valid & inside[:, None]
+        return Q, valid, ls, res, cont
 
     def _native_batch(self, Ts, free, limits):
         """solve_batch_info on the C chain (it checks the targets itself), or None when there is none or
@@ -349,7 +372,7 @@ class Solver:
     def solve_batch(self, Ts, *free, limits=True):
         """Exact solutions of N targets: Q (N, K, n) and valid (N, K)."""
         Q, valid, ls, _, _ = self._batch(Ts, self._free_in(free), limits, flags=False)
-        return self._out(Q), valid & ~ls
+        return self._out(Q, free), valid & ~ls
 
     # -- the public API of one target -------------------------------------------------------------
 
@@ -368,7 +391,7 @@ class Solver:
             q_seed, weights = self._seed_in(q_seed, weights)
             q = selection.select(self.robot, q, np.ones(len(q), dtype=bool), limits, aliases, q_seed,
                                  weights)[0]
-        return self._out(q)
+        return self._out(q, free)
 
     def solve_info(self, T, *free, limits=True, aliases=False, q_seed=None, weights=None):
         """Every candidate of one target with residuals and flags: a SolveInfo.
@@ -379,11 +402,12 @@ class Solver:
         leave out, each with the joints outside their limits.  ``aliases`` and ``q_seed`` / ``weights`` as
         in ``solve``.
         """
-        free = self._free_in(free)
+        given, free = free, self._free_in(free)
         found = self.rows(T, free, limits)
         unlimited = self.rows(T, free, False) if limits else None
         q_seed, weights = self._seed_in(q_seed, weights)
-        return self._info_out(selection.info(self.robot, found, unlimited, limits, aliases, q_seed, weights))
+        return self._info_out(selection.info(self.robot, found, unlimited, limits, aliases, q_seed, weights),
+                              given)
 
     def nearest(self, T, q_seed, *free, limits=True, aliases=True, weights=None):
         """The exact solution closest to q_seed (see solve), or None when there is none.
@@ -403,10 +427,21 @@ class Solver:
     # -- folded slides: the chain solves for speed * q, the API takes and returns q -----------------
     # (ikcompiler/model/fold.py; docs/design.md section 2).  Without folded slides these are identities.
 
-    def _out(self, Q):
-        """Rows (..., n) solved for, as returned: each folded slide's value over its speed."""
+    def _out(self, Q, given=()):
+        """Rows (..., n) solved for, as returned: each folded slide's value over its speed.  ``given``:
+        the free values as the user gave them; a free slide's column that holds the given value (times
+        its speed, _free_as_given) returns it bit for bit (f * s / s need not be f)."""
         sp = self.robot.speed
-        return Q if sp is None else Q / sp
+        if sp is None:
+            return Q
+        out = Q / sp
+        if len(given) == len(self.robot.free):
+            for f, p in zip(given, self.robot.free):
+                if sp[p] != 1.0:
+                    f = np.asarray(f, dtype=float)
+                    f = f.reshape(f.shape + (1,) * (Q.ndim - 1 - f.ndim))  # (N,) -> (N, 1) for (N, K, n)
+                    out[..., p] = np.where(Q[..., p] == f * sp[p], f, out[..., p])
+        return out
 
     def _free_in(self, free):
         """Free joint values as the chain solves for them (a wrong count is left to the checks)."""
@@ -424,18 +459,18 @@ class Solver:
         w = np.ones(len(sp)) if weights is None else np.asarray(weights, dtype=float)
         return np.asarray(q_seed, dtype=float) * sp, w / sp
 
-    def _info_out(self, info):
+    def _info_out(self, info, given=()):
         """A SolveInfo as returned; sigma_min of the Jacobian in the returned values."""
         r = self.robot
         if r.speed is None:
             return info
         from subproblems import select as _sel
 
-        q = info.q / r.speed
+        q = self._out(info.q, given)
         A = r.A.copy()
         A[:, :len(r.speed)] *= r.speed  # d th / d q of the returned values (a virtual roll's column kept)
         sig = _sel.sigma_min(q, twists=r.twists, A=A, b=r.B, home=r.home, scale=r.scale, target=r.target)
-        excluded = tuple(e._replace(q=e.q / r.speed) for e in info.excluded)
+        excluded = tuple(e._replace(q=self._out(e.q, given)) for e in info.excluded)
         return info._replace(q=q, sigma_min=sig, excluded=excluded)
 
     def invalid_reasons(self, Ts):
@@ -452,6 +487,17 @@ def _scatter(parts, idx, done):
 
 def _joined(parts):
     return tuple(np.concatenate(x) for x in zip(*parts))
+
+
+def _packed(found, exact_only):
+    """One target's rows as _unpack returns them, back in the batch layout (N = 1)."""
+    if exact_only:
+        q = np.asarray(found, dtype=float)
+        none = np.zeros((1, len(q)), dtype=bool)
+        return q[None], ~none, none, np.zeros((1, len(q))), none
+    q, res, ls, cont = (np.asarray(x) for x in found)
+    return (q[None], np.ones((1, len(q)), dtype=bool), np.asarray(ls, dtype=bool)[None], res[None],
+            np.asarray(cont, dtype=bool)[None])
 
 
 def _unpack(parts, exact_only):

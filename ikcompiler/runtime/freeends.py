@@ -47,8 +47,8 @@ class NativeFreeEnds:
     the C calls exact misses the precision on the whole robot (the moved target's error is the whole
     robot's up to the right factor ``M^-1 S M``)."""
 
-    def __init__(self, robot, native, split: FreeEnds):
-        self.split = split
+    def __init__(self, robot, native):
+        self.split = split = robot.free_ends
         self.robot = robot
         self.native = native
         self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
@@ -62,7 +62,7 @@ class NativeFreeEnds:
 
         if robot.general6 is None or isinstance(robot.general6, FoldedGeneral6):  # folded: Python only
             return None
-        split = FreeEnds(robot)
+        split = robot.free_ends
         if len(split.solved) != 6 or robot.couplings:
             return None
         pos = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
@@ -72,7 +72,7 @@ class NativeFreeEnds:
                                    twists=robot.twists[split.solved], home=robot.home, A=np.eye(6),
                                    b=np.zeros(6))
         chain = source and native.bind(source, dof=6, slots=robot.slots, nfree=0, target="pose")
-        return cls(robot, chain, split) if chain is not None else None
+        return cls(robot, chain) if chain is not None else None
 
     def _as_given(self, init, limits) -> np.ndarray:
         """(N,) whether every free value comes back as given: its own representative, inside its limits."""

@@ -36,9 +36,7 @@ def correct(robot, TH, owner, goals, general6, family):
     representatives of a self-motion of the snapped robot.  Returns (TH, owner, continuum): the
     representatives of a self-motion among the rows are those the true robot leaves unresolved."""
     report = {}
-    held = np.asarray(TH)  # the free joints' values of each target, before the rows change
-    order = np.argsort(owner, kind="stable")
-    held_owner = np.asarray(owner)[order]
+    held, held_owner = np.asarray(TH), np.asarray(owner)  # the free joints' values, before rows change
     TH, owner = _ct.correct(TH, goals[owner], owner, twists0=robot.plan_twists, twists1=robot.twists,
                             home=robot.home, A=robot.A, b=robot.B, independent=robot.vary,
                             kinds=robot.vary_kinds, target=robot.solve_target, hold=robot.free,
@@ -53,7 +51,8 @@ def correct(robot, TH, owner, goals, general6, family):
     solver = general6() if len(doubt) else None
     if solver is not None:
         if robot.free_joints:  # folded at each target's free value, held in its rows (freefold.py)
-            first = np.searchsorted(held_owner, doubt)
+            order = np.argsort(held_owner, kind="stable")
+            first = np.searchsorted(held_owner[order], doubt)
             TH2, own2 = solver.rows(goals[doubt], held[order[first], solver.column])
         else:
             TH2, own2 = solver.rows(goals[doubt])  # a plain 6R chain: its rows are all joint values
@@ -95,9 +94,7 @@ def general6_rows(robot, goals, init):
         return robot.general6.rows(goals)
     if isinstance(robot.general6, freefold.FoldedGeneral6):  # a free joint between solved ones
         return robot.general6.rows(goals, init[:, robot.general6.column])
-    from ikcompiler.runtime.freeends import FreeEnds
-
-    split = FreeEnds(robot)
+    split = robot.free_ends
     Q, owner = robot.general6.rows(split.targets(goals, init))
     return split.rows(Q, init[owner]), owner
 
@@ -233,6 +230,7 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # still above the precision get more steps, in rounds of 3, up to 15 in all.
         near = (err > exact) & (err < NEAR_MISS * scale)
         TH = robot.newton_until_exact(TH, goals[owner], 15, FINISH_MARGIN, rows=near, per_round=3)
+        TH, owner, ls, cont = resolved_families(robot, TH, owner, ls, cont, goals)
         # a step's ls flag on a representative says only that its last angle 0 missed; Newton may have
         # pulled it onto the family since (onto_self_motion moves only rows that miss or lie outside)
         TH = onto_self_motion(robot, TH, owner, cont, goals, limits)
@@ -249,6 +247,40 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
                       slots=robot.slots, error=robot.error, cont=cont,
                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
                       vary=robot.vary, dedupe=dedupe, family_dedupe=_fk.SPLIT_ROOT)
+
+
+def resolved_families(robot, TH, owner, ls, cont, goals):
+    """Representatives of a step's continuum (rows ``cont``) that are exact at a full-rank Jacobian
+    of the true robot: the other equations fix the family's parameter, so the row is one isolated
+    solution of a few on that family, not a self-motion.  Its flag is cleared and the family is swept
+    (:func:`_along_family`: its most moving joint held across its range, Newton on the others); every
+    exact end point joins the candidates (the finish dedupes them).  Modular TRRRT (seed 0) at
+    q = (q1, pi, pi, 0, q5): the O-RRR gimbal leaves q2 - q4 fixed, the position picks two points of
+    that family, the chain's representative was one of them and the pose came back with one row
+    flagged a self-motion at sigma_min 0.05 (docs/design.md section 5, "Alternative chain")."""
+    if not cont.any():
+        return TH, owner, ls, cont
+    exact = robot.tol * robot.scale
+    err = robot.error(_rt.fk_batch(robot.twists, np.nan_to_num(TH), robot.home), goals[owner])
+    resolved = cont & ~ls & (err <= exact)
+    resolved[resolved] = selfmotion.full_rank(robot, TH[resolved])
+    rows = np.nonzero(resolved)[0]
+    if not len(rows):
+        return TH, owner, ls, cont
+    Q = TH[rows][:, list(robot.vary)]
+    _, n = _ct.weakest(Q, robot.twists, A=robot.A, b=robot.B, home=robot.home, kinds=robot.vary_kinds,
+                       target=robot.solve_target, hold=robot.free, scale=robot.scale)
+    X = _along_family(robot, Q, n, goals[owner[rows]])
+    k = X.shape[1]
+    X = X.reshape(len(rows) * k, -1)
+    own = np.repeat(owner[rows], k)
+    X = robot.newton_until_exact(X, goals[own], 15, FINISH_MARGIN, per_round=3)
+    keep = robot.error(_rt.fk_batch(robot.twists, np.nan_to_num(X), robot.home), goals[own]) <= exact
+    keep[keep] = selfmotion.full_rank(robot, X[keep])  # isolated points only (no self-motion's samples)
+    cont = cont & ~resolved
+    none = np.zeros(int(keep.sum()), dtype=bool)
+    return (np.concatenate([TH, X[keep]]), np.concatenate([owner, own[keep]]), np.concatenate([ls, none]),
+            np.concatenate([cont, none]))
 
 
 def onto_self_motion(robot, TH, owner, cont, goals, limits):

@@ -89,6 +89,13 @@ class Robot:
                          "upper": tuple(self.upper.tolist()), "limits": limits, "scale": self.scale,
                          "tol": self.tol, "slots": self.slots} for limits in (False, True)}
 
+    @functools.cached_property
+    def free_ends(self):
+        """The split of a general-6r robot with free end joints (runtime.freeends.FreeEnds), made once."""
+        from ikcompiler.runtime.freeends import FreeEnds
+
+        return FreeEnds(self)
+
     def error(self, G, goals) -> np.ndarray:
         """How far tool poses G miss their goals, in lengths (rotation scaled by the robot's size)."""
         return _rt.target_error(G, goals, self.target, self.scale)

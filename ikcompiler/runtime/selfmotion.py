@@ -29,6 +29,27 @@ STEP = 1e-4  # rad (revolute) or of the size (prismatic) along the null directio
 NEWTON_STEPS = 10  # back onto the pose with one joint held (quadratic convergence from ~STEP^2)
 
 
+def _moving_jacobian(robot, TH):
+    """The Jacobian (M, 6, k) at rows TH of the k joints that move (free joints hold their given
+    values), linear rows over the size; the columns of A that map them; their positions."""
+    _, J = _newton.tool_jacobian(robot.twists, TH, robot.home, robot.A)
+    J = J.copy()
+    J[:, :3] /= robot.scale
+    moving = [k for k in range(J.shape[2]) if k not in robot.free]
+    if len(moving) < J.shape[2]:
+        return J[:, :, moving], robot.A[:, moving], moving
+    return J, robot.A, moving
+
+
+def full_rank(robot, TH) -> np.ndarray:
+    """(M,) True where the Jacobian of the moving joints at row TH[m] has no singular value below
+    ``RANK_DEFICIENT``: the row is an isolated solution, no point of a self-motion."""
+    if not len(TH):
+        return np.zeros(0, dtype=bool)
+    J, _, _ = _moving_jacobian(robot, np.nan_to_num(TH))
+    return np.linalg.svd(J, compute_uv=False)[:, -1] >= RANK_DEFICIENT
+
+
 def flags(robot, TH, goals, exact_only: bool = False) -> np.ndarray:
     """(M,) True where row TH[m] (exact for goals[m]) is one point of a self-motion; with
     ``exact_only`` the rows that are not exact (or not finite) are left unflagged instead of assumed."""
@@ -40,15 +61,7 @@ def flags(robot, TH, goals, exact_only: bool = False) -> np.ndarray:
         return out
     if not len(TH):
         return out
-    _, J = _newton.tool_jacobian(robot.twists, TH, robot.home, robot.A)
-    J = J.copy()
-    J[:, :3] /= robot.scale
-    moving = [k for k in range(J.shape[2]) if k not in robot.free]  # free joints hold their given values
-    if len(moving) < J.shape[2]:
-        J = J[:, :, moving]
-        A = robot.A[:, moving]  # the moving joints' columns
-    else:
-        A = robot.A
+    J, A, moving = _moving_jacobian(robot, TH)
     # |det J| = prod(sigma) <= sigma_min |J|_F^5: rows whose determinant rules out a small sigma_min
     # skip the SVD (about 20 us a pose of the general 6R's 225 us otherwise)
     if J.shape[1] == J.shape[2]:
