@@ -41,6 +41,17 @@
 #define G6_NEWTON 8        /* Newton steps on the true robot per candidate */
 #define G6_CLEAN 1e-6      /* prismatic pencils: a candidate missing by less (of the size) before Newton
                             * is a clean root, a farther one may be spurious */
+#define G6_IMAG_TOL 2e-3   /* the eigenvalue path: |imaginary part| of a candidate angle kept for Newton */
+#define G6_LEADING_OK 1e-9 /* the eigenvalue path: |det| / prod(row norms) of the leading matrix to use it */
+#define G6_TWIN 1e-6       /* the eigenvalue path: two roots this close (rad) are read as two solutions */
+#define G6_PINV_RCOND 1e-7 /* the eigenvalue path's Newton: singular values below this (relative) left out */
+#define G6_UNDAMPED_RCOND 1e-13 /* ... for candidates it left between exact and G6_STALLED */
+#define G6_STALLED 1e-3    /* ... (of the size) */
+#define G6_COPY_ANGLE 1e-4 /* the eigenvalue path: two copies of the target rotated by this much (rad) */
+#define G6_POOL 192        /* the eigenvalue path: exact candidates pooled per target */
+#define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
+#define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
+#define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
 
 typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
@@ -150,6 +161,26 @@ static void g6_lu_solve(int n, const double *a, const int *piv, double *x) {
         }
         for (int i = k + 1; i < n; i++) x[i] -= a[i * n + k] * x[k];
     }
+    for (int k = n - 1; k >= 0; k--) {
+        double s = x[k];
+        for (int j = k + 1; j < n; j++) s -= a[k * n + j] * x[j];
+        x[k] = s / a[k * n + k];
+    }
+}
+
+/* x <- a^-1 x for the factors of g6_lu: every row interchange first (g6_lu swaps whole rows, so its
+ * multipliers are in the final row order), then the two triangular solves.  (g6_lu_solve interleaves
+ * the interchanges with the elimination: not a^-1 x, but its last pivot still dominates, so inverse
+ * iteration at a root, its one use, still finds U's null direction.) */
+static void g6_lu_solve_exact(int n, const double *a, const int *piv, double *x) {
+    for (int k = 0; k < n; k++)
+        if (piv[k] != k) {
+            double tmp = x[k];
+            x[k] = x[piv[k]];
+            x[piv[k]] = tmp;
+        }
+    for (int k = 0; k < n; k++)
+        for (int i = k + 1; i < n; i++) x[i] -= a[i * n + k] * x[k];
     for (int k = n - 1; k >= 0; k--) {
         double s = x[k];
         for (int j = k + 1; j < n; j++) s -= a[k * n + j] * x[j];
@@ -410,6 +441,311 @@ static int g6_roots(const double *a, const double *b, double noise, double *root
     return n;
 }
 
+
+/* ---- eigenvalues of a real matrix (the doubtful targets' path, below) ------------------------------ */
+
+/* Balance the n x n matrix a (row-major, in place) by powers of 2 (Parlett-Reinsch): the eigenvalues
+ * are unchanged, their rounding errors scale with the balanced norm. */
+static void g6_balance(int n, double *a) {
+    for (int done = 0; !done;) {
+        done = 1;
+        for (int i = 0; i < n; i++) {
+            double c = 0.0, r = 0.0;
+            for (int j = 0; j < n; j++)
+                if (j != i) c += fabs(a[n * j + i]), r += fabs(a[n * i + j]);
+            if (!(c > 0.0 && r > 0.0)) continue;
+            double g = r / 2.0, f = 1.0;
+            const double s = c + r;
+            while (c < g) f *= 2.0, c *= 4.0;
+            g = r * 2.0;
+            while (c > g) f /= 2.0, c /= 4.0;
+            if ((c + r) / f < 0.95 * s) {
+                done = 0;
+                for (int j = 0; j < n; j++) a[n * i + j] /= f;
+                for (int j = 0; j < n; j++) a[n * j + i] *= f;
+            }
+        }
+    }
+}
+
+/* Reduce a to upper Hessenberg form by stabilised elementary similarity transforms (the multipliers
+ * are left below the subdiagonal; g6_hqr ignores them). */
+static void g6_hessenberg(int n, double *a) {
+    for (int m = 1; m < n - 1; m++) {
+        double x = 0.0;
+        int i = m;
+        for (int j = m; j < n; j++)
+            if (fabs(a[n * j + m - 1]) > fabs(x)) x = a[n * j + m - 1], i = j;
+        if (i != m) {
+            for (int j = m - 1; j < n; j++) {
+                double t = a[n * i + j];
+                a[n * i + j] = a[n * m + j], a[n * m + j] = t;
+            }
+            for (int j = 0; j < n; j++) {
+                double t = a[n * j + i];
+                a[n * j + i] = a[n * j + m], a[n * j + m] = t;
+            }
+        }
+        if (x == 0.0) continue;
+        for (i = m + 1; i < n; i++) {
+            double y = a[n * i + m - 1];
+            if (y == 0.0) continue;
+            y /= x;
+            a[n * i + m - 1] = y;
+            for (int j = m; j < n; j++) a[n * i + j] -= y * a[n * m + j];
+            for (int j = 0; j < n; j++) a[n * j + m] += y * a[n * j + i];
+        }
+    }
+}
+
+/* Eigenvalues (wr + i wi) of the upper Hessenberg matrix a (destroyed) by the Francis double-shift QR
+ * algorithm; 0, or -1 when an eigenvalue takes more than 60 iterations. */
+static int g6_hqr(int n, double *a, double *wr, double *wi) {
+#define H(i, j) a[n * (i) + (j)]
+    double anorm = 0.0, t = 0.0, p = 0.0, q = 0.0, r = 0.0, x, y, z, w, s, u, v;
+    for (int i = 0; i < n; i++)
+        for (int j = i > 0 ? i - 1 : 0; j < n; j++) anorm += fabs(H(i, j));
+    int nn = n - 1, l;
+    while (nn >= 0) {
+        int its = 0;
+        do {
+            for (l = nn; l >= 1; l--) {
+                s = fabs(H(l - 1, l - 1)) + fabs(H(l, l));
+                if (s == 0.0) s = anorm;
+                if (fabs(H(l, l - 1)) + s == s) {
+                    H(l, l - 1) = 0.0;
+                    break;
+                }
+            }
+            x = H(nn, nn);
+            if (l == nn) {
+                wr[nn] = x + t, wi[nn] = 0.0;
+                nn--;
+            } else {
+                y = H(nn - 1, nn - 1);
+                w = H(nn, nn - 1) * H(nn - 1, nn);
+                if (l == nn - 1) {
+                    p = 0.5 * (y - x);
+                    q = p * p + w;
+                    z = sqrt(fabs(q));
+                    x += t;
+                    if (q >= 0.0) {
+                        z = p + (p >= 0.0 ? z : -z);
+                        wr[nn - 1] = wr[nn] = x + z;
+                        if (z != 0.0) wr[nn] = x - w / z;
+                        wi[nn - 1] = wi[nn] = 0.0;
+                    } else {
+                        wr[nn - 1] = wr[nn] = x + p;
+                        wi[nn - 1] = -z, wi[nn] = z;
+                    }
+                    nn -= 2;
+                } else {
+                    if (its == 60) return -1;
+                    if (its == 10 || its == 20) {  /* exceptional shift */
+                        t += x;
+                        for (int i = 0; i <= nn; i++) H(i, i) -= x;
+                        s = fabs(H(nn, nn - 1)) + fabs(H(nn - 1, nn - 2));
+                        y = x = 0.75 * s;
+                        w = -0.4375 * s * s;
+                    }
+                    ++its;
+                    int m;
+                    for (m = nn - 2; m >= l; m--) {
+                        z = H(m, m);
+                        r = x - z;
+                        s = y - z;
+                        p = (r * s - w) / H(m + 1, m) + H(m, m + 1);
+                        q = H(m + 1, m + 1) - z - r - s;
+                        r = H(m + 2, m + 1);
+                        s = fabs(p) + fabs(q) + fabs(r);
+                        p /= s, q /= s, r /= s;
+                        if (m == l) break;
+                        u = fabs(H(m, m - 1)) * (fabs(q) + fabs(r));
+                        v = fabs(p) * (fabs(H(m - 1, m - 1)) + fabs(z) + fabs(H(m + 1, m + 1)));
+                        if (u + v == v) break;
+                    }
+                    for (int i = m + 2; i <= nn; i++) {
+                        H(i, i - 2) = 0.0;
+                        if (i != m + 2) H(i, i - 3) = 0.0;
+                    }
+                    for (int k = m; k <= nn - 1; k++) {
+                        if (k != m) {
+                            p = H(k, k - 1);
+                            q = H(k + 1, k - 1);
+                            r = k != nn - 1 ? H(k + 2, k - 1) : 0.0;
+                            if ((x = fabs(p) + fabs(q) + fabs(r)) != 0.0) p /= x, q /= x, r /= x;
+                        }
+                        s = sqrt(p * p + q * q + r * r);
+                        if (p < 0.0) s = -s;
+                        if (s == 0.0) continue;
+                        if (k == m) {
+                            if (l != m) H(k, k - 1) = -H(k, k - 1);
+                        } else {
+                            H(k, k - 1) = -s * x;
+                        }
+                        p += s;
+                        x = p / s, y = q / s, z = r / s;
+                        q /= p, r /= p;
+                        for (int j = k; j <= nn; j++) {
+                            p = H(k, j) + q * H(k + 1, j);
+                            if (k != nn - 1) {
+                                p += r * H(k + 2, j);
+                                H(k + 2, j) -= p * z;
+                            }
+                            H(k + 1, j) -= p * y;
+                            H(k, j) -= p * x;
+                        }
+                        const int mmin = nn < k + 3 ? nn : k + 3;
+                        for (int i = l; i <= mmin; i++) {
+                            p = x * H(i, k) + y * H(i, k + 1);
+                            if (k != nn - 1) {
+                                p += z * H(i, k + 2);
+                                H(i, k + 2) -= p * r;
+                            }
+                            H(i, k + 1) -= p * q;
+                            H(i, k) -= p;
+                        }
+                    }
+                }
+            }
+        } while (l < nn - 1);
+    }
+    return 0;
+#undef H
+}
+
+/* One-sided Jacobi SVD of the n x n matrix a (row-major, in place: its columns become U Sigma): the
+ * singular values sv (unsorted) and the right singular vectors, V's columns (row-major v).  The
+ * doubtful targets' path only (twin roots' 2-D null spaces, the truncated Newton below). */
+static void g6_svd(int n, double *a, double *sv, double *v) {
+    for (int i = 0; i < n * n; i++) v[i] = (i % (n + 1) == 0) ? 1.0 : 0.0;
+    for (int sweep = 0; sweep < 40; sweep++) {
+        int rotated = 0;
+        for (int p = 0; p < n - 1; p++)
+            for (int q = p + 1; q < n; q++) {
+                double al = 0.0, be = 0.0, ga = 0.0;
+                for (int i = 0; i < n; i++) {
+                    al += a[n * i + p] * a[n * i + p];
+                    be += a[n * i + q] * a[n * i + q];
+                    ga += a[n * i + p] * a[n * i + q];
+                }
+                if (!(fabs(ga) > 1e-15 * sqrt(al * be)) || ga == 0.0) continue;
+                rotated = 1;
+                const double zeta = (be - al) / (2.0 * ga);
+                const double t = (zeta >= 0.0 ? 1.0 : -1.0) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+                const double c = 1.0 / sqrt(1.0 + t * t), sn = c * t;
+                for (int i = 0; i < n; i++) {
+                    const double x = a[n * i + p], y = a[n * i + q];
+                    a[n * i + p] = c * x - sn * y, a[n * i + q] = sn * x + c * y;
+                    const double vx = v[n * i + p], vy = v[n * i + q];
+                    v[n * i + p] = c * vx - sn * vy, v[n * i + q] = sn * vx + c * vy;
+                }
+            }
+        if (!rotated) break;
+    }
+    for (int j = 0; j < n; j++) {
+        double s = 0.0;
+        for (int i = 0; i < n; i++) s += a[n * i + j] * a[n * i + j];
+        sv[j] = sqrt(s);
+    }
+}
+
+/* Truncated Gauss-Newton on the true robot toward goal g (general6.py _newton): columns scaled to unit
+ * norm, singular values of the Jacobian below rcond times the largest left out, so that at a double
+ * root the step never moves along the weak direction, which the eigenvalue read gave accurately (the
+ * damped ikc_newton runs along it); steps bounded to 0.5 rad; the best iterate kept.  Returns its
+ * error.  (A 6-joint robot: rb->dof == 6.) */
+static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *q, int iters, double rcond) {
+    double G[12], J[36], best[6], x[6];
+    for (int i = 0; i < 6; i++) x[i] = best[i] = q[i];
+    double best_err = INFINITY;
+    const double done = 1e-3 * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
+    for (int it = 0; it <= iters; it++) {
+        ikc_fk_jacobian(rb, x, G, J);
+        const double err = ikc_pose_error(rb, G, g);
+        if (!(err == err)) break;
+        if (err < best_err) {
+            best_err = err;
+            for (int i = 0; i < 6; i++) best[i] = x[i];
+        }
+        if (err <= done || it == iters) break;
+        /* far after general6.py's first 6 steps: a near-real complex root, not a solution */
+        if (it == 6 && best_err > G6_STALLED * rb->scale) break;
+        double e[6];
+        for (int k = 0; k < 3; k++) e[k] = g[9 + k] - G[9 + k], e[3 + k] = 0.0;
+        for (int c = 0; c < 3; c++) {
+            const double a0 = G[c], a1 = G[3 + c], a2 = G[6 + c], b0 = g[c], b1 = g[3 + c], b2 = g[6 + c];
+            e[3] += 0.5 * (a1 * b2 - a2 * b1);
+            e[4] += 0.5 * (a2 * b0 - a0 * b2);
+            e[5] += 0.5 * (a0 * b1 - a1 * b0);
+        }
+        double col[6], Js[36], sv[6], V[36];
+        for (int j = 0; j < 6; j++) {
+            double s = 0.0;
+            for (int r = 0; r < 6; r++) s += J[r * 6 + j] * J[r * 6 + j];
+            col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
+            for (int r = 0; r < 6; r++) Js[r * 6 + j] = J[r * 6 + j] / col[j];
+        }
+        g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
+        double top = 0.0;
+        for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
+        double dq[6] = {0, 0, 0, 0, 0, 0};
+        for (int j = 0; j < 6; j++) {
+            if (!(sv[j] > rcond * top)) continue;
+            double proj = 0.0;  /* (U S)_j . e / s_j^2 = u_j . e / s_j */
+            for (int r = 0; r < 6; r++) proj += Js[r * 6 + j] * e[r];
+            proj /= sv[j] * sv[j];
+            for (int i = 0; i < 6; i++) dq[i] += V[6 * i + j] * proj;
+        }
+        double step = 0.0;
+        for (int i = 0; i < 6; i++) dq[i] /= col[i], step = fmax(step, fabs(dq[i]));
+        const double f = step > 0.5 ? 0.5 / step : 1.0;
+        for (int i = 0; i < 6; i++) x[i] += f * dq[i];
+    }
+    for (int i = 0; i < 6; i++) q[i] = best[i];
+    return best_err;
+}
+
+/* The two monomial vectors in the 2-D null space (V1, V2) of M at a root shared by two solutions
+ * (general6.py _two_monomial_vectors): u = b V1 + a V2 is one exactly when every identity
+ * u_p u_q = u_r u_s of the layout x_d^i x_e^j (i <= 3, j <= 2) holds; each is a quadratic form in
+ * (b, a), all multiples of the one whose two roots are the two solutions: the top eigenvector of the
+ * Gram matrix of their coefficients (power iteration on 3 x 3). */
+static void g6_two_vectors(const double *V1, const double *V2, double *u1, double *u2) {
+    double Gm[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    for (int p = 0; p < 12; p++)
+        for (int q = p; q < 12; q++)
+            for (int r = 0; r < 12; r++)
+                for (int t = r; t < 12; t++) {
+                    if (r * 12 + t <= p * 12 + q) continue;  /* each pair of pairs once */
+                    if (p / 3 + q / 3 != r / 3 + t / 3 || p % 3 + q % 3 != r % 3 + t % 3) continue;
+                    const double h[3] = {V1[p] * V1[q] - V1[r] * V1[t],
+                                         V1[p] * V2[q] + V2[p] * V1[q] - V1[r] * V2[t] - V2[r] * V1[t],
+                                         V2[p] * V2[q] - V2[r] * V2[t]};
+                    for (int i = 0; i < 3; i++)
+                        for (int j = 0; j < 3; j++) Gm[i][j] += h[i] * h[j];
+                }
+    double h[3] = {0.57, 0.61, 0.55};
+    for (int it = 0; it < 100; it++) {
+        double y[3], nrm = 0.0;
+        for (int i = 0; i < 3; i++) y[i] = Gm[i][0] * h[0] + Gm[i][1] * h[1] + Gm[i][2] * h[2], nrm += y[i] * y[i];
+        nrm = sqrt(nrm);
+        if (!(nrm > 0.0)) break;
+        for (int i = 0; i < 3; i++) h[i] = y[i] / nrm;
+    }
+    /* h0 b^2 + h1 a b + h2 a^2 = 0: the ratio of the larger coefficient's variable */
+    const double disc = sqrt(fmax(h[1] * h[1] - 4.0 * h[0] * h[2], 0.0));
+    for (int sgn = 0; sgn < 2; sgn++) {
+        const double num = -h[1] + (sgn ? -disc : disc);
+        double b = 1.0, a = 1.0;
+        if (fabs(h[2]) >= fabs(h[0])) a = h[2] != 0.0 ? num / (2.0 * h[2]) : 0.0;
+        else b = h[0] != 0.0 ? num / (2.0 * h[0]) : 0.0;
+        double *u = sgn ? u2 : u1;
+        for (int i = 0; i < 12; i++) u[i] = b * V1[i] + a * V2[i];
+    }
+}
+
+
 /* ---- the elimination ---------------------------------------------------------------------------- */
 
 static const double g6_probe[12] = {0.31, -0.77, 0.52, 0.13, -0.48, 0.91, -0.26, 0.67, -0.84, 0.39, 0.58, -0.19};
@@ -437,7 +773,134 @@ static void g6_basis(double th, int prism, double *u) {
 
 /* Candidates of goal g (12 entries, robot units) in the original joint order, prismatic values in
  * robot units: their count (at most 16), or -1 when the target is doubtful. */
+static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig);
+
 static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
+    return g6_candidates(G, g, Qout, 0);
+}
+
+/* general6.py's SHIFTS: th_c = delta + 2 atan(y), delta chosen so that the leading matrix is regular */
+static const double g6_shifts[4] = {0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944};
+
+/* The uncertified candidates of the doubtful targets' path (g6_candidates with eig set; general6.py
+ * _candidates in C): the pencil in y = tan((th - delta) / 2), (1 + y^2) M(th) = P0 + P1 y + P2 y^2,
+ * its 24 x 24 companion's eigenvalues (balanced, Hessenberg, Francis QR), every th = delta + 2 atan(y)
+ * whose imaginary part is below G6_IMAG_TOL (near-real pairs: a double root split by rounding), the
+ * null vector of M(th) by inverse iteration; roots closer than G6_TWIN also read as the two monomial
+ * vectors of a 2-D null space.  Thetas into rth, vectors into rv (at most 32); their count or -1. */
+static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
+
+    double P[3][144], best = -1.0, delta = g6_shifts[0];
+    for (int k = 0; k < 4; k++) {  /* the shift whose leading matrix is best conditioned (Hadamard) */
+        const double cd = cos(g6_shifts[k]), sd = sin(g6_shifts[k]);
+        double L[144], logrows = 0.0;
+        int piv[12];
+        for (int i = 0; i < 12; i++) {
+            double rn = 0.0;
+            for (int j = 0; j < 12; j++) {
+                const double A = Mt[1][i][j] * cd + Mt[2][i][j] * sd;
+                L[12 * i + j] = Mt[0][i][j] - A;
+                rn += L[12 * i + j] * L[12 * i + j];
+            }
+            logrows += 0.5 * log(rn > 1e-300 ? rn : 1e-300);
+        }
+        const double ratio = log(fabs(g6_lu(12, L, piv)) + 1e-300) - logrows;
+        if (ratio > best || k == 0) {
+            best = ratio, delta = g6_shifts[k];
+            if (ratio > log(G6_LEADING_OK)) break;
+        }
+    }
+    const double cd = cos(delta), sd = sin(delta);
+    for (int i = 0; i < 12; i++)
+        for (int j = 0; j < 12; j++) {
+            const double A = Mt[1][i][j] * cd + Mt[2][i][j] * sd, B = Mt[2][i][j] * cd - Mt[1][i][j] * sd;
+            P[0][12 * i + j] = Mt[0][i][j] + A;
+            P[1][12 * i + j] = 2.0 * B;
+            P[2][12 * i + j] = Mt[0][i][j] - A;
+        }
+    int piv[12];
+    g6_lu(12, P[2], piv);
+    double Kl[576];
+    for (int i = 0; i < 576; i++) Kl[i] = 0.0;
+    for (int i = 0; i < 12; i++) Kl[24 * i + 12 + i] = 1.0;
+    for (int half = 0; half < 2; half++)
+        for (int j = 0; j < 12; j++) {
+            double x[12];
+            for (int i = 0; i < 12; i++) x[i] = P[half][12 * i + j];
+            g6_lu_solve_exact(12, P[2], piv, x);
+            for (int i = 0; i < 12; i++) Kl[24 * (12 + i) + 12 * half + j] = -x[i];
+        }
+    for (int i = 0; i < 576; i++)
+        if (!isfinite(Kl[i])) return -1;
+    double wr[24], wi[24];
+    g6_balance(24, Kl);
+    g6_hessenberg(24, Kl);
+    if (g6_hqr(24, Kl, wr, wi) < 0) return -1;
+    int n = 0;
+    for (int k = 0; k < 24; k++) {
+        const double u = wr[k], v = wi[k];
+        const double re = 0.5 * atan2(2.0 * u, 1.0 - u * u - v * v);
+        const double im = 0.25 * log((u * u + (v + 1.0) * (v + 1.0)) / (u * u + (v - 1.0) * (v - 1.0)));
+        if (!isfinite(re) || !isfinite(im) || !(fabs(2.0 * im) < G6_IMAG_TOL)) continue;
+        if (v < 0.0) {  /* a conjugate pair gives one candidate (its real part): the v > 0 member */
+            int twin = 0;
+            for (int j = 0; j < 24; j++)
+                if (j != k && wr[j] == u && wi[j] == -v) twin = 1;
+            if (twin) continue;
+        }
+        rth[n++] = ikc_wrap(delta + 2.0 * re);
+    }
+    /* null vectors; twins also from the 2-D null space */
+    const int roots = n;
+    for (int k = 0; k < roots; k++) {
+        const double c = cos(rth[k]), s = sin(rth[k]);
+        double L[144];
+        for (int i = 0; i < 12; i++)
+            for (int j = 0; j < 12; j++) L[12 * i + j] = Mt[0][i][j] + c * Mt[1][i][j] + s * Mt[2][i][j];
+        int twin = 0;
+        for (int j = 0; j < roots; j++) {
+            double d = fabs(rth[j] - rth[k]);
+            if (d > IKC_PI_F) d = IKC_TWO_PI - d;
+            if (j != k && d < G6_TWIN) twin = 1;
+        }
+        if (twin && n + 2 <= 32) {
+            double Ls[144], sv[12], V[144], V1[12], V2[12];
+            for (int i = 0; i < 144; i++) Ls[i] = L[i];
+            g6_svd(12, Ls, sv, V);
+            int a = 0, b2 = 1;
+            if (sv[b2] < sv[a]) a = 1, b2 = 0;
+            for (int j = 2; j < 12; j++) {
+                if (sv[j] < sv[a]) b2 = a, a = j;
+                else if (sv[j] < sv[b2]) b2 = j;
+            }
+            for (int i = 0; i < 12; i++) V1[i] = V[12 * i + a], V2[i] = V[12 * i + b2];
+            g6_two_vectors(V1, V2, rv[n], rv[n + 1]);
+            rth[n] = rth[n + 1] = rth[k];
+            for (int r = n; r < n + 2; r++) {
+                double mx = 0.0;
+                for (int i = 0; i < 12; i++) mx = fmax(mx, fabs(rv[r][i]));
+                for (int i = 0; i < 12; i++) rv[r][i] = mx > 0.0 ? rv[r][i] / mx : 0.0;
+            }
+            n += 2;
+        }
+        g6_lu(12, L, piv);
+        double *v = rv[k];
+        for (int i = 0; i < 12; i++) v[i] = g6_probe[i];
+        for (int it = 0; it < 2; it++) {
+            g6_lu_solve_exact(12, L, piv, v);
+            double mx = 0.0;
+            for (int i = 0; i < 12; i++) mx = fmax(mx, fabs(v[i]));
+            if (!(mx > 0.0) || !isfinite(mx)) break;
+            for (int i = 0; i < 12; i++) v[i] /= mx;
+        }
+    }
+    return n;
+}
+
+/* Candidates of goal g: the certified path (eig 0, ikc_g6_candidates) or the doubtful targets'
+ * uncertified eigenvalue path (eig 1, g6_eigen_roots; at most 32 candidates, non-finite ones left NaN
+ * for Newton to drop). */
+static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig) {
     /* normalised target Tn and Gn = Tn Mn^-1, inverted for the inverse chain */
     double R[9], t[3];
     for (int k = 0; k < 9; k++) R[k] = g[k];
@@ -488,7 +951,7 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
     int perm[8];
     for (int c = 0; c < nc; c++)
         for (int i = 0; i < 14; i++) Bp[c][i] = B[1 + G->cols[c]][i];
-    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK) return -1;
+    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return -1;
     double Nl[6][14];
     for (int e = 0; e < 6; e++) {
         for (int i = 0; i < 14; i++) Nl[e][i] = (i == 8 + e) ? 1.0 : 0.0;
@@ -535,6 +998,12 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         for (int tt = 0; tt < 3; tt++)
             for (int j = 0; j < 12; j++) Mt[tt][i][j] *= s;
     }
+    double rth[32], rv[32][12];
+    int nr = 0;
+    if (eig) {
+        nr = g6_eigen_roots(Mt, rth, rv);
+        if (nr < 0) return -1;
+    } else {
     /* D on the circle, its Fourier coefficients */
     double D[G6_K], a[11], b[11], ck[G6_K], sk[G6_K];
     for (int k = 0; k < G6_K; k++) ck[k] = cos(IKC_TWO_PI * k / G6_K), sk[k] = sin(IKC_TWO_PI * k / G6_K);
@@ -567,8 +1036,9 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
     /* each root: null vector, then the other joints */
     for (int k = 0; k < n; k++) {
         const double thc = roots[k] > IKC_PI_F ? roots[k] - IKC_TWO_PI : roots[k];
-        double c = cos(thc), s = sin(thc), L[144], v[12];
+        double c = cos(thc), s = sin(thc), L[144], *v = rv[nr];
         int piv[12];
+        rth[nr++] = thc;
         for (int i = 0; i < 12; i++)
             for (int j = 0; j < 12; j++) L[12 * i + j] = Mt[0][i][j] + c * Mt[1][i][j] + s * Mt[2][i][j];
         g6_lu(12, L, piv);
@@ -580,6 +1050,10 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
             if (!(mx > 0.0) || !isfinite(mx)) return -1;
             for (int i = 0; i < 12; i++) v[i] /= mx;
         }
+    }
+    }
+    for (int k = 0; k < nr; k++) {
+        const double thc = rth[k], c = cos(thc), s = sin(thc), *v = rv[k];
         /* v[3 i + j] = x_d^i x_e^j, i <= 3, j <= 2 */
         double den[9], num[9];
         for (int i = 0; i < 9; i++) den[i] = v[i], num[i] = v[i + 3];
@@ -642,11 +1116,11 @@ static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
         for (int j = 0; j < 6; j++) {
             double x = th[j];
             if (G->prism[j]) x *= G->s;
-            if (!isfinite(x)) return -1;
+            if (!isfinite(x) && !eig) return -1;
             Qout[6 * k + G->order[j]] = x;
         }
     }
-    return n;
+    return nr;
 }
 
 /* One arrangement's leaves for goal g: every candidate after G6_NEWTON Newton steps on the true robot,
@@ -683,17 +1157,108 @@ static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const dou
     return n;
 }
 
+/* The target g rotated by th about the unit axis w through the normalisation centre (general6.py
+ * rotates the normalised goal about its origin, the same point) */
+static void g6_rotated_target(const ikc_g6 *G, const double *w, double th, const double *g, double *out) {
+    double Rr[9];
+    g6_rot(w, th, Rr);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            out[3 * i + j] = Rr[3 * i] * g[j] + Rr[3 * i + 1] * g[3 + j] + Rr[3 * i + 2] * g[6 + j];
+    double d[3] = {g[9] - G->center[0], g[10] - G->center[1], g[11] - G->center[2]}, y[3];
+    ikc_mat_vec(Rr, d, y);
+    for (int i = 0; i < 3; i++) out[9 + i] = y[i] + G->center[i];
+}
+
+/* general6.py's _PERTURB: the axes of its rotated copies */
+static const double g6_copy_axes[2][3] = {{0.49297937126024555, -0.8307369262465643, 0.2585488326840085},
+                                          {0.05063565066984169, 0.9585454499271961, 0.28040444237763246}};
+
+/* The rows P (np, best error first by selection) merged at distance `apart` into Q (at most 16 leaves):
+ * their count, or -1 when more than 16 remain. */
+static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int np, double apart, double *Q, double *E,
+                    int *F) {
+    int used[G6_POOL] = {0}, m = 0;
+    for (;;) {
+        int best = -1;
+        for (int j = 0; j < np; j++)
+            if (!used[j] && (best < 0 || PE[j] < PE[best])) best = j;
+        if (best < 0) break;
+        used[best] = 1;
+        int near = 0;
+        for (int r = 0; r < m && !near; r++) near = ikc_row_distance(rb, Q + 6 * r, P + 6 * best) < apart;
+        if (near) continue;
+        if (m == 16) return -1;
+        for (int i = 0; i < 6; i++) Q[6 * m + i] = P[6 * best + i];
+        E[m] = PE[best], F[m] = 0;
+        m++;
+    }
+    return m;
+}
+
+/* A target doubtful under every arrangement (a double root at a singular configuration, a pencil
+ * singular at the target: 189 of 300 Jaco poses with every joint at 0, +-pi/2, pi; docs/general6.md
+ * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  The eigenvalue
+ * candidates (g6_eigen_roots) of every arrangement for the target and for four copies rotated by
+ * +-G6_COPY_ANGLE about two fixed axes (a double root splits; a singular pencil becomes regular), each
+ * polished toward the true target by truncated Newton steps (g6_truncated_newton: they keep the weak
+ * direction the eigenvector read gave), the stalled ones by plain steps; the exact rows pooled.  -1 when
+ * no arrangement gave candidates (the Python general6 takes the target). */
+static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
+                           int *F) {
+    if (rb->dof != 6 || rb->nfree) return -1;  /* the six solved joints alone (g6_truncated_newton) */
+    for (int j = 0; j < 6; j++)  /* revolute chains only: a prismatic pencil's real spurious roots and
+                                  * absent columns are not treated here (a modular RRRRTT lost 2 of 10
+                                  * verify poses): its doubtful targets stay Python's */
+        if (G->prism[j]) return -1;
+    const double exact = rb->tol * rb->scale;
+    double P[6 * G6_POOL], PE[G6_POOL];
+    int np = 0, answered = 0;
+    for (int c = 0; c < 5; c++)
+        for (int k = 0; k < count; k++) {
+            double Qc[6 * 32], gr[12];
+            if (c == 0)
+                for (int i = 0; i < 12; i++) gr[i] = g[i];
+            else
+                g6_rotated_target(G, g6_copy_axes[(c - 1) % 2], c > 2 ? -G6_COPY_ANGLE : G6_COPY_ANGLE, g, gr);
+            const int n = g6_candidates(G + k, gr, Qc, 1);
+            if (n < 0) continue;
+            answered++;
+            for (int j = 0; j < n && np < G6_POOL; j++) {
+                double *q = Qc + 6 * j;
+                double e = g6_truncated_newton(rb, g, q, G6_TRUNCATED_STEPS, G6_PINV_RCOND);
+                if (e > exact && e < G6_STALLED * rb->scale)  /* stalled: a near-double root (_undamped) */
+                    e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
+                if (!(e <= exact)) continue;
+                for (int i = 0; i < 6; i++) P[6 * np + i] = q[i];
+                PE[np] = e;
+                np++;
+            }
+        }
+    if (!answered) return -1;
+    /* the exact rows, best first; one closer than G6_SAME to a kept row is that row (general6.py _pack;
+     * at a double root the candidates end 1e-6..4e-5 apart, each exact, and the one nearest the root is
+     * not the one of least error); more than 16 left: merged at G6_COLLIDE instead (general6.py
+     * _apart) */
+    int m = -1;
+    for (int pass = 0; pass < 2 && m < 0; pass++) m = g6_merge(rb, P, PE, np, pass ? G6_COLLIDE : G6_SAME, Q, E, F);
+    return m;
+}
+
 /* The leaves of the general-6r chain (ikc_chain_fn's outputs) for goal g, trying the module's
  * arrangements G[0..count-1] in order (general6.py's usable order): a target doubtful under one is
  * re-solved under the next, and the first that answers it cleanly gives its leaves, the same trust as a
  * clean first arrangement (general6.py's doubtful-target path, docs/general6.md "Native path").  A
- * target doubtful under every one is one DEFER leaf, for the Python general6 (rotated copies). */
+ * target doubtful under every one takes the eigenvalue path (g6_eigen_leaves); where that fails, one
+ * DEFER leaf, for the Python general6. */
 static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
                          int *F) {
     for (int k = 0; k < count; k++) {
         int n = g6_arrangement_leaves(rb, G + k, g, Q, E, F);
         if (n >= 0) return n;
     }
+    const int n = g6_eigen_leaves(rb, G, count, g, Q, E, F);
+    if (n >= 0) return n;
     for (int j = 0; j < 6; j++) Q[j] = 0.0;
     E[0] = 0.0;
     F[0] = IKC_DEFER;

@@ -25,6 +25,7 @@ pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler
 SAME = 1e-6  # two rows are one solution (rad; prismatic values relative to the size)
 PRECISION = 1e-12  # the contract: position / size and Frobenius rotation
 HANDED_BACK = 0.05  # at most this share of random targets may go to the Python path (measured: ~1%)
+COLLIDE = 1e-4  # general6's G6_COLLIDE: rows at a double root are found to 1e-6..4e-5 rad (see _covers)
 
 _MODULES: dict[str, tuple] = {}
 
@@ -150,32 +151,55 @@ def test_jaco_complete_and_exact():
     assert back <= HANDED_BACK * len(T), back
 
 
-def test_jaco_special_poses_as_python():
-    """Special-angle poses of the Jaco (a third of the joint values at 0, +-pi/2, pi: double roots
-    and aligned axes are common there): where the C answers, its rows are the Python general6's rows
-    and exact; the targets it hands back are the Python path's (counted).  Completeness on these
-    poses is the Python general6's own open question (it misses some: docs/general6.md)."""
-    robot = load_robot("jaco")
-    module, nc = _module("jaco", robot)
-    Q = sample_configurations(robot, 150, seed=4, special=0.3)
-    T = np.array([module.fk(q) for q in Q])
-    back = 0
+def _covers(module, nc, Q, T):
+    """C rows against the reference runtime's (NATIVE False), limits off, where double roots are common:
+    every reference row within COLLIDE of a C row, every C row exact, the C's distinct solutions (1e-4
+    apart) at least the reference's.  At a double root the rows of both paths are found only to
+    1e-6..4e-5 rad (each exact; the pose error is quadratic or flatter in the distance there), so the two
+    clouds are compared at general6's G6_COLLIDE.  Returns (handed back, C recovered, reference
+    recovered) at SAME."""
+    prism = np.zeros(6, dtype=bool)
+    back = c_hit = r_hit = 0
     for n in range(len(T)):
         rows = nc.exact(T[n], (), False)
-        if rows is None:
-            back += 1
-            continue
         module.NATIVE = False
         try:
             reference = module.solve(T[n], limits=False)
         finally:
             module.NATIVE = True
-        assert len(rows) == len(reference), (n, len(rows), len(reference))
-        if len(rows):
-            d = _gap(rows, reference, np.zeros(6, dtype=bool), module.SCALE)
-            assert d.min(axis=1).max() < SAME and d.min(axis=0).max() < SAME, n
+        if rows is None:
+            back += 1
+            rows = module.solve(T[n], limits=False)
         _exact(module, rows, T[n])
-    assert back <= 0.3 * len(T), back
+        if len(reference):
+            assert len(rows) and _gap(reference, rows, prism, module.SCALE).min(axis=1).max() < COLLIDE, n
+        assert _distinct(rows) >= _distinct(reference), n
+        c_hit += bool(len(rows)) and _gap(rows, Q[n:n + 1], prism, module.SCALE).min() < SAME
+        r_hit += bool(len(reference)) and _gap(reference, Q[n:n + 1], prism, module.SCALE).min() < SAME
+    return back, c_hit, r_hit
+
+
+def _distinct(rows):
+    """Solutions among rows: rows within COLLIDE of an earlier kept one are that one."""
+    kept = []
+    for q in rows:
+        if not kept or _gap(np.array(kept), q[None], np.zeros(6, dtype=bool), 1.0).min() >= COLLIDE:
+            kept.append(q)
+    return len(kept)
+
+
+def test_jaco_special_poses_as_python():
+    """Special-angle poses of the Jaco (a third of the joint values at 0, +-pi/2, pi: double roots
+    and aligned axes are common there): the C answers them (its certified path, or for the targets
+    doubtful under every arrangement general6.py's eigenvalue path in C, g6_eigen_leaves) with the
+    reference runtime's solutions, exact, recovering at least as many sampled vectors."""
+    robot = load_robot("jaco")
+    module, nc = _module("jaco", robot)
+    Q = sample_configurations(robot, 150, seed=4, special=0.3)
+    T = np.array([module.fk(q) for q in Q])
+    back, c_hit, r_hit = _covers(module, nc, Q, T)
+    assert back <= 2, back
+    assert c_hit >= r_hit, (c_hit, r_hit)
 
 
 def test_eliminated_joint_at_pi():
@@ -219,21 +243,20 @@ def _first_arrangement_only(module, robot):
     return native.bind(src, dof=6, slots=ns["MAX_SOLUTIONS"], nfree=0, target="pose")
 
 
-def test_jaco_doubtful_targets_resolved_by_the_next_arrangement_in_c():
-    """A target doubtful under the first arrangement is re-solved in C under the next (general6.h
-    ikc_g6_leaves): on special-angle Jaco poses some targets the first arrangement alone hands back are
-    answered in C, and those answers are the Python general6's rows, exact, with the sampled vector."""
+def test_jaco_first_arrangement_alone_settles_special_poses_in_c():
+    """The module's C with its first arrangement alone: before the eigenvalue path (general6.h
+    g6_eigen_leaves) it handed back the targets doubtful under that arrangement (the re-solve under the
+    next one rescued some, as this test counted); now the targets doubtful under it take the eigenvalue
+    path, and its answers cover the reference runtime's, exact, with as many sampled vectors."""
     robot = load_robot("jaco")
-    module, nc = _module("jaco", robot)
+    module, _ = _module("jaco", robot)
     assert len(csource_arrangements(module)) >= 2
     first = _first_arrangement_only(module, robot)
     Q = sample_configurations(robot, 150, seed=4, special=0.3)
     T = np.array([module.fk(q) for q in Q])
-    rescued = [n for n in range(len(T)) if first.exact(T[n], (), False) is None
-               and nc.exact(T[n], (), False) is not None]
-    assert rescued, "no target needed the second arrangement"
-    back = _compare(module, nc, Q[rescued], T[rescued])
-    assert back == 0
+    back, c_hit, r_hit = _covers(module, first, Q, T)
+    assert back <= 2, back
+    assert c_hit >= r_hit, (c_hit, r_hit)
 
 
 def csource_arrangements(module):
@@ -242,15 +265,17 @@ def csource_arrangements(module):
     return general6_native_arrangements(module._GENERAL6)
 
 
-def test_jaco_all_special_poses_c_answers_are_complete():
-    """Poses with every Jaco joint at 0, +-pi/2 or pi (double roots and near-double roots abound): where
-    the C answers, its rows are the Python general6's rows and hold the sampled vector.  A clean
-    candidate that Newton cannot finish makes its target doubtful: dropping it as spurious lost 2 of
-    8 solutions on poses 154 and 176 of this sample."""
+def test_jaco_all_special_poses_settle_in_c():
+    """Poses with every Jaco joint at 0, +-pi/2 or pi: 56% of them have the sampled vector at a singular
+    configuration (a double root of det M) and 17% a pencil singular at the target, which the certified
+    root isolation cannot answer; before the eigenvalue path in C (g6_eigen_leaves) 198 of these 400 went
+    to the Python general6 at ~0.1 s each.  Now the C settles them with the reference runtime's
+    solutions (every reference row within COLLIDE of a C row, exact), recovering at least as many
+    sampled vectors."""
     robot = load_robot("jaco")
     module, nc = _module("jaco", robot)
     Q = sample_configurations(robot, 400, seed=21, special=1.0)
     T = np.array([module.fk(q) for q in Q])
-    answered = [n for n in range(len(T)) if nc.exact(T[n], (), False) is not None]
-    assert len(answered) >= len(T) // 3, len(answered)
-    assert _compare(module, nc, Q[answered], T[answered]) == 0
+    back, c_hit, r_hit = _covers(module, nc, Q, T)
+    assert back <= 4, back
+    assert c_hit >= r_hit, (c_hit, r_hit)
