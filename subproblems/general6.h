@@ -152,27 +152,11 @@ static double g6_lu(int n, double *a, int *piv) {
     return det;
 }
 
-static void g6_lu_solve(int n, const double *a, const int *piv, double *x) {
-    for (int k = 0; k < n; k++) {
-        if (piv[k] != k) {
-            double tmp = x[k];
-            x[k] = x[piv[k]];
-            x[piv[k]] = tmp;
-        }
-        for (int i = k + 1; i < n; i++) x[i] -= a[i * n + k] * x[k];
-    }
-    for (int k = n - 1; k >= 0; k--) {
-        double s = x[k];
-        for (int j = k + 1; j < n; j++) s -= a[k * n + j] * x[j];
-        x[k] = s / a[k * n + k];
-    }
-}
-
 /* x <- a^-1 x for the factors of g6_lu: every row interchange first (g6_lu swaps whole rows, so its
- * multipliers are in the final row order), then the two triangular solves.  (g6_lu_solve interleaves
- * the interchanges with the elimination: not a^-1 x, but its last pivot still dominates, so inverse
- * iteration at a root, its one use, still finds U's null direction.) */
-static void g6_lu_solve_exact(int n, const double *a, const int *piv, double *x) {
+ * multipliers are in the final row order), then the two triangular solves.  (An earlier version
+ * interleaved the interchanges with the elimination: not a^-1 x, residuals of 1-5 on random systems,
+ * though inverse iteration at a root still found U's null direction.) */
+static void g6_lu_solve(int n, const double *a, const int *piv, double *x) {
     for (int k = 0; k < n; k++)
         if (piv[k] != k) {
             double tmp = x[k];
@@ -827,7 +811,7 @@ static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
         for (int j = 0; j < 12; j++) {
             double x[12];
             for (int i = 0; i < 12; i++) x[i] = P[half][12 * i + j];
-            g6_lu_solve_exact(12, P[2], piv, x);
+            g6_lu_solve(12, P[2], piv, x);
             for (int i = 0; i < 12; i++) Kl[24 * (12 + i) + 12 * half + j] = -x[i];
         }
     for (int i = 0; i < 576; i++)
@@ -887,7 +871,7 @@ static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
         double *v = rv[k];
         for (int i = 0; i < 12; i++) v[i] = g6_probe[i];
         for (int it = 0; it < 2; it++) {
-            g6_lu_solve_exact(12, L, piv, v);
+            g6_lu_solve(12, L, piv, v);
             double mx = 0.0;
             for (int i = 0; i < 12; i++) mx = fmax(mx, fabs(v[i]));
             if (!(mx > 0.0) || !isfinite(mx)) break;
