@@ -532,6 +532,22 @@ def row_distance(rb: FinishRobot, x, y) -> float:
     return m
 
 
+def _line_and_across(rb: FinishRobot, col, V, s):
+    """The line's unit direction f (its slopes s on the moving columns col) and the null direction n
+    across it (_null_across), or None when the slopes vanish or no null direction lies well across
+    the line (ikc_tangent_line_alone and ikc_plane_misses inline the same steps)."""
+    fn = 0.0
+    for a in range(len(col)):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return None
+    f = [s[col[a]] / math.sqrt(fn) for a in range(len(col))]
+    n, best = _null_across(rb, col, V, f)
+    if not best > 0.25:
+        return None
+    return f, n
+
+
 def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
     """Whether the tangent line through its exact point p0 is a self-motion alone: a null space of two
     directions, the line's and one along which Newton steps come back to the line (a double root),
@@ -543,15 +559,10 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
         return False
     if lam[1] >= floor:
         return True
-    fn = 0.0
-    for a in range(m):
-        fn += s[col[a]] * s[col[a]]
-    if not fn > 0.0:
+    found = _line_and_across(rb, col, V, s)
+    if found is None:
         return False
-    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
-    n, best = _null_across(rb, col, V, f)
-    if not best > 0.25:
-        return False
+    f, n = found
     for side in (-1, 1):
         x = list(p0)
         for a in range(m):
@@ -594,15 +605,10 @@ def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) ->
     floor = LINE_RANK * LINE_RANK
     if lam is None or m < 3 or not (lam[1] < floor and lam[2] >= floor):
         return False
-    fn = 0.0
-    for a in range(m):
-        fn += s[col[a]] * s[col[a]]
-    if not fn > 0.0:
+    found = _line_and_across(rb, col, V, s)
+    if found is None:
         return False
-    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
-    n, best = _null_across(rb, col, V, f)
-    if not best > 0.25:
-        return False
+    f, n = found
     out = [a for a in range(m) if abs(f[a]) <= PLANE_FIXED and abs(n[a]) <= PLANE_FIXED
            and not _joint_inside(rb, col[a], p0[col[a]], slack, slide_slack)]
     if not out:
