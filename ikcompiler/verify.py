@@ -160,13 +160,21 @@ VERIFY_CHUNK = 500
 
 def _singular(chain, q, free_cols, target: str = "pose") -> bool:
     """Whether the Jacobian of the solved joints is rank-deficient at q (body Jacobian, linear rows in
-    units of the robot's size, free joints' columns left out, the target's rows only)."""
+    units of the robot's size, free joints' columns left out, the target's rows only).
+
+    A position+direction target constrains the tool origin and its z axis: a turn about the tool's own
+    z axis (body row 5) changes neither, so its rows are the linear ones and the body turns about x
+    and y.  With all six rows a 5-joint chain looked full-rank at its self-motions (shadow_thumb at
+    q2 = q3 = 0: three parallel z axes reach a point of the plane, sigma 7e-18 on the five rows, 0.09
+    on six)."""
     J = np.delete(chain.body_jacobian(q), list(free_cols), axis=1)
     J[:3] /= chain.scale
     if target == "position":
         J = J[:3]
     elif target == "orientation":
         J = J[3:]
+    elif target == "position+direction":
+        J = J[:5]
     sv = np.linalg.svd(J, compute_uv=False)
     rank_needed = min(J.shape)
     return bool(len(sv) < rank_needed or sv[:rank_needed].min() < SINGULAR)

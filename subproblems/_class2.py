@@ -50,6 +50,7 @@ COEF_TOL = tol.S2_ZERO_COEFFICIENT
 ROUNDOFF = float(np.finfo(float).eps)
 POLISH_TOL = tol.S2_NO_POLISH
 MERGE_TOL = tol.S2_TANGENT_MERGE
+MERGE_SPREAD = tol.S2_TANGENT_SPREAD
 FAR_TOL = tol.S2_FAR
 TANGENT_TOL = tol.S2_TANGENT
 NEAR_FREE_TOL = tol.S2_NEAR_POINT_ON_AXIS
@@ -266,7 +267,7 @@ def finalize(code: str, twists, p, q, candidates, continuum: bool = False) -> li
                 join(dup, s)
             continue
         for k in kept:
-            if merge_tangent(kinds, twists, p, q, k[1], s[1], scale) is not None:
+            if merge_tangent(kinds, twists, p, q, k[1], s[1], scale, max(k[0], s[0])) is not None:
                 join(k, s)
                 break
         else:
@@ -426,23 +427,27 @@ def joint_midpoint(kinds: str, a, b) -> np.ndarray:
     return wrap_row(kinds, np.asarray(a, dtype=float) + joint_offset(kinds, a, b) / 2)
 
 
-def merge_tangent(kinds: str, twists, p, q, a, b, scale: float):
+def merge_tangent(kinds: str, twists, p, q, a, b, scale: float, res: float = 0.0):
     """One representative of two exact rows that are one (multiple) root, or None.
 
     Near a tangency (a double root: two circles touching, a line touching a circle; or a root of
     higher multiplicity) the computed roots straddle the true one by about ``eps^(1/k)`` relative,
     so several exact rows stand for one solution.  Two rows closer than ``TANGENT_TOL`` are one when
     their midpoint, polished, satisfies the equation to ``MERGE_TOL`` (1000 times tighter than
-    exactness) and polishing moved it by less than a tenth of their half-distance.  Two genuinely
-    distinct roots fail this: between them the residual does not vanish, and polishing either
-    stalls above ``MERGE_TOL`` or runs to one of them.  Returns the polished midpoint.
+    exactness) and to ``MERGE_SPREAD`` times ``res``, the larger of the rows' own residuals (at least
+    one eps of the scale), and polishing moved it by less than a tenth of their half-distance.  Two
+    genuinely distinct roots fail this: between them the residual is ~curvature x (d/2)^2, far above
+    their own, and polishing either stalls there or runs to one of them (near a fold, roots a few 1e-6
+    apart leave less than ``MERGE_TOL`` between them: the residual relative to the rows' own is what
+    tells them apart; tolerances.S2_TANGENT_SPREAD).  Returns the polished midpoint.
     """
     d = joint_distance(kinds, a, b)
     if d > TANGENT_TOL:
         return None
     mid = joint_midpoint(kinds, a, b)
     pm = wrap_row(kinds, polish(twists, p, q, mid, problem_scale(twists, p, q)))
-    if residual(twists, p, q, pm) <= MERGE_TOL * scale and joint_distance(kinds, pm, mid) <= 0.05 * d:
+    bound = min(MERGE_TOL * scale, MERGE_SPREAD * max(res, ROUNDOFF * scale))
+    if residual(twists, p, q, pm) <= bound and joint_distance(kinds, pm, mid) <= 0.05 * d:
         return pm
     return None
 
@@ -987,6 +992,7 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
     Cand = np.take_along_axis(Cand, order[..., None], axis=1)
     keep = np.take_along_axis(exact, order, axis=1)
     cfree = np.take_along_axis(cfree, order, axis=1)
+    res_kept = np.take_along_axis(res, order, axis=1)  # each kept row's own residual (merge_tangent)
 
     def jdist(a, b):
         d = np.abs(a - b)
@@ -1020,9 +1026,9 @@ def finalize_batch(code: str, tw, p, q, cand, cand_free=None, inst_cont=None) ->
                 mid = a + offset(a, b) / 2
                 pm, rm = polished(near, mid)
                 moved = jdist(pm, np.where(rev, wrap_array(mid), mid))
-                hit = np.concatenate(
-                    [split, near[(rm <= MERGE_TOL * scale[near]) & (moved <= 0.05 * d[near])]]
-                )
+                own = np.maximum(np.maximum(res_kept[near, i], res_kept[near, j]), ROUNDOFF * scale[near])
+                bound = np.minimum(MERGE_TOL * scale[near], MERGE_SPREAD * own)
+                hit = np.concatenate([split, near[(rm <= bound) & (moved <= 0.05 * d[near])]])
             if hit.size == 0:
                 continue
             fi, fj = cfree[hit, i], cfree[hit, j]

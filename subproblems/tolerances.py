@@ -113,8 +113,14 @@ S2_ZERO_COEFFICIENT = 1e-12
 #: forms and eigenvalue roots normally land there, and Gauss-Newton would not change them.
 S2_NO_POLISH = 1e-14
 #: Two exact rows closer than S2_TANGENT are one (multiple) root when their polished midpoint
-#: satisfies the equation to this times the problem scale: see ``_class2.merge_tangent``.
+#: satisfies the equation to this times the problem scale, and to S2_TANGENT_SPREAD times the larger
+#: of the two rows' own residuals (at least one eps of the scale): see ``_class2.merge_tangent``.
 S2_TANGENT_MERGE = 1e-12
+#: ... Between two distinct roots d apart the residual is ~curvature x (d/2)^2: at a fold with roots
+#: 4.3e-6 rad apart (shadow_thumb position+direction, q5 = +-2.1e-6, limits [0, pi/2]) that is 3.5e-13
+#: of the scale, below S2_TANGENT_MERGE, and the merged row at q5 = 0 lost the in-limit root.  A split
+#: multiple root's midpoint is as exact as its members (the spread is eps^(1/k) by construction).
+S2_TANGENT_SPREAD = 100.0
 #: Candidates whose residual exceeds this times the problem scale are polished only when no candidate
 #: of the instance is exact (to find the best least-squares answer): from that far, a few
 #: Gauss-Newton steps do not reach a solution the construction missed.

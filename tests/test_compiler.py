@@ -154,13 +154,7 @@ def test_cli_explain_and_compile(tmp_path, capsys):
     "name, target, free",
     [
         ("shadow_index", "position", ()),
-        pytest.param(
-            "shadow_thumb", "position+direction", (),
-            marks=pytest.mark.xfail(strict=True, reason=(
-                "solver gap (position+direction on the 5-joint thumb, special angles): seed 5 misses 2 of "
-                "60 poses: at q2 = q3 = 0 the sampled branch is not returned (the other branches are "
-                "outside the limits), and near q5 = 0 the sampled row comes back only to ~1e-5 rad")),
-        ),
+        ("shadow_thumb", "position+direction", ()),
         ("puma560", "orientation", ("j1", "j2", "j3")),
         ("ur5", "position", ("wrist_1_joint", "wrist_2_joint", "wrist_3_joint")),
     ],

@@ -21,7 +21,7 @@ import pytest
 from ikcompiler import load_robot
 from ikcompiler.cli import main
 from ikcompiler.compiler import compile_robot
-from ikcompiler.verify import _limit_checks, sample_configurations, verify
+from ikcompiler.verify import _limit_checks, _singular, sample_configurations, verify
 from subproblems import fast, solve
 from subproblems.plan_runtime import InvalidFreeValueError, InvalidTargetError
 from subproblems.screw import apply, twist_exp
@@ -274,6 +274,19 @@ def test_verify_counts_every_kind_of_failure():
         assert getattr(report, field) >= 1 and not report.ok, (field, report.text())
     report = verify(chain, _tampered(module, missing), samples=40, seed=2, scalar_checks=0, allow_missed=1)
     assert report.missed == 1 and report.ok, report.text()
+
+
+def test_verify_rank_test_of_a_position_and_direction_target():
+    """A position+direction target constrains five numbers: the rank test that counts a pose as a
+    self-motion uses those rows (linear, and the body turns about the tool's x and y).  At q2 = q3 = 0
+    the thumb's th1, th4, th5 axes are parallel to its tool z axis: a planar 3R reaching a point, a
+    self-motion (five-row sigma 7e-18), which six rows (a turn about the tool z counted) called
+    full-rank (0.09); a generic configuration is full-rank either way."""
+    chain = load_robot("shadow_thumb")
+    locked = np.array([0.29252769, 0.0, 0.0, 0.66208883, 1.41006869])
+    assert _singular(chain, locked, [], "position+direction")
+    assert not _singular(chain, locked, [], "pose")  # the six rows: what it was judged on
+    assert not _singular(chain, np.array([0.3, 0.4, -0.1, 0.2, 0.9]), [], "position+direction")
 
 
 def test_ikc_verify_exit_code(capsys):

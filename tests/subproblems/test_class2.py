@@ -351,6 +351,22 @@ def test_s2_rr_near_tangent_distinct_roots_both_kept():
     assert contains_solution(r.q, th, "RR") and contains_solution(Qb, th, "RR")
 
 
+def test_s2_rr_fold_roots_a_few_1e6_apart_both_kept():
+    """The shadow thumb's S2-RR (parallel axes through x = 38 and x = 70, the point at x = 97.5) with
+    the elbow 2.1e-6 rad from stretched: the roots th_2 = +-2.1e-6 are 4.3e-6 apart, distinct by the
+    1e-6 of a recovered sample, and both exact to roundoff; their midpoint misses by 3.4e-11 (3.5e-13
+    of the scale), under S2_TANGENT_MERGE.  Merged into the stretched row th_2 = 0, the thumb lost the
+    in-limit root (its limits [0, pi/2]; tests/test_compiler.py)."""
+    tw = [revolute_twist([0, 0, 1], [38.0, 0, 0]), revolute_twist([0, 0, 1], [70.0, 0, 0])]
+    p = np.array([97.5, 0.0, 0.0])
+    for th in (np.array([-0.45, 2.1364805193913288e-06]), np.array([0.3, -3e-6])):
+        q = fk_point(np.array(tw), th, p)
+        r, Qb, lsb, _ = _both_paths("S2-RR", tw, p, q)
+        assert len(r.q) == 2 and len(Qb) == 2 and not r.ls.any() and not lsb.any()
+        assert contains_solution(r.q, th, "RR") and contains_solution(Qb, th, "RR")
+        assert abs(r.q[0, 1] + r.q[1, 1]) < 1e-9  # the fold's two mirror roots
+
+
 def test_s2_rrt_fourfold_root_is_one_row():
     """Circle touching a cylinder from outside: one solution of multiplicity 4 in th_1, whose roots
     the eigenvalues scatter by ~eps^(1/4) ~ 2e-4; they come back as one row near the true one."""
