@@ -12,7 +12,7 @@ import contextlib
 
 import numpy as np
 
-from ikcompiler.runtime import freefold, selfmotion
+from ikcompiler.runtime import freefold, nearfamily, selfmotion
 from subproblems import continuation as _ct
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
@@ -53,6 +53,13 @@ def correct(robot, TH, owner, goals, general6, family):
     cont = report["continuum"] | selfmotion.flags(robot, TH, goals[owner], exact_only=True)
     doubt = report["uncertain"]
     solver = general6() if len(doubt) else None
+    if len(doubt) and solver is None and nearfamily.square(robot):
+        # no complete solver of the true robot: walk the near-self-motions the doubtful rows lie on,
+        # whose isolated zeros Newton reaches only from close by (rhino at q2 = pi; nearfamily.py)
+        X, own_x = nearfamily.candidates(robot, TH, owner, goals, doubt)
+        if len(X):
+            TH, owner = np.concatenate([TH, X]), np.concatenate([owner, own_x])
+            cont = np.concatenate([cont, selfmotion.flags(robot, X, goals[own_x])])
     if solver is not None:
         if robot.free_joints:  # folded at each target's free value, held in its rows (freefold.py)
             order = np.argsort(held_owner, kind="stable")
