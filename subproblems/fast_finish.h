@@ -905,6 +905,117 @@ static int ikc_plane_misses(const ikc_robot *rb, const double *g, const double *
     return 1;
 }
 
+/* A joint the sheet's direction n leaves, where a double root's direction shares the null space at p0:
+ * there p0 is exact only to the double root's flat error (joint values to ~1e-8, the error their
+ * square), the null vectors of the triple eigenvalue mix by ~1e-6 and Newton's end points on the sheet
+ * keep the joint to ~1e-8; the joint is also asked to stay outside its limits at those points. */
+#define IKC_ROOT_FIXED 1e-4
+
+/* ikc_plane_root_misses for one choice of the sheet's second direction n and the double root's r
+ * (unit, across f and each other; m entries over col): a joint that neither f nor n moves lies outside
+ * its limits; Newton steps from p0 +- IKC_TANGENT_PROBE r come back to the sheet's tangent plane (a
+ * double root: no solutions along r); the points p0 +- IKC_PLANE_PROBE n are exact, off the line, keep
+ * that joint (within IKC_ROOT_FIXED, outside its limits) and have two null directions (the sheet alone
+ * there).  (settle._sheet_and_root) */
+static int ikc_sheet_and_root(const ikc_robot *rb, const double *g, const double *p0, int m, const int *col,
+                              const double *f, const double *n, const double *r, double slack,
+                              double slide_slack) {
+    const int dof = rb->dof;
+    int out[m], nout = 0;
+    for (int a = 0; a < m; a++)
+        if (fabs(f[a]) <= IKC_PLANE_FIXED && fabs(n[a]) <= IKC_ROOT_FIXED &&
+            !ikc_joint_inside(rb, col[a], p0[col[a]], slack, slide_slack))
+            out[nout++] = a;
+    if (!nout) return 0;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_TANGENT_PROBE * r[a] * u;
+        }
+        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
+        double d[m], along = 0.0, across = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+            across += d[a] * n[a];
+        }
+        for (int a = 0; a < m; a++)
+            off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a]);
+        if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the sheet: no double root */
+    }
+    const double exact = rb->tol * rb->scale, floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
+        }
+        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
+        for (int k = 0; k < nout; k++)
+            if (!(fabs(d[out[k]]) <= IKC_ROOT_FIXED &&
+                  !ikc_joint_inside(rb, col[out[k]], x[col[out[k]]], slack, slide_slack)))
+                return 0;
+        int colx[dof];
+        double lamx[dof];
+        ikc_jtj_eigen(rb, x, colx, lamx, NULL);
+        if (!(lamx[1] < floor && lamx[2] >= floor)) return 0;
+    }
+    return 1;
+}
+
+/* Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone of
+ * which a joint lies outside its limits, where a double root adds a third null direction at p0 (prob at
+ * q5 = pi: joints 1, 4 and 6 coaxial and the S2-RR of joints 2 and 3 at a double root): the null space
+ * at p0 has exactly three directions, the line's f and, across it, a sheet's n and a double root's r
+ * (tried in each order of the null vectors across f: at a triple null eigenvalue the sweeps' vectors
+ * are any basis of it, so a mixed basis finds no order and refuses), each as ikc_sheet_and_root asks
+ * (settle.plane_root_misses). */
+static int ikc_plane_root_misses(const ikc_robot *rb, const double *g, const double *p0, const double *s,
+                                 double slack, double slide_slack) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 4 || !(lam[2] < floor && lam[3] >= floor)) return 0;
+    double f[m], fn = 0.0, W[3][m];
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);
+    for (int v = 0; v < 3; v++) {  /* the three null vectors made orthogonal to f */
+        double d = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) W[v][a] = V[a * m + v] - d * f[a];
+    }
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) {
+            if (i == k) continue;
+            double ni = 0.0, n[m], r[m], d = 0.0, nr = 0.0;
+            for (int a = 0; a < m; a++) ni += W[i][a] * W[i][a];
+            if (!(ni > 0.25)) continue;
+            for (int a = 0; a < m; a++) n[a] = W[i][a] / sqrt(ni);
+            for (int a = 0; a < m; a++) d += W[k][a] * n[a];
+            for (int a = 0; a < m; a++) r[a] = W[k][a] - d * n[a];
+            for (int a = 0; a < m; a++) nr += r[a] * r[a];
+            if (!(nr > 0.25)) continue;
+            for (int a = 0; a < m; a++) r[a] = r[a] / sqrt(nr);
+            if (ikc_sheet_and_root(rb, g, p0, m, col, f, n, r, slack, slide_slack)) return 1;
+        }
+    return 0;
+}
+
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
  * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
  * representative that is exact and inside the limits (the family's interval of reachable values may
@@ -946,11 +1057,14 @@ static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *
                      ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
         return -2;
     const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+    const double slide = tangent ? slack * rb->scale : slack;
+    /* not a line alone: a plane alone that misses the limits has no solution either (also where a double
+     * root adds a third null direction at p0) */
     if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
-        /* not a line alone: a plane alone that misses the limits has no solution either */
-        return ikc_plane_misses(rb, g, p0, s, slack, tangent ? slack * rb->scale : slack) ? 0 : -2;
+        return ikc_plane_misses(rb, g, p0, s, slack, slide) || ikc_plane_root_misses(rb, g, p0, s, slack, slide)
+                   ? 0 : -2;
     *t = 0.0;
-    return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
+    return ikc_line_in_limits(rb, q0, s, slack, slide, t);
 }
 
 /* The earlier leaf k < j whose line verdict j can take (-1 when none): asked already, the same test

@@ -724,6 +724,120 @@ def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) ->
     return True
 
 
+# IKC_ROOT_FIXED: a joint the sheet's direction n leaves, where a double root's direction shares the null
+# space at p0: there p0 is exact only to the double root's flat error (joint values to ~1e-8, the error
+# their square), the null vectors of the triple eigenvalue mix by ~1e-6 and Newton's end points on the
+# sheet keep the joint to ~1e-8; the joint is also asked to stay outside its limits at those points
+ROOT_FIXED = 1e-4
+
+
+def _sheet_and_root(rb: FinishRobot, g, p0, col, f, n, r, slack: float, slide_slack: float) -> bool:
+    """plane_root_misses for one choice of the sheet's second direction n and the double root's r (unit,
+    across f and each other): a joint that neither f nor n moves lies outside its limits; Newton steps
+    from p0 +- TANGENT_PROBE r come back to the sheet's tangent plane (a double root: no solutions
+    along r); the points p0 +- PLANE_PROBE n are exact, off the line, keep that joint and have two null
+    directions (the sheet alone there), the joint within ROOT_FIXED and outside its limits
+    (ikc_sheet_and_root)."""
+    m = len(col)
+    out = [a for a in range(m) if abs(f[a]) <= PLANE_FIXED and abs(n[a]) <= ROOT_FIXED
+           and not _joint_inside(rb, col[a], p0[col[a]], slack, slide_slack)]
+    if not out:
+        return False
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * TANGENT_PROBE * r[a] * u
+        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
+        d, along, across = [], 0.0, 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+            across += d[a] * n[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a])
+        if not math.sqrt(off) <= 0.1 * TANGENT_PROBE:
+            return False  # not back on the sheet: no double root's direction
+    exact = rb.tol * rb.scale
+    floor = LINE_RANK * LINE_RANK
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * PLANE_PROBE * n[a] * u
+        if not newton_steps(rb, g, x, 15) <= exact:
+            return False
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) >= 0.5 * PLANE_PROBE:
+            return False  # back towards the line: no sheet
+        for a in out:
+            if not (abs(d[a]) <= ROOT_FIXED and not _joint_inside(rb, col[a], x[col[a]], slack, slide_slack)):
+                return False
+        _, lam_x, _ = jtj_eigen(rb, x)
+        if not (lam_x[1] < floor and lam_x[2] >= floor):
+            return False
+    return True
+
+
+def plane_root_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) -> bool:
+    """Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone
+    of which a joint lies outside its limits, where a double root adds a third null direction at p0
+    (prob at q5 = pi: joints 1, 4 and 6 coaxial and the S2-RR of joints 2 and 3 at a double root): the
+    null space at p0 has exactly three directions, the line's f and, across it, a sheet's n and a double
+    root's r (tried in each order of the null vectors across f: at a triple null eigenvalue the sweeps'
+    vectors are any basis of it, so a mixed basis finds no order and refuses), each as
+    :func:`_sheet_and_root` asks (ikc_plane_root_misses)."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 4 or not (lam[2] < floor and lam[3] >= floor):
+        return False
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    W = []  # the three null vectors made orthogonal to f
+    for v in range(3):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        W.append([V[a][v] - d * f[a] for a in range(m)])
+    for i in range(3):
+        for k in range(3):
+            if i == k:
+                continue
+            ni = 0.0
+            for a in range(m):
+                ni += W[i][a] * W[i][a]
+            if not ni > 0.25:
+                continue
+            n = [W[i][a] / math.sqrt(ni) for a in range(m)]
+            d = 0.0
+            for a in range(m):
+                d += W[k][a] * n[a]
+            r = [W[k][a] - d * n[a] for a in range(m)]
+            nr = 0.0
+            for a in range(m):
+                nr += r[a] * r[a]
+            if not nr > 0.25:
+                continue
+            r = [r[a] / math.sqrt(nr) for a in range(m)]
+            if _sheet_and_root(rb, g, p0, col, f, n, r, slack, slide_slack):
+                return True
+    return False
+
+
 def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
     a line alone (a tangent line: its exact point near q0 is found first; ``root``: an exact line whose
@@ -735,8 +849,11 @@ def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
         return -2, 0.0
     slack = TANGENT_MARGIN if tangent else LIMIT_EPS
     if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
-        # not a line alone: a plane alone that misses the limits has no solution either
-        return (0 if plane_misses(rb, g, p0, s, slack, slack * rb.scale if tangent else slack) else -2), 0.0
+        # not a line alone: a plane alone that misses the limits has no solution either (also where a
+        # double root adds a third null direction at p0)
+        slide = slack * rb.scale if tangent else slack
+        return (0 if plane_misses(rb, g, p0, s, slack, slide) or plane_root_misses(rb, g, p0, s, slack, slide)
+                else -2), 0.0
     found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
     return found, (0.0 if t is None else t)
 
