@@ -1114,16 +1114,17 @@ static void ikc_fit_lines(const ikc_robot *rb, int n, int r, double rep, const d
     }
 }
 
-/* Whether the line q0 + s rep misses the goal by at most `bound` (forward kinematics) at every
- * representative but 0 and the first, where the chain's leaves showed it: the line checked where the
- * chain would have run (settle._line_points_exact). */
+/* Whether the line q0 + s rep misses the goal by at most `bound` (forward kinematics) at the
+ * representatives k pi / 4 (k = +-1, +-2, +-3, 4): with the chain's leaves at 0 and pi / 8, nine points
+ * around the closed line, the chain's grid at half its resolution (each point costs a quarter of a chain
+ * run; settle._line_points_exact). */
 static int ikc_line_points_exact(const ikc_robot *rb, const double *g, const double *q0, const double *s,
                                  double bound) {
     const int dof = rb->dof;
-    for (int r = 2; r < IKC_REPS; r++) {
+    for (int r = 1; r < IKC_REPS; r++) {
         int step = (r + 1) / 2;
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS), x[dof];
-        if (rep <= -IKC_PI_F) continue;
+        if (step % 2 || rep <= -IKC_PI_F) continue;
         for (int c = 0; c < dof; c++) x[c] = q0[c] + s[c] * rep;
         if (!(ikc_measure(rb, g, x) <= bound)) return 0;
     }
@@ -1139,9 +1140,9 @@ static int ikc_line_point_inside(const ikc_robot *rb, const double *q0, const do
 
 /* The settling of a target whose self-motion leaves are all straight-line candidates after the first
  * other representative (Q1, E1, F1: its leaves), without running the chain at the other 14
- * (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at those
- * representatives are checked by forward kinematics instead (exact, or for a tangent line within
- * IKC_NEAR_MISS, as its leaves were); a tangent line is judged first, as in the full loop, and must be
+ * (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at every other
+ * of those representatives are checked by forward kinematics instead (exact, or for a tangent line
+ * within IKC_NEAR_MISS, as its leaves were: ikc_line_points_exact); a tangent line is judged first, as in the full loop, and must be
  * dropped; an exact line's leaf takes the first representative whose line point lies inside the limits
  * (the chain run there, its leaf on the line, exact and inside: what the full loop would take), or,
  * with none, the line's verdict drops it (the line misses the limits) or takes the chain at its

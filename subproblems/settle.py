@@ -997,11 +997,12 @@ def _fit_lines(rb: FinishRobot, r, rep, Q2, E2, F2, Q0, line, S):
 
 
 def _line_points_exact(rb: FinishRobot, g, q0, s, bound: float) -> bool:
-    """Whether the line q0 + s rep misses the goal by at most ``bound`` (forward kinematics) at every
-    representative but 0 and the first (where the chain's leaves showed it): the line checked where the
-    chain would have run (ikc_line_points_exact)."""
+    """Whether the line q0 + s rep misses the goal by at most ``bound`` (forward kinematics) at the
+    representatives k pi / 4 (k = +-1, +-2, +-3, 4): with the chain's leaves at 0 and pi / 8, nine points
+    around the closed line, the chain's grid at half its resolution (each point costs a quarter of a
+    chain run; ikc_line_points_exact)."""
     for r, rep in _reps():
-        if r == 1:
+        if ((r + 1) // 2) % 2:
             continue
         if not measure(rb, g, [q0[c] + s[c] * rep for c in range(rb.dof)]) <= bound:
             return False
@@ -1011,14 +1012,15 @@ def _line_points_exact(rb: FinishRobot, g, q0, s, bound: float) -> bool:
 def quick_lines(rb: FinishRobot, chain, g, free, Q, E, F, Q0, line, S, tangent, root, first):
     """The settling of a target whose self-motion leaves are all straight-line candidates after the
     first other representative (first = its leaves), without running the chain at the other 14
-    (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at those
-    representatives are checked by forward kinematics instead (exact, or for a tangent line within
-    NEAR_MISS, as its leaves were); a tangent line is judged first, as in the full loop, and must be
-    dropped; an exact line's leaf takes the first representative whose line point lies inside the
-    limits (the chain run there, its leaf on the line, exact and inside: what the full loop would
-    take), or, with none, the line's verdict drops it (the line misses the limits) or takes the chain
-    at its in-limit middle.  The rows of the full loop, or None where any step leaves the quick case
-    (the full loop then runs from the start: ikc_quick_lines)."""
+    (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at every
+    other of those representatives are checked by forward kinematics instead (exact, or for a tangent
+    line within NEAR_MISS, as its leaves were: :func:`_line_points_exact`); a tangent line is judged
+    first, as in the full loop, and must be dropped; an exact line's leaf takes the first
+    representative whose line point lies inside the limits (the chain run there, its leaf on the line,
+    exact and inside: what the full loop would take), or, with none, the line's verdict drops it (the
+    line misses the limits) or takes the chain at its in-limit middle.  The rows of the full loop, or
+    None where any step leaves the quick case (the full loop then runs from the start:
+    ikc_quick_lines)."""
     dof, n = rb.dof, len(Q)
     exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
     Q1, E1, F1 = first
