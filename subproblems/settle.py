@@ -317,6 +317,7 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
         status = represent(rb, w, limits, held)
         if status == CLAMPED:
             newton_steps(rb, g, w, CLAMPED_NEWTON, True, held)
+            same = SPLIT_ROOT  # Newton placed this row: a copy of it may stop 1e-7 away (as the C, 814886d)
             if any(x != x for x in w):
                 return PYTHON
             status = represent(rb, w, limits, held)
