@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -182,7 +183,7 @@ def _subprocess(args: list[str]) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def _table(rows, mem, batch) -> str:
+def _table(rows, mem, batch, load=None) -> str:
     lines = [
         "# Special poses and batch memory",
         "",
@@ -223,6 +224,8 @@ def _table(rows, mem, batch) -> str:
     lines += ["", f"Timing goal missed by: {', '.join(miss) or 'none'}; on taught poses by: "
               f"{', '.join(taught) or 'none'}.  "
               f"Memory goal missed by: {', '.join(over) or 'none'}.", ""]
+    if load:  # the machine is shared: its 1-minute load average when the run started and ended
+        lines += [f"Load average (1 min) at the start and end of the run: {load[0]:.1f}, {load[1]:.1f}.", ""]
     return "\n".join(lines)
 
 
@@ -260,6 +263,7 @@ def main(argv=None) -> int:
         print(f"wrote {out}")
         return 0
     rows, mem = [], {}
+    load = [os.getloadavg()[0]]
     for name in args.robots or zoo_names():
         row = _subprocess(["--time-one", name])
         row.setdefault("robot", name)
@@ -268,7 +272,8 @@ def main(argv=None) -> int:
         if not args.no_memory:
             mem[name] = _subprocess(["--memory-one", name, "--batch", str(args.batch)])
             print(json.dumps(mem[name]), flush=True)
-    Path(args.out).write_text(_table(rows, mem, args.batch))
+    load.append(os.getloadavg()[0])
+    Path(args.out).write_text(_table(rows, mem, args.batch, load))
     print(f"wrote {args.out}")
     return 0
 

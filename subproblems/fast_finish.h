@@ -636,6 +636,73 @@ static double ikc_joint_step(const ikc_robot *rb, int j, double a, double b) {
 
 static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const double *p0, const double *s);
 
+/* A sufficient test that the second smallest eigenvalue of the size-free J^T J at q is at least
+ * IKC_LINE_RANK^2, cheaper than ikc_jtj_eigen's sweeps: J^T J compressed onto the complement of the
+ * line's unit direction f (an orthonormal basis by Gram-Schmidt), less twice that floor, has a Cholesky
+ * factor.  By Courant-Fischer the second eigenvalue is at least the compression's smallest, so where
+ * this holds the eigenvalue test holds too (the factor 2 keeps roundoff off the floor); where it fails
+ * the caller asks the eigenvalues (settle.rank_clear). */
+static int ikc_rank_clear(const ikc_robot *rb, const double *q, const double *s) {
+    const int dof = rb->dof;
+    int col[dof], rows;
+    double Sf[dof * dof];
+    const int m = ikc_scaled_jtj(rb, q, col, Sf, &rows);
+    if (m < 2 || m > rows) return 0;
+    double f[m], fn = 0.0;
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);
+    int top = 0;
+    for (int a = 1; a < m; a++)
+        if (fabs(f[a]) > fabs(f[top])) top = a;
+    const int k = m - 1;
+    double U[k > 0 ? k : 1][m];  /* orthonormal basis of the complement of f */
+    int nu = 0;
+    for (int a = 0; a < m; a++) {
+        if (a == top) continue;
+        double *u = U[nu];
+        for (int c = 0; c < m; c++) u[c] = (c == a ? 1.0 : 0.0) - f[a] * f[c];
+        for (int b = 0; b < nu; b++) {
+            double d = 0.0;
+            for (int c = 0; c < m; c++) d += U[b][c] * u[c];
+            for (int c = 0; c < m; c++) u[c] -= d * U[b][c];
+        }
+        double norm = 0.0;
+        for (int c = 0; c < m; c++) norm += u[c] * u[c];
+        norm = sqrt(norm);
+        if (!(norm > 0.0)) return 0;
+        for (int c = 0; c < m; c++) u[c] = u[c] / norm;
+        nu++;
+    }
+    double C[k > 0 ? k : 1][k > 0 ? k : 1], L[k > 0 ? k : 1][k > 0 ? k : 1];
+    for (int a = 0; a < k; a++) {
+        double Su[m];
+        for (int r = 0; r < m; r++) {
+            double t = 0.0;
+            for (int c = 0; c < m; c++) t += Sf[r * m + c] * U[a][c];
+            Su[r] = t;
+        }
+        for (int b = 0; b <= a; b++) {
+            double t = 0.0;
+            for (int r = 0; r < m; r++) t += U[b][r] * Su[r];
+            C[a][b] = t;
+        }
+    }
+    const double floor = 2.0 * IKC_LINE_RANK * IKC_LINE_RANK;
+    for (int a = 0; a < k; a++)
+        for (int b = 0; b <= a; b++) {
+            double t = C[a][b] - (a == b ? floor : 0.0);
+            for (int c = 0; c < b; c++) t -= L[a][c] * L[b][c];
+            if (a == b) {
+                if (!(t > 0.0)) return 0;
+                L[a][a] = sqrt(t);
+            } else {
+                L[a][b] = t / L[b][b];
+            }
+        }
+    return 1;
+}
+
 /* Whether the line q0 + s t is a self-motion alone at its points t = 0, +-2 pi / 3 (see above).  With
  * g (the goal; not NULL for a line whose leaves are flagged a tangent root, exact there), a point with a
  * second null direction counts where that direction is a double root's (ikc_tangent_line_alone at the
@@ -648,6 +715,7 @@ static int ikc_line_alone(const ikc_robot *rb, const double *q0, const double *s
     for (int p = 0; p < IKC_LINE_POINTS; p++) {
         double t = (p == 0 ? 0.0 : (p == 1 ? 1.0 : -1.0)) * IKC_TWO_PI / 3.0, q[dof], sig[2];
         for (int j = 0; j < dof; j++) q[j] = q0[j] + s[j] * t;
+        if (ikc_rank_clear(rb, q, s)) continue;  /* the eigenvalues would say the same */
         ikc_two_weakest(rb, q, sig);
         if (!(sig[1] >= IKC_LINE_RANK) && !(g != NULL && ikc_tangent_line_alone(rb, g, q, s))) return 0;
     }
@@ -838,6 +906,117 @@ static int ikc_plane_misses(const ikc_robot *rb, const double *g, const double *
     return 1;
 }
 
+/* A joint the sheet's direction n leaves, where a double root's direction shares the null space at p0:
+ * there p0 is exact only to the double root's flat error (joint values to ~1e-8, the error their
+ * square), the null vectors of the triple eigenvalue mix by ~1e-6 and Newton's end points on the sheet
+ * keep the joint to ~1e-8; the joint is also asked to stay outside its limits at those points. */
+#define IKC_ROOT_FIXED 1e-4
+
+/* ikc_plane_root_misses for one choice of the sheet's second direction n and the double root's r
+ * (unit, across f and each other; m entries over col): a joint that neither f nor n moves lies outside
+ * its limits; Newton steps from p0 +- IKC_TANGENT_PROBE r come back to the sheet's tangent plane (a
+ * double root: no solutions along r); the points p0 +- IKC_PLANE_PROBE n are exact, off the line, keep
+ * that joint (within IKC_ROOT_FIXED, outside its limits) and have two null directions (the sheet alone
+ * there).  (settle._sheet_and_root) */
+static int ikc_sheet_and_root(const ikc_robot *rb, const double *g, const double *p0, int m, const int *col,
+                              const double *f, const double *n, const double *r, double slack,
+                              double slide_slack) {
+    const int dof = rb->dof;
+    int out[m], nout = 0;
+    for (int a = 0; a < m; a++)
+        if (fabs(f[a]) <= IKC_PLANE_FIXED && fabs(n[a]) <= IKC_ROOT_FIXED &&
+            !ikc_joint_inside(rb, col[a], p0[col[a]], slack, slide_slack))
+            out[nout++] = a;
+    if (!nout) return 0;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_TANGENT_PROBE * r[a] * u;
+        }
+        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
+        double d[m], along = 0.0, across = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+            across += d[a] * n[a];
+        }
+        for (int a = 0; a < m; a++)
+            off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a]);
+        if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the sheet: no double root */
+    }
+    const double exact = rb->tol * rb->scale, floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    for (int side = -1; side <= 1; side += 2) {
+        double x[dof];
+        for (int j = 0; j < dof; j++) x[j] = p0[j];
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
+        }
+        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
+        double d[m], along = 0.0, off = 0.0;
+        for (int a = 0; a < m; a++) {
+            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+            along += d[a] * f[a];
+        }
+        for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
+        if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
+        for (int k = 0; k < nout; k++)
+            if (!(fabs(d[out[k]]) <= IKC_ROOT_FIXED &&
+                  !ikc_joint_inside(rb, col[out[k]], x[col[out[k]]], slack, slide_slack)))
+                return 0;
+        int colx[dof];
+        double lamx[dof];
+        ikc_jtj_eigen(rb, x, colx, lamx, NULL);
+        if (!(lamx[1] < floor && lamx[2] >= floor)) return 0;
+    }
+    return 1;
+}
+
+/* Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone of
+ * which a joint lies outside its limits, where a double root adds a third null direction at p0 (prob at
+ * q5 = pi: joints 1, 4 and 6 coaxial and the S2-RR of joints 2 and 3 at a double root): the null space
+ * at p0 has exactly three directions, the line's f and, across it, a sheet's n and a double root's r
+ * (tried in each order of the null vectors across f: at a triple null eigenvalue the sweeps' vectors
+ * are any basis of it, so a mixed basis finds no order and refuses), each as ikc_sheet_and_root asks
+ * (settle.plane_root_misses). */
+static int ikc_plane_root_misses(const ikc_robot *rb, const double *g, const double *p0, const double *s,
+                                 double slack, double slide_slack) {
+    const int dof = rb->dof;
+    int col[dof];
+    double lam[dof], V[dof * dof];
+    const int m = ikc_jtj_eigen(rb, p0, col, lam, V);
+    const double floor = IKC_LINE_RANK * IKC_LINE_RANK;
+    if (m < 4 || !(lam[2] < floor && lam[3] >= floor)) return 0;
+    double f[m], fn = 0.0, W[3][m];
+    for (int a = 0; a < m; a++) fn += s[col[a]] * s[col[a]];
+    if (!(fn > 0.0)) return 0;
+    for (int a = 0; a < m; a++) f[a] = s[col[a]] / sqrt(fn);
+    for (int v = 0; v < 3; v++) {  /* the three null vectors made orthogonal to f */
+        double d = 0.0;
+        for (int a = 0; a < m; a++) d += V[a * m + v] * f[a];
+        for (int a = 0; a < m; a++) W[v][a] = V[a * m + v] - d * f[a];
+    }
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) {
+            if (i == k) continue;
+            double ni = 0.0, n[m], r[m], d = 0.0, nr = 0.0;
+            for (int a = 0; a < m; a++) ni += W[i][a] * W[i][a];
+            if (!(ni > 0.25)) continue;
+            for (int a = 0; a < m; a++) n[a] = W[i][a] / sqrt(ni);
+            for (int a = 0; a < m; a++) d += W[k][a] * n[a];
+            for (int a = 0; a < m; a++) r[a] = W[k][a] - d * n[a];
+            for (int a = 0; a < m; a++) nr += r[a] * r[a];
+            if (!(nr > 0.25)) continue;
+            for (int a = 0; a < m; a++) r[a] = r[a] / sqrt(nr);
+            if (ikc_sheet_and_root(rb, g, p0, m, col, f, n, r, slack, slide_slack)) return 1;
+        }
+    return 0;
+}
+
 /* Leaves, finish, and for a self-motion none of whose representatives (rep = 0) is exact inside the
  * joint limits, the chain again with rep = +-pi/8, +-pi/4, ... pi: each family leaf takes the first
  * representative that is exact and inside the limits (the family's interval of reachable values may
@@ -879,11 +1058,14 @@ static int ikc_line_verdict(const ikc_robot *rb, const double *g, const double *
                      ikc_row_distance(rb, p0, q0) <= IKC_TANGENT_MARGIN))
         return -2;
     const double slack = tangent ? IKC_TANGENT_MARGIN : IKC_LIMIT_EPS;
+    const double slide = tangent ? slack * rb->scale : slack;
+    /* not a line alone: a plane alone that misses the limits has no solution either (also where a double
+     * root adds a third null direction at p0) */
     if (!(tangent ? ikc_tangent_line_alone(rb, g, p0, s) : ikc_line_alone(rb, q0, s, root ? g : NULL)))
-        /* not a line alone: a plane alone that misses the limits has no solution either */
-        return ikc_plane_misses(rb, g, p0, s, slack, tangent ? slack * rb->scale : slack) ? 0 : -2;
+        return ikc_plane_misses(rb, g, p0, s, slack, slide) || ikc_plane_root_misses(rb, g, p0, s, slack, slide)
+                   ? 0 : -2;
     *t = 0.0;
-    return ikc_line_in_limits(rb, q0, s, slack, tangent ? slack * rb->scale : slack, t);
+    return ikc_line_in_limits(rb, q0, s, slack, slide, t);
 }
 
 /* The earlier leaf k < j whose line verdict j can take (-1 when none): asked already, the same test
@@ -905,6 +1087,179 @@ static int ikc_given_verdict(const ikc_robot *rb, int j, const int *verdict, con
         if (same) return k;
     }
     return -1;
+}
+
+/* Whether each candidate line's leaf at representative rep (the r-th: Q2, E2, F2) still lies on it,
+ * exactly; the first (r = 1) sets its slopes S (settle._fit_lines). */
+static void ikc_fit_lines(const ikc_robot *rb, int n, int r, double rep, const double *Q2, const double *E2,
+                          const int *F2, const double *Q0, int *line, double *S) {
+    const int dof = rb->dof;
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    for (int j = 0; j < n; j++) {
+        if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
+            const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
+            int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) &&
+                       (E2[j] <= exact_tol || ((F2[j] & IKC_TANGENT_ROOT) && E2[j] < near));
+            for (int c = 0; c < dof && fits; c++) {
+                double d = ikc_joint_step(rb, c, row[c], q0[c]), unit = rb->revolute[c] ? 1.0 : rb->scale;
+                if (r == 1) {
+                    double sl = d / rep, whole = nearbyint(sl);
+                    fits = rb->revolute[c] ? fabs(sl - whole) <= IKC_LINE_FIT / rep : fabs(d) <= IKC_LINE_FIT * unit;
+                    S[j * dof + c] = rb->revolute[c] ? whole : 0.0;
+                } else {
+                    fits = fabs(ikc_joint_step(rb, c, d, S[j * dof + c] * rep)) <= IKC_LINE_FIT * unit;
+                }
+            }
+            line[j] = fits;
+        }
+    }
+}
+
+/* Whether the line q0 + s rep misses the goal by at most `bound` (forward kinematics) at the
+ * representatives k pi / 4 (k = +-1, +-2, +-3, 4): with the chain's leaves at 0 and pi / 8, nine points
+ * around the closed line, the chain's grid at half its resolution (each point costs a quarter of a chain
+ * run; settle._line_points_exact). */
+static int ikc_line_points_exact(const ikc_robot *rb, const double *g, const double *q0, const double *s,
+                                 double bound) {
+    const int dof = rb->dof;
+    for (int r = 1; r < IKC_REPS; r++) {
+        int step = (r + 1) / 2;
+        double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS), x[dof];
+        if (step % 2 || rep <= -IKC_PI_F) continue;
+        for (int c = 0; c < dof; c++) x[c] = q0[c] + s[c] * rep;
+        if (!(ikc_measure(rb, g, x) <= bound)) return 0;
+    }
+    return 1;
+}
+
+/* Whether the line point q0 + s rep has a representative inside the limits. */
+static int ikc_line_point_inside(const ikc_robot *rb, const double *q0, const double *s, double rep) {
+    double x[rb->dof];
+    for (int c = 0; c < rb->dof; c++) x[c] = q0[c] + s[c] * rep;
+    return ikc_row_inside(rb, x);
+}
+
+/* The settling of a target whose self-motion leaves are all straight-line candidates after the first
+ * other representative (Q1, E1, F1: its leaves), without running the chain at the other 14
+ * (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at every other
+ * of those representatives are checked by forward kinematics instead (exact, or for a tangent line
+ * within IKC_NEAR_MISS, as its leaves were: ikc_line_points_exact); a tangent line is judged first, as in the full loop, and must be
+ * dropped; an exact line's leaf takes the first representative whose line point lies inside the limits
+ * (the chain run there, its leaf on the line, exact and inside: what the full loop would take), or,
+ * with none, the line's verdict drops it (the line misses the limits) or takes the chain at its
+ * in-limit middle.  The finish's count (or IKC_PYTHON), or -4 where any step leaves the quick case
+ * (the full loop then runs from the start; Q, E, F untouched: settle.quick_lines). */
+#define IKC_NOT_QUICK (-4)
+static int ikc_quick_lines(const ikc_robot *rb, ikc_chain_fn chain, int L, int n, const double *g,
+                           const double *fr, const double *Q, const double *E, const int *F,
+                           const double *Q0, const int *line, const double *S, const int *tangent,
+                           const int *root, const double *Q1, const double *E1, const int *F1, double *q,
+                           double *res, int *ls, int *cont) {
+    const int dof = rb->dof;
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    int pending[L], np = 0;
+    for (int j = 0; j < n; j++) {
+        if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
+        const int lock = F[j] & IKC_LOCK;
+        if (!lock && E[j] <= exact_tol && ikc_row_inside(rb, Q + j * dof)) continue;
+        if (!line[j] || !(tangent[j] || E1[j] <= exact_tol)) return IKC_NOT_QUICK;
+        pending[np++] = j;
+    }
+    if (!np) return IKC_NOT_QUICK;
+    for (int a = 0; a < np; a++) {  /* each line once (split copies share their values and slopes) */
+        const int j = pending[a];
+        int seen = 0;
+        for (int b = 0; b < a && !seen; b++) {
+            const int k = pending[b];
+            seen = 1;
+            for (int c = 0; c < dof && seen; c++)
+                seen = Q0[k * dof + c] == Q0[j * dof + c] && S[k * dof + c] == S[j * dof + c];
+        }
+        if (!seen && !ikc_line_points_exact(rb, g, Q0 + j * dof, S + j * dof, tangent[j] ? near : exact_tol))
+            return IKC_NOT_QUICK;
+    }
+    /* the chain at a representative, run once (rep r at r - 1; the first is Q1) */
+    double RQ[(IKC_REPS - 1) * L * dof], RE[(IKC_REPS - 1) * L];
+    int RF[(IKC_REPS - 1) * L], ran[IKC_REPS];
+    for (int r = 0; r < IKC_REPS; r++) ran[r] = r == 1;
+    double Qc[L * dof], Ec[L], VT[L], Q3[L * dof], E3[L];
+    int Fc[L], verdict[L], F3[L];
+    for (int j = 0; j < n; j++) {  /* the full loop starts afresh where this fails */
+        for (int c = 0; c < dof; c++) Qc[j * dof + c] = Q[j * dof + c];
+        Ec[j] = E[j];
+        Fc[j] = F[j];
+        verdict[j] = -3;
+        VT[j] = 0.0;
+    }
+    for (int a = 0; a < np; a++) {  /* tangent lines first, as the full loop judges them before its polish */
+        const int j = pending[a];
+        if (!tangent[j]) continue;
+        const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+        if (k >= 0)
+            verdict[j] = verdict[k], VT[j] = VT[k];
+        else
+            verdict[j] = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 1, 0, VT + j);
+        if (verdict[j] != 0) return IKC_NOT_QUICK;
+        Fc[j] |= IKC_EMPTY;
+    }
+    for (int a = 0; a < np; a++) {
+        const int j = pending[a];
+        if (tangent[j]) continue;
+        int taken = 0;
+        for (int r = 1; r < IKC_REPS && !taken && !(Fc[j] & IKC_LOCK); r++) {
+            int step = (r + 1) / 2;
+            double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
+            if (rep <= -IKC_PI_F) continue;
+            if (!ikc_line_point_inside(rb, Q0 + j * dof, S + j * dof, rep)) continue;
+            const double *Q2 = r == 1 ? Q1 : RQ + (r - 1) * L * dof, *E2 = r == 1 ? E1 : RE + (r - 1) * L;
+            const int *F2 = r == 1 ? F1 : RF + (r - 1) * L;
+            if (!ran[r]) {
+                if (ikc_lock_leaves(chain, g, fr, rep, RQ + (r - 1) * L * dof, RE + (r - 1) * L,
+                                    RF + (r - 1) * L) != n)
+                    return IKC_NOT_QUICK;
+                ran[r] = 1;
+            }
+            const double *row = Q2 + j * dof;
+            if (!(F2[j] & IKC_FAMILY) || (F2[j] & (IKC_DEFER | IKC_EMPTY)) || !(E2[j] <= exact_tol) ||
+                !ikc_row_inside(rb, row))
+                return IKC_NOT_QUICK;
+            for (int c = 0; c < dof; c++) {
+                const double unit = rb->revolute[c] ? 1.0 : rb->scale;
+                const double d = ikc_joint_step(rb, c, row[c], Q0[j * dof + c]);
+                if (!(fabs(ikc_joint_step(rb, c, d, S[j * dof + c] * rep)) <= IKC_LINE_FIT * unit))
+                    return IKC_NOT_QUICK;
+            }
+            for (int c = 0; c < dof; c++) Qc[j * dof + c] = row[c];
+            Ec[j] = E2[j];
+            Fc[j] = F2[j];
+            taken = 1;
+        }
+        if (taken) continue;
+        double t = 0.0;
+        const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);
+        int found;
+        if (k >= 0)
+            found = verdict[k], t = VT[k];
+        else
+            found = ikc_line_verdict(rb, g, Q0 + j * dof, S + j * dof, 0, root[j], &t);
+        verdict[j] = found, VT[j] = t;
+        if (found == 0) {
+            Fc[j] |= IKC_EMPTY;
+            continue;
+        }
+        if (found != 1) return IKC_NOT_QUICK;
+        if (ikc_lock_leaves(chain, g, fr, t, Q3, E3, F3) != n || !(F3[j] & IKC_FAMILY) ||
+            (F3[j] & (IKC_DEFER | IKC_EMPTY)))
+            return IKC_NOT_QUICK;
+        double e3 = E3[j];
+        if (exact_tol < e3 && e3 < near) e3 = ikc_newton(rb, g, Q3 + j * dof, 15);
+        if (!(e3 <= exact_tol && ikc_row_inside(rb, Q3 + j * dof))) return IKC_NOT_QUICK;
+        for (int c = 0; c < dof; c++) Qc[j * dof + c] = Q3[j * dof + c];
+        Ec[j] = e3;
+        Fc[j] = F3[j] & ~IKC_LOCK;
+    }
+    const int kept = ikc_finish(rb, g, n, Qc, Ec, Fc, 1, q, res, ls, cont);
+    return kept == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : kept;
 }
 
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
@@ -935,36 +1290,6 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         line[j] = limits && (F[j] & IKC_FAMILY) && !(F[j] & (IKC_DEFER | IKC_EMPTY)) &&
                   (E[j] <= exact_tol || ((F[j] & IKC_TANGENT_ROOT) && E[j] < near));
     }
-    for (int r = 1; r < IKC_REPS; r++) {  /* the representatives' leaves, and which lie on a line */
-        int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
-        double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
-        if (rep <= -IKC_PI_F) continue;
-        double *Q2 = RQ + (r - 1) * L * dof;
-        int *F2 = RF + (r - 1) * L;
-        int n2 = ikc_lock_leaves(chain, g, fr, rep, Q2, RE + (r - 1) * L, F2);
-        if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
-        const double *E2 = RE + (r - 1) * L;
-        for (int j = 0; j < n; j++) {
-            if (line[j]) {  /* still on the line q0 + s rep, exactly? (the first rep sets the slopes) */
-                const double *row = Q2 + j * dof, *q0 = Q0 + j * dof;
-                int fits = (F2[j] & IKC_FAMILY) && !(F2[j] & (IKC_DEFER | IKC_EMPTY)) &&
-                           (E2[j] <= exact_tol || ((F2[j] & IKC_TANGENT_ROOT) && E2[j] < near));
-                for (int c = 0; c < dof && fits; c++) {
-                    double d = ikc_joint_step(rb, c, row[c], q0[c]), unit = rb->revolute[c] ? 1.0 : rb->scale;
-                    if (r == 1) {
-                        double sl = d / rep, whole = nearbyint(sl);
-                        fits = rb->revolute[c] ? fabs(sl - whole) <= IKC_LINE_FIT / rep : fabs(d) <= IKC_LINE_FIT * unit;
-                        S[j * dof + c] = rb->revolute[c] ? whole : 0.0;
-                    } else {
-                        fits = fabs(ikc_joint_step(rb, c, d, S[j * dof + c] * rep)) <= IKC_LINE_FIT * unit;
-                    }
-                }
-                line[j] = fits;
-            }
-        }
-    }
-    /* A tangent line shown to miss the limits has no solution: decided before its representatives are
-     * polished (docs/design.md section 6: each polish is 8 Newton steps, moot there). */
     int verdict[L];  /* ikc_line_verdict of a line (its t in VT), or -3 where not yet asked */
     int tangent[L], root[L];
     double VT[L];
@@ -974,6 +1299,24 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         tangent[j] = !(E0[j] <= exact_tol);
         root[j] = (F0[j] & IKC_TANGENT_ROOT) != 0;
     }
+    for (int r = 1; r < IKC_REPS; r++) {  /* the representatives' leaves, and which lie on a line */
+        int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
+        double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
+        if (rep <= -IKC_PI_F) continue;
+        double *Q2 = RQ + (r - 1) * L * dof;
+        int *F2 = RF + (r - 1) * L;
+        int n2 = ikc_lock_leaves(chain, g, fr, rep, Q2, RE + (r - 1) * L, F2);
+        if (n2 != n) return ikc_hand_back(IKC_WHY_REPS);
+        const double *E2 = RE + (r - 1) * L;
+        ikc_fit_lines(rb, n, r, rep, Q2, E2, F2, Q0, line, S);
+        if (r == 1) {  /* the slopes are known: the quick case, where it applies, needs no more reps */
+            const int quick = ikc_quick_lines(rb, chain, L, n, g, fr, Q, E, F, Q0, line, S, tangent, root,
+                                              Q2, E2, F2, q, res, ls, cont);
+            if (quick != IKC_NOT_QUICK) return quick;
+        }
+    }
+    /* A tangent line shown to miss the limits has no solution: decided before its representatives are
+     * polished (docs/design.md section 6: each polish is 8 Newton steps, moot there). */
     for (int j = 0; j < n; j++) {
         if (line[j] && tangent[j]) {
             const int k = ikc_given_verdict(rb, j, verdict, line, Q0, S, tangent, root);

@@ -317,6 +317,7 @@ def finish(rb: FinishRobot, g, Q, E, F, limits: bool):
         status = represent(rb, w, limits, held)
         if status == CLAMPED:
             newton_steps(rb, g, w, CLAMPED_NEWTON, True, held)
+            same = SPLIT_ROOT  # Newton placed this row: a copy of it may stop 1e-7 away (as the C, 814886d)
             if any(x != x for x in w):
                 return PYTHON
             status = represent(rb, w, limits, held)
@@ -431,6 +432,88 @@ def joint_step(rb: FinishRobot, j: int, a: float, b: float) -> float:
     return wrap(a - b) if rb.revolute[j] else a - b
 
 
+def rank_clear(rb: FinishRobot, q, s) -> bool:
+    """A sufficient test that the second smallest eigenvalue of the size-free J^T J at q is at least
+    LINE_RANK^2, cheaper than :func:`jtj_eigen`'s sweeps: J^T J compressed onto the complement of the
+    line's unit direction f (an orthonormal basis by Gram-Schmidt), less twice that floor, has a Cholesky
+    factor.  By Courant-Fischer the second eigenvalue is at least the compression's smallest, so where
+    this holds the eigenvalue test holds too (the factor 2 keeps roundoff off the floor); where it
+    fails the caller asks the eigenvalues (ikc_rank_clear)."""
+    dof = rb.dof
+    _, J = fk_jacobian(rb, q)
+    r0, r1 = (3 if rb.target == 2 else 0), (3 if rb.target == 1 else 6)
+    col = [j for j in range(dof) if not rb.is_free[j]]
+    m = len(col)
+    if m < 2 or m > r1 - r0:
+        return False
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    S = [[0.0] * m for _ in range(m)]
+    for a in range(m):
+        for c in range(m):
+            t = 0.0
+            for r in range(r0, r1):
+                w = 1.0 / (rb.scale * rb.scale) if r < 3 else 1.0
+                t += w * J[r * dof + col[a]] * J[r * dof + col[c]]
+            ua = 1.0 if rb.revolute[col[a]] else rb.scale
+            uc = 1.0 if rb.revolute[col[c]] else rb.scale
+            S[a][c] = t * ua * uc
+    top = 0
+    for a in range(1, m):
+        if abs(f[a]) > abs(f[top]):
+            top = a
+    U = []  # orthonormal basis of the complement of f: e_a (a != top) less its parts along f and U
+    for a in range(m):
+        if a == top:
+            continue
+        u = [(1.0 if c == a else 0.0) - f[a] * f[c] for c in range(m)]
+        for b in U:
+            d = 0.0
+            for c in range(m):
+                d += b[c] * u[c]
+            for c in range(m):
+                u[c] -= d * b[c]
+        norm = 0.0
+        for c in range(m):
+            norm += u[c] * u[c]
+        norm = math.sqrt(norm)
+        if not norm > 0.0:
+            return False
+        U.append([u[c] / norm for c in range(m)])
+    k = m - 1
+    C = [[0.0] * k for _ in range(k)]
+    for a in range(k):
+        Su = [0.0] * m
+        for r in range(m):
+            t = 0.0
+            for c in range(m):
+                t += S[r][c] * U[a][c]
+            Su[r] = t
+        for b in range(a + 1):
+            t = 0.0
+            for r in range(m):
+                t += U[b][r] * Su[r]
+            C[a][b] = t
+    floor = 2.0 * LINE_RANK * LINE_RANK
+    L = [[0.0] * k for _ in range(k)]
+    for a in range(k):
+        for b in range(a + 1):
+            t = C[a][b] - (floor if a == b else 0.0)
+            for c in range(b):
+                t -= L[a][c] * L[b][c]
+            if a == b:
+                if not t > 0.0:
+                    return False
+                L[a][a] = math.sqrt(t)
+            else:
+                L[a][b] = t / L[b][b]
+    return True
+
+
 def line_alone(rb: FinishRobot, q0, s, g=None) -> bool:
     """Whether the line q0 + s t is a self-motion alone at t = 0, +-2 pi / 3.  With ``g`` (the goal; a
     line whose leaves are a tangent root, exact there), a point with a second null direction counts
@@ -439,6 +522,8 @@ def line_alone(rb: FinishRobot, q0, s, g=None) -> bool:
         return False
     for t in (0.0, TWO_PI / 3.0, -1.0 * TWO_PI / 3.0):
         q = [q0[j] + s[j] * t for j in range(rb.dof)]
+        if rank_clear(rb, q, s):
+            continue
         if not two_weakest(rb, q)[1] >= LINE_RANK and not (g is not None and tangent_line_alone(rb, g, q, s)):
             return False
     return True
@@ -640,6 +725,120 @@ def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) ->
     return True
 
 
+# IKC_ROOT_FIXED: a joint the sheet's direction n leaves, where a double root's direction shares the null
+# space at p0: there p0 is exact only to the double root's flat error (joint values to ~1e-8, the error
+# their square), the null vectors of the triple eigenvalue mix by ~1e-6 and Newton's end points on the
+# sheet keep the joint to ~1e-8; the joint is also asked to stay outside its limits at those points
+ROOT_FIXED = 1e-4
+
+
+def _sheet_and_root(rb: FinishRobot, g, p0, col, f, n, r, slack: float, slide_slack: float) -> bool:
+    """plane_root_misses for one choice of the sheet's second direction n and the double root's r (unit,
+    across f and each other): a joint that neither f nor n moves lies outside its limits; Newton steps
+    from p0 +- TANGENT_PROBE r come back to the sheet's tangent plane (a double root: no solutions
+    along r); the points p0 +- PLANE_PROBE n are exact, off the line, keep that joint and have two null
+    directions (the sheet alone there), the joint within ROOT_FIXED and outside its limits
+    (ikc_sheet_and_root)."""
+    m = len(col)
+    out = [a for a in range(m) if abs(f[a]) <= PLANE_FIXED and abs(n[a]) <= ROOT_FIXED
+           and not _joint_inside(rb, col[a], p0[col[a]], slack, slide_slack)]
+    if not out:
+        return False
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * TANGENT_PROBE * r[a] * u
+        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
+        d, along, across = [], 0.0, 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+            across += d[a] * n[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a])
+        if not math.sqrt(off) <= 0.1 * TANGENT_PROBE:
+            return False  # not back on the sheet: no double root's direction
+    exact = rb.tol * rb.scale
+    floor = LINE_RANK * LINE_RANK
+    for side in (-1, 1):
+        x = list(p0)
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            x[col[a]] += side * PLANE_PROBE * n[a] * u
+        if not newton_steps(rb, g, x, 15) <= exact:
+            return False
+        d, along = [], 0.0
+        for a in range(m):
+            u = 1.0 if rb.revolute[col[a]] else rb.scale
+            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+            along += d[a] * f[a]
+        off = 0.0
+        for a in range(m):
+            off += (d[a] - along * f[a]) * (d[a] - along * f[a])
+        if not math.sqrt(off) >= 0.5 * PLANE_PROBE:
+            return False  # back towards the line: no sheet
+        for a in out:
+            if not (abs(d[a]) <= ROOT_FIXED and not _joint_inside(rb, col[a], x[col[a]], slack, slide_slack)):
+                return False
+        _, lam_x, _ = jtj_eigen(rb, x)
+        if not (lam_x[1] < floor and lam_x[2] >= floor):
+            return False
+    return True
+
+
+def plane_root_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) -> bool:
+    """Whether the self-motion through the exact point p0 of a family line (slopes s) is a plane alone
+    of which a joint lies outside its limits, where a double root adds a third null direction at p0
+    (prob at q5 = pi: joints 1, 4 and 6 coaxial and the S2-RR of joints 2 and 3 at a double root): the
+    null space at p0 has exactly three directions, the line's f and, across it, a sheet's n and a double
+    root's r (tried in each order of the null vectors across f: at a triple null eigenvalue the sweeps'
+    vectors are any basis of it, so a mixed basis finds no order and refuses), each as
+    :func:`_sheet_and_root` asks (ikc_plane_root_misses)."""
+    col, lam, V = jtj_eigen(rb, p0, vectors=True)
+    m = len(col)
+    floor = LINE_RANK * LINE_RANK
+    if lam is None or m < 4 or not (lam[2] < floor and lam[3] >= floor):
+        return False
+    fn = 0.0
+    for a in range(m):
+        fn += s[col[a]] * s[col[a]]
+    if not fn > 0.0:
+        return False
+    f = [s[col[a]] / math.sqrt(fn) for a in range(m)]
+    W = []  # the three null vectors made orthogonal to f
+    for v in range(3):
+        d = 0.0
+        for a in range(m):
+            d += V[a][v] * f[a]
+        W.append([V[a][v] - d * f[a] for a in range(m)])
+    for i in range(3):
+        for k in range(3):
+            if i == k:
+                continue
+            ni = 0.0
+            for a in range(m):
+                ni += W[i][a] * W[i][a]
+            if not ni > 0.25:
+                continue
+            n = [W[i][a] / math.sqrt(ni) for a in range(m)]
+            d = 0.0
+            for a in range(m):
+                d += W[k][a] * n[a]
+            r = [W[k][a] - d * n[a] for a in range(m)]
+            nr = 0.0
+            for a in range(m):
+                nr += r[a] * r[a]
+            if not nr > 0.25:
+                continue
+            r = [r[a] / math.sqrt(nr) for a in range(m)]
+            if _sheet_and_root(rb, g, p0, col, f, n, r, slack, slide_slack):
+                return True
+    return False
+
+
 def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
     """(found, t) of family leaf q0 (its leaf at rep = 0) with slopes s: found -2 where it is not shown
     a line alone (a tangent line: its exact point near q0 is found first; ``root``: an exact line whose
@@ -651,8 +850,11 @@ def line_verdict(rb: FinishRobot, g, q0, s, tangent: bool, root: bool = False):
         return -2, 0.0
     slack = TANGENT_MARGIN if tangent else LIMIT_EPS
     if not (tangent_line_alone(rb, g, p0, s) if tangent else line_alone(rb, q0, s, g if root else None)):
-        # not a line alone: a plane alone that misses the limits has no solution either
-        return (0 if plane_misses(rb, g, p0, s, slack, slack * rb.scale if tangent else slack) else -2), 0.0
+        # not a line alone: a plane alone that misses the limits has no solution either (also where a
+        # double root adds a third null direction at p0)
+        slide = slack * rb.scale if tangent else slack
+        return (0 if plane_misses(rb, g, p0, s, slack, slide) or plane_root_misses(rb, g, p0, s, slack, slide)
+                else -2), 0.0
     found, t = line_in_limits(rb, q0, s, slack, slack * rb.scale if tangent else slack)
     return found, (0.0 if t is None else t)
 
@@ -698,33 +900,20 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
             and (E[j] <= exact_tol or bool(F[j] & _fk.TANGENT_ROOT) and E[j] < near) for j in range(n)]
     S = [[0.0] * dof for _ in range(n)]
     kept = {}  # r -> the leaves of representative r, for the polish below
+    tangent = [not E0[j] <= exact_tol for j in range(n)]
+    root = [bool(F0[j] & _fk.TANGENT_ROOT) for j in range(n)]
     for r, rep in _reps():
         Q2, E2, F2 = kept[r] = rb.leaves(chain, g, free, rep)
         if len(Q2) != n:
             return PYTHON
-        for j in range(n):
-            if line[j]:
-                row, q0 = Q2[j], Q0[j]
-                fits = _plain_family(F2[j]) and (
-                    E2[j] <= exact_tol or bool(F2[j] & _fk.TANGENT_ROOT) and E2[j] < near)
-                for c in range(dof):
-                    if not fits:
-                        break
-                    d = joint_step(rb, c, row[c], q0[c])
-                    unit = 1.0 if rb.revolute[c] else rb.scale
-                    if r == 1:
-                        sl = d / rep
-                        whole = float(round(sl))
-                        fits = (abs(sl - whole) <= LINE_FIT / rep if rb.revolute[c]
-                                else abs(d) <= LINE_FIT * unit)
-                        S[j][c] = whole if rb.revolute[c] else 0.0
-                    else:
-                        fits = abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit
-                line[j] = fits
+        _fit_lines(rb, r, rep, Q2, E2, F2, Q0, line, S)
+        if r == 1:
+            quick = quick_lines(rb, chain, g, free, Q, E, F, Q0, line, S, tangent, root, kept[1])
+            if quick is not None:
+                return quick
+
     # a tangent line shown to miss the limits has no solution: decided before the polish (moot there)
     verdict = {}
-    tangent = [not E0[j] <= exact_tol for j in range(n)]
-    root = [bool(F0[j] & _fk.TANGENT_ROOT) for j in range(n)]
     for j in range(n):
         if line[j] and tangent[j]:
             verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
@@ -780,6 +969,131 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
         if e <= exact_tol and (not limits or row_inside(rb, B[j])):
             Q[j], E[j] = list(B[j]), e
     k = finish(rb, g, Q, E, F, limits)
+    return PYTHON if k == FAMILY_MISS else k
+
+
+def _fit_lines(rb: FinishRobot, r, rep, Q2, E2, F2, Q0, line, S):
+    """Whether each candidate line's leaf at representative rep (the r-th) still lies on it, exactly;
+    the first (r = 1) sets its slopes S (ikc_fit_lines)."""
+    exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
+    for j in range(len(Q0)):
+        if line[j]:
+            row, q0 = Q2[j], Q0[j]
+            fits = _plain_family(F2[j]) and (
+                E2[j] <= exact_tol or bool(F2[j] & _fk.TANGENT_ROOT) and E2[j] < near)
+            for c in range(rb.dof):
+                if not fits:
+                    break
+                d = joint_step(rb, c, row[c], q0[c])
+                unit = 1.0 if rb.revolute[c] else rb.scale
+                if r == 1:
+                    sl = d / rep
+                    whole = float(round(sl))
+                    fits = (abs(sl - whole) <= LINE_FIT / rep if rb.revolute[c]
+                            else abs(d) <= LINE_FIT * unit)
+                    S[j][c] = whole if rb.revolute[c] else 0.0
+                else:
+                    fits = abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit
+            line[j] = fits
+
+
+def _line_points_exact(rb: FinishRobot, g, q0, s, bound: float) -> bool:
+    """Whether the line q0 + s rep misses the goal by at most ``bound`` (forward kinematics) at the
+    representatives k pi / 4 (k = +-1, +-2, +-3, 4): with the chain's leaves at 0 and pi / 8, nine points
+    around the closed line, the chain's grid at half its resolution (each point costs a quarter of a
+    chain run; ikc_line_points_exact)."""
+    for r, rep in _reps():
+        if ((r + 1) // 2) % 2:
+            continue
+        if not measure(rb, g, [q0[c] + s[c] * rep for c in range(rb.dof)]) <= bound:
+            return False
+    return True
+
+
+def quick_lines(rb: FinishRobot, chain, g, free, Q, E, F, Q0, line, S, tangent, root, first):
+    """The settling of a target whose self-motion leaves are all straight-line candidates after the
+    first other representative (first = its leaves), without running the chain at the other 14
+    (docs/design.md section 6, "Lines checked by forward kinematics"): each line's points at every
+    other of those representatives are checked by forward kinematics instead (exact, or for a tangent
+    line within NEAR_MISS, as its leaves were: :func:`_line_points_exact`); a tangent line is judged
+    first, as in the full loop, and must be dropped; an exact line's leaf takes the first
+    representative whose line point lies inside the limits (the chain run there, its leaf on the line,
+    exact and inside: what the full loop would take), or, with none, the line's verdict drops it (the
+    line misses the limits) or takes the chain at its in-limit middle.  The rows of the full loop, or
+    None where any step leaves the quick case (the full loop then runs from the start:
+    ikc_quick_lines)."""
+    dof, n = rb.dof, len(Q)
+    exact_tol, near = rb.tol * rb.scale, NEAR_MISS * rb.scale
+    Q1, E1, F1 = first
+    pending = []
+    for j in range(n):
+        if not F[j] & _fk.FAMILY or F[j] & (_fk.DEFER | _fk.EMPTY):
+            continue
+        lock = F[j] & _fk.LOCK
+        if not lock and E[j] <= exact_tol and row_inside(rb, Q[j]):
+            continue
+        if not line[j] or not (tangent[j] or E1[j] <= exact_tol):
+            return None
+        pending.append(j)
+    if not pending:
+        return None
+    checked = []  # (q0, s) of the lines checked
+    for j in pending:
+        if not any(Q0[j] == q and S[j] == sl for q, sl in checked):
+            if not _line_points_exact(rb, g, Q0[j], S[j], near if tangent[j] else exact_tol):
+                return None
+            checked.append((Q0[j], S[j]))
+    runs = {1: first}  # the chain at a representative, run once
+    verdict = {}
+    Q, E, F = [list(row) for row in Q], list(E), list(F)  # the full loop starts afresh where this fails
+    for j in pending:  # tangent lines first, as the full loop judges them before its polish
+        if tangent[j]:
+            verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+                or line_verdict(rb, g, Q0[j], S[j], True)
+            if verdict[j][0] != 0:
+                return None
+            F[j] |= _fk.EMPTY
+    for j in pending:
+        if tangent[j]:
+            continue
+        taken = False
+        if not F[j] & _fk.LOCK:
+            for r, rep in _reps():
+                if not row_inside(rb, [Q0[j][c] + S[j][c] * rep for c in range(dof)]):
+                    continue
+                if r not in runs:
+                    runs[r] = rb.leaves(chain, g, free, rep)
+                Q2, E2, F2 = runs[r]
+                if len(Q2) != n or not _plain_family(F2[j]) or not E2[j] <= exact_tol \
+                        or not row_inside(rb, Q2[j]):
+                    return None
+                for c in range(dof):
+                    unit = 1.0 if rb.revolute[c] else rb.scale
+                    d = joint_step(rb, c, Q2[j][c], Q0[j][c])
+                    if not abs(joint_step(rb, c, d, S[j][c] * rep)) <= LINE_FIT * unit:
+                        return None
+                Q[j], E[j], F[j] = list(Q2[j]), E2[j], F2[j]
+                taken = True
+                break
+        if taken:
+            continue
+        found, t = verdict[j] = _given_verdict(rb, verdict, j, line, Q0, S, tangent, root) \
+            or line_verdict(rb, g, Q0[j], S[j], False, root[j])
+        if found == 0:
+            F[j] |= _fk.EMPTY
+            continue
+        if found != 1:
+            return None
+        Q3, E3, F3 = rb.leaves(chain, g, free, t)
+        if len(Q3) != n or not _plain_family(F3[j]):
+            return None
+        row3, e3 = Q3[j], E3[j]
+        if exact_tol < e3 < near:
+            e3 = newton_steps(rb, g, row3, 15)
+        if not (e3 <= exact_tol and row_inside(rb, row3)):
+            return None
+        Q[j], E[j], F[j] = list(row3), e3, F3[j] & ~_fk.LOCK
+    k = finish(rb, g, Q, E, F, True)
     return PYTHON if k == FAMILY_MISS else k
 
 
