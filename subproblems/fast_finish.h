@@ -1407,8 +1407,9 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
  * scalar chain's leaf has a flag or its kernels took a rare branch).  A lane without a flagged leaf
  * holds ikc_chain's leaves of its pose, all unflagged: their finish is what ikc_settle returns for it
  * (an unflagged set of leaves goes straight to ikc_finish there) whenever it returns a count.  Every
- * other lane -- a flag, a finish that hands back or misses a family -- is solved by ikc_solve_goal
- * from the start, so the block path returns what ikc_many returns, target for target. */
+ * other lane -- a flag, a near miss, a finish that hands back or misses a family -- is solved by
+ * ikc_solve_goal from the start, so the block path returns what ikc_many returns, target for target
+ * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
 typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
 
 typedef struct {
@@ -1422,8 +1423,13 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     const int dof = rb->dof, slots = rb->slots, m = n > 0 ? n : 1;
     double *q = job->q + i * slots * dof, *res = job->res + i * slots;
     int *ls = job->ls + i * slots, *cont = job->cont + i * slots;
+    /* a near miss gets Newton steps in the finish, which amplify the lanes' few-ulp angles (libmvec)
+     * along an ill-conditioned least-squares valley (1e-10 .. 4e-9 rad measured): the scalar chain's
+     * leaves start them instead, so every row is the scalar path's to roundoff */
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     int regular = 1;
-    for (int k = 0; k < n && regular; k++) regular = F[4 * k + l] == 0;
+    for (int k = 0; k < n && regular; k++)
+        regular = F[4 * k + l] == 0 && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
     int count = IKC_PYTHON;
     if (regular) {
         double Ql[m * dof], El[m];
