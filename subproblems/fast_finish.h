@@ -1403,14 +1403,16 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
 /* ---- the block path of a batch (docs/design.md section 14, "SIMD over poses") ----
  * A block chain (ikcompiler/codegen/printers.py c_lane_function, subproblems/lane_kernels.h) writes
  * the leaves of 4 poses at once: goal entry i of lane l at G[4 i + l], leaf k's joint j at
- * Q[4 (k dof + j) + l], its error at E[4 k + l], its flag mask at F[4 k + l] (nonzero where the
- * scalar chain's leaf has a flag or its kernels took a rare branch).  A lane without a flagged leaf
- * holds ikc_chain's leaves of its pose, all unflagged: their finish is what ikc_settle returns for it
- * (an unflagged set of leaves goes straight to ikc_finish there) whenever it returns a count.  Every
+ * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT as the
+ * scalar chain's, IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took
+ * a rare branch).  A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and
+ * all, none FAMILY or LOCK: their finish is what ikc_settle returns for it (such leaves go straight to
+ * ikc_finish there) whenever it returns a count.  Every
  * other lane -- a flag, a near miss, a finish that hands back or misses a family -- is solved by
  * ikc_solve_goal from the start, so the block path returns what ikc_many returns, target for target
  * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
 typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
+#define IKC_LANE_IRREGULAR 256  /* lane_kernels.h IKC_IRREGULAR */
 
 typedef struct {
     ikc_job job;
@@ -1429,7 +1431,7 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     int regular = 1;
     for (int k = 0; k < n && regular; k++)
-        regular = F[4 * k + l] == 0 && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+        regular = !(F[4 * k + l] & ~(int64_t)IKC_TANGENT_ROOT) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
     int count = IKC_PYTHON;
     if (regular) {
         double Ql[m * dof], El[m];
@@ -1437,7 +1439,7 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
         for (int k = 0; k < n; k++) {
             for (int j = 0; j < dof; j++) Ql[k * dof + j] = Q[4 * (k * dof + j) + l];
             El[k] = E[4 * k + l];
-            Fl[k] = 0;
+            Fl[k] = (int)F[4 * k + l];
         }
         ikc_why = 0;
         count = ikc_finish(rb, g, n, Ql, El, Fl, job->limits, q, res, ls, cont);

@@ -4,12 +4,14 @@
  * A block chain (ikcompiler/codegen/printers.py c_lane_function) is the chain ikc_chain with every
  * value a vector of 4 lanes, one pose a lane, and every solution slot computed in every lane.  The
  * kernels here compute only the regular branch of their fast_kernels.h form -- the arithmetic a kernel
- * does where it sets no flag -- in the same order of operations, and return, per slot, a lane mask that
- * is nonzero wherever the scalar kernel would set any flag (DEFER, FAMILY, TANGENT_ROOT, LOCK) or take
- * another branch (a gimbal lock, a locked S2-RR angle, every angle a root).  A lane whose leaves are all
- * unflagged is, value for value, what ikc_chain computes for that pose (every +, -, *, /, sqrt of a
- * lane is the scalar IEEE operation: no -ffast-math, -ffp-contract=off); any other lane is handed to the
- * scalar chain whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
+ * does where it takes no other branch -- in the same order of operations, and return per slot its flag
+ * bits: IKC_TANGENT_ROOT where the scalar kernel sets that flag and nothing else changes (the roots are
+ * the same formulas; with libm's angles only, IKC_LANE_TANGENT), IKC_IRREGULAR wherever it would set another flag (DEFER, FAMILY, LOCK) or take
+ * another branch (a gimbal lock, a locked S2-RR angle, every angle a root, a tangent root of O-RRR,
+ * which asks whether it is a lock).  A lane whose leaves carry no IKC_IRREGULAR is, value for value and
+ * flag for flag, what ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar
+ * IEEE operation: no -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
+ * whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
  * angles (atan2, acos: the joint values themselves, never the cosines and sines the chain reads) come
  * from glibc's libmvec, within a few ulps of libm's (benchmarks/results/batch_simd.md).
  */
@@ -24,6 +26,15 @@ typedef int64_t ikc_m4 __attribute__((vector_size(32), aligned(32)));  /* a lane
 /* (no immintrin.h: parsing it was three quarters of a block chain's compile time; GCC's builtins and
  * libmvec's ABI take these vector types as they are) */
 #define IKC_LANES 4
+#define IKC_IRREGULAR 256  /* a lane the scalar chain must solve (fast_finish.h IKC_LANE_IRREGULAR) */
+/* A tangent root's flag.  With libmvec's angles a tangent root is irregular too: its two copies (phi +-
+ * acos(x), x within ulps of +-1) split by about the square root of an angle's ulps, so a few ulps of
+ * atan2 moved the copy the finish keeps by 1.4e-7 rad (ur5; both exact rows of a double root). */
+#if defined(IKC_LIBMVEC) && defined(__AVX2__)
+#define IKC_LANE_TANGENT IKC_IRREGULAR
+#else
+#define IKC_LANE_TANGENT IKC_TANGENT_ROOT
+#endif
 #define IKC_V(x) ((ikc_v4){(x), (x), (x), (x)})
 
 /* the block chain's arrays hold 4 lanes an entry; loads and stores need no alignment */
@@ -156,7 +167,8 @@ static inline ikc_v4 ikc_v_angle_about_cs(const ikc_v4 *w, const ikc_v4 *u, cons
     return th;
 }
 
-/* ikc_trig_roots_cs where no root is every angle; the mask: flat (DEFER or FAMILY) or TANGENT_ROOT */
+/* ikc_trig_roots_cs where no root is every angle; flags: IKC_IRREGULAR where flat (DEFER or FAMILY),
+ * IKC_TANGENT_ROOT as the scalar kernel's */
 static inline ikc_m4 ikc_v_trig_roots_cs(ikc_v4 a, ikc_v4 b, ikc_v4 c, ikc_v4 size, ikc_v4 *th, ikc_v4 *cs) {
     ikc_v4 rho = ikc_v_sqrt(a * a + b * b);
     ikc_v4 phi = ikc_v_atan2(b, a);
@@ -175,7 +187,7 @@ static inline ikc_m4 ikc_v_trig_roots_cs(ikc_v4 a, ikc_v4 b, ikc_v4 c, ikc_v4 si
     cs[1] = sp * cd + cp * sd;
     cs[2] = cp * cd + sp * sd;
     cs[3] = sp * cd - cp * sd;
-    return flat | tangent;
+    return (flat & IKC_IRREGULAR) | (tangent & IKC_LANE_TANGENT);
 }
 
 /* H-R (ikc_plane_r_cs).  2 slots x 1 */
@@ -193,8 +205,8 @@ static inline void ikc_v_plane_r_cs(const ikc_v4 *w, const ikc_v4 *r, const ikc_
     f[0] = f[1] = ikc_v_trig_roots_cs(a, b, c, size, q, cs);
 }
 
-/* S2-RR, parallel axes (ikc_point_rr_parallel_cs).  2 slots x 2; the mask: coincident axes, a tangent
- * root or a locked angle */
+/* S2-RR, parallel axes (ikc_point_rr_parallel_cs).  2 slots x 2; IKC_IRREGULAR: coincident axes or a
+ * locked angle */
 static inline void ikc_v_point_rr_parallel_cs(const ikc_v4 *w1, const ikc_v4 *r1, const ikc_v4 *w2,
                                               const ikc_v4 *r2, const ikc_v4 *p, const ikc_v4 *qq, ikc_v4 *q,
                                               ikc_m4 *f, ikc_v4 *cs) {
@@ -218,7 +230,8 @@ static inline void ikc_v_point_rr_parallel_cs(const ikc_v4 *w1, const ikc_v4 *r1
     ikc_v4 y = ikc_v_sqrt(ikc_v_pos(y2));
     ikc_v4 f0 = w1_ * e2 - w2_ * e1, f1 = w2_ * e0 - w0 * e2, f2 = w0 * e1 - w1_ * e0;
     ikc_v4 size2 = ikc_v_dot(p, p) + ikc_v_dot(qq, qq) + ikc_v_dot(r1, r1) + ikc_v_dot(r2, r2);
-    ikc_m4 degenerate = (ee <= IKC_NEAR2 * (rho1 + rho2 + size2 + 1.0)) | (ikc_v_abs(y2) * ee <= IKC_TANGENT * rho2);
+    ikc_m4 degenerate = ((ee <= IKC_NEAR2 * (rho1 + rho2 + size2 + 1.0)) & IKC_IRREGULAR) |
+                        ((ikc_v_abs(y2) * ee <= IKC_TANGENT * rho2) & IKC_LANE_TANGENT);
     for (int i = 0; i < 2; i++) {
         ikc_v4 s = i == 0 ? y : -y;
         ikc_v4 z[3] = {x * e0 + s * f0, x * e1 + s * f1, x * e2 + s * f2};
@@ -226,12 +239,13 @@ static inline void ikc_v_point_rr_parallel_cs(const ikc_v4 *w1, const ikc_v4 *r1
         ikc_m4 g1, g2;
         q[2 * i + 1] = ikc_v_angle_about_cs(w2, a, z, size2, &g2, cs + 4 * i + 2);
         q[2 * i] = ikc_v_angle_about_cs(w1, ze, b, size2, &g1, cs + 4 * i);
-        f[i] = degenerate | g1 | g2;
+        f[i] = degenerate | ((g1 | g2) & IKC_IRREGULAR);
     }
 }
 
 /* O-RRR (ikc_rot_rrr_cs) where neither slot is a gimbal lock and neither root is a tangent one.  2 slots
- * x 3; the mask: either root flagged, or an angle about w1 or w3 deferred (a lock) */
+ * x 3; IKC_IRREGULAR: either root flagged (a tangent root may be a lock), or an angle about w1 or w3
+ * deferred (a lock) */
 static inline void ikc_v_rot_rrr_cs(const ikc_v4 *w1, const ikc_v4 *w2, const ikc_v4 *w3, const ikc_v4 *R,
                                     ikc_v4 *q, ikc_m4 *f, ikc_v4 *cs) {
     ikc_v4 Rw3[3], Rtw1[3], w23[3], w21[3];
@@ -265,7 +279,7 @@ static inline void ikc_v_rot_rrr_cs(const ikc_v4 *w1, const ikc_v4 *w2, const ik
         cs[6 * i + 2] = c2;
         cs[6 * i + 3] = s2;
         q[3 * i + 2] = ikc_v_angle_about_cs(w3, Rtw1, y, IKC_V(0.0), &f3, cs + 6 * i + 4);
-        f[i] = rf | f1 | f3;
+        f[i] = ((rf != 0) | f1 | f3) & IKC_IRREGULAR;
     }
 }
 

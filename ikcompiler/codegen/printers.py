@@ -309,9 +309,9 @@ def c_function(program: ir.Program, name: str, dof: int, *,
 #
 # The same tree printed a second time with every value a vector of 4 lanes, one pose a lane
 # (``ikc_v4`` of subproblems/lane_kernels.h; docs/design.md section 14, "SIMD over poses"): every
-# solution slot computed in every lane, each leaf's flags a lane mask.  The lane kernels compute only
-# the regular branch (a lane with any flag is solved again by the scalar chain), so they take no
-# ``rep``: the arguments kept of each kernel, the leading ones.
+# solution slot computed in every lane, each leaf's flags lane by lane.  The lane kernels compute only
+# the regular branch (a lane where the scalar chain takes another is solved again by it), so they take
+# no ``rep``: the arguments kept of each kernel, the leading ones.
 LANE_KERNEL_ARGS = {"plane_r": 5, "point_rr_parallel": 6, "rot_rrr": 4}
 _LANE_CALLS = {"cos": "ikc_v_cos", "sin": "ikc_v_sin", "sqrt": "ikc_v_sqrt", "atan2": "ikc_v_atan2",
                "max2": "ikc_v_max2"}
@@ -421,8 +421,9 @@ class _LanePrinter(_CPrinter):
 def c_lane_function(program: ir.Program, name: str, dof: int) -> tuple[list[str], int]:
     """(C lines of ``static int NAME(G, Q, E, F)``, the most leaves it writes): the chain for 4 poses,
     goal entry ``i`` of lane ``l`` at ``G[4*i + l]``, leaf ``n``'s joint ``j`` at ``Q[4*(n*dof + j) + l]``,
-    its error at ``E[4*n + l]`` and its flag mask at ``F[4*n + l]`` (nonzero: the scalar chain's leaf has
-    a flag, the lane is solved again by it); raises :class:`Untranslatable`."""
+    its error at ``E[4*n + l]`` and its flags at ``F[4*n + l]`` (``IKC_TANGENT_ROOT`` as the scalar
+    chain's; ``IKC_IRREGULAR``: the lane is solved again by the scalar chain); raises
+    :class:`Untranslatable`."""
     pr = _LanePrinter(dof)
     for i, g in enumerate(program.goal):
         pr.emit(f"const ikc_v4 {g} = ikc_v_load(G + 4 * {i});")
