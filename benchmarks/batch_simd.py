@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import os
+import resource
 import sys
 import time
 from pathlib import Path
@@ -73,7 +74,10 @@ def measure(cmp, label: str, batch: int, rounds: int) -> dict:
     _, Tb = bc._poses(chain, batch, cmp.SEED_BATCH, [], [])
     module = cmp.compile_spec(entry["spec"])
     nc = module._native_chain()
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     nc.bind_block(lambda: csource.block_c_source(vars(module)))
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cc_ms = 1e3 * (r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
     H, P, R6T, _fixed = bc.eaik_geometry(chain, [], [])
     robot = bc.eaik_robot(H, P, R6T)
     free = np.zeros((len(Tb), 0))
@@ -101,7 +105,7 @@ def measure(cmp, label: str, batch: int, rounds: int) -> dict:
     gap = max(_row_gap(Q0, v0, ls0, Q1, v1), _row_gap(Q1, v1, ls1, Q0, v0))
     n = len(Tb)
     return {
-        "label": label, "n": n, "build_ms": nc.block_build_ms, "has_block": nc._block is not None,
+        "label": label, "n": n, "build_ms": nc.block_build_ms, "cc_ms": cc_ms, "has_block": nc._block is not None,
         "cpu_us": {k: 1e6 * v[0] / n for k, v in best.items()},
         "wall_pps": {k: n / v[1] for k, v in best.items()},
         "same_codes": bool(np.array_equal(k0, k1)), "rows": int(v0.sum()), "rows_block": int(v1.sum()),
@@ -114,9 +118,14 @@ def main(argv=None) -> int:
     ap.add_argument("--robots", nargs="*", default=list(ROBOTS))
     ap.add_argument("--batch", type=int, default=10000)
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--warm", action="store_true", help="the usual cache (the block chain's build warm)")
     ap.add_argument("--out", default=str(RESULTS / "batch_simd.md"))
     opts = ap.parse_args(argv)
     cmp = _compare()
+    if not opts.warm:  # a fresh cache: the block chain's build is cold (the finish and chain built first)
+        import tempfile
+
+        os.environ["IKC_CACHE"] = tempfile.mkdtemp(prefix="ikc_batch_simd_")
     load0 = os.getloadavg()[0]
     rows = []
     for label in opts.robots:
@@ -127,11 +136,12 @@ def main(argv=None) -> int:
         "# The block chain of a batch (SIMD over poses): CPU a pose beside the scalar driver and EAIK",
         "",
         f"`python benchmarks/batch_simd.py --robots {' '.join(opts.robots)} --batch {opts.batch} --rounds"
-        f" {opts.rounds}` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; load average {load0:.1f}"
+        f" {opts.rounds}{' --warm' if opts.warm else ''}` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; load average {load0:.1f}"
         f" at the start, {load1:.1f} at the end, on {os.cpu_count()} cores): compare.py's batch poses, the"
         " three calls in interleaved rounds in one process, each its best round.  *us a pose*: CPU time"
         " in one thread; *poses/s*: wall time in 2 threads; *EAIK / ours*: EAIK's time over ours (above"
-        " 1x ours is faster); *block build*: printing and compiling the block chain on the first batch;"
+        " 1x ours is faster); *block build*: printing and compiling the block chain on the first batch"
+        " (a fresh cache unless --warm; in square brackets the compiler's CPU time);"
         " *row gap*: the largest distance between an exact row of one path and the nearest row of the"
         " other (modulo 2 pi), the codes (solution counts, hand-backs) equal on every pose.",
         "",
@@ -146,7 +156,7 @@ def main(argv=None) -> int:
             f"| {r['label']} | {c['block 1']:.2f} | {c['scalar 1']:.2f} | {c['eaik 1']:.2f} |"
             f" {c['eaik 1'] / c['block 1']:.2f}x | {c['eaik 1'] / c['scalar 1']:.2f}x |"
             f" {w['block 2']:,.0f} | {w['scalar 2']:,.0f} | {w['eaik 2']:,.0f} | {w['block 2'] / w['eaik 2']:.2f}x |"
-            f" {r['build_ms']:.0f} | {'yes' if r['same_codes'] else 'NO'} | {r['rows']} / {r['rows_block']} |"
+            f" {r['build_ms']:.0f} [cc CPU {r['cc_ms']:.0f}] | {'yes' if r['same_codes'] else 'NO'} | {r['rows']} / {r['rows_block']} |"
             f" {r['gap']:.1e} rad ({r['ulps']:.0f} ulp of pi) |")
     Path(opts.out).write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
