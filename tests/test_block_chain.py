@@ -25,7 +25,7 @@ from subproblems import native
 
 pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
 
-BLOCK_ROBOTS = ("puma560", "ur5", "kr6_r700")  # Pieper and UR-type arms (issue 11, Deliver 6)
+BLOCK_ROBOTS = ("puma560", "ur5", "kr6_r700", "prob")  # the zoo chains with a lane form (Pieper, UR-type)
 ROW_SAME = 1e-12  # rad: the brief's bound for rows of the two paths
 
 _MODULES: dict[str, tuple] = {}
