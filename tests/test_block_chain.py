@@ -69,12 +69,12 @@ def _targets(name, n=403, seed=5):
     return np.array(Ts)
 
 
-def _both(nc, Ts, monkeypatch, workers=1):
+def _both(nc, Ts, monkeypatch, workers=1, limits=True):
     free = np.zeros((len(Ts), 0))
     monkeypatch.setenv("IKC_BLOCK", "0")
-    scalar = nc.many(Ts, free, True, workers)
+    scalar = nc.many(Ts, free, limits, workers)
     monkeypatch.setenv("IKC_BLOCK", "1")
-    block = nc.many(Ts, free, True, workers)
+    block = nc.many(Ts, free, limits, workers)
     return scalar, block
 
 
@@ -82,8 +82,8 @@ def _both(nc, Ts, monkeypatch, workers=1):
 def test_block_path_with_libm_angles_is_the_scalar_path_bit_for_bit(name, monkeypatch):
     module, nc = _chains(name, monkeypatch, libmvec=False)
     Ts = _targets(name)
-    for workers in (1, 2):
-        ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, Ts, monkeypatch, workers)
+    for workers, limits in ((1, True), (2, True), (1, False)):
+        ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, Ts, monkeypatch, workers, limits)
         assert np.array_equal(k0, k1)
         assert (k0 > 0).sum() > 0.9 * len(Ts) - 2 and (k0 == native.INVALID).sum() == 2
         for a, b in ((Q0, Q1), (v0, v1), (ls0, ls1), (r0, r1), (c0, c1)):
