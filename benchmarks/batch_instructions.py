@@ -40,10 +40,21 @@ DRIVER = r"""
 #include <stdlib.h>
 typedef void (*many_fn)(int64_t, const double *, const double *, int, double *, double *, int *, int *,
                         int *, int);
+typedef void (*block_fn)(const void *, int64_t, const double *, const double *, int, double *, double *,
+                         int *, int *, int *, int);
 int main(int argc, char **argv) {
     void *h = dlopen(argv[1], RTLD_NOW);
     if (!h) { fprintf(stderr, "%s\n", dlerror()); return 1; }
     many_fn many = (many_fn)dlsym(h, "ikc_solve_many");
+    block_fn block = NULL;  /* argv[4]: the block chain's library (the block path), if any */
+    const void *rb = NULL;
+    if (argc > 4) {
+        void *hb = dlopen(argv[4], RTLD_NOW);
+        const void *(*data)(void) = (const void *(*)(void))dlsym(h, "ikc_robot_data");
+        if (!hb || !data) { fprintf(stderr, "no block chain\n"); return 1; }
+        block = (block_fn)dlsym(hb, "ikc_solve_many_block");
+        rb = data();
+    }
     FILE *f = fopen(argv[2], "rb");
     int64_t n; int slots, dof;
     if (!many || !f || fread(&n, 8, 1, f) != 1 || fread(&slots, 4, 1, f) != 1 || fread(&dof, 4, 1, f) != 1)
@@ -54,7 +65,8 @@ int main(int argc, char **argv) {
     double *q = malloc(sizeof(double) * n * slots * dof), *res = malloc(sizeof(double) * n * slots);
     int *ls = malloc(sizeof(int) * n * slots), *cont = malloc(sizeof(int) * n * slots);
     int *count = malloc(sizeof(int) * n);
-    if (atoi(argv[3])) many(n, T, fr, 1, q, res, ls, cont, count, 1);
+    if (atoi(argv[3]) && block) block(rb, n, T, fr, 1, q, res, ls, cont, count, 1);
+    else if (atoi(argv[3])) many(n, T, fr, 1, q, res, ls, cont, count, 1);
     long rows = 0;
     for (int64_t i = 0; i < n && atoi(argv[3]); i++) rows += count[i] > 0 ? count[i] : 0;
     printf("%ld\n", rows);
@@ -79,7 +91,10 @@ nc = module._native_chain()
 with open(out, "wb") as f:
     f.write(struct.pack("<qii", count, nc.slots, nc.dof))
     f.write(Tb.astype("<f8").tobytes())
-print(native.build(csource.native_source(vars(module))))
+lib = native.build(csource.native_source(vars(module)))
+block = getattr(csource, "block_c_source", None)  # the block chain (this checkout; not before it)
+block = block and sys.argv[5] == "1" and block(vars(module))
+print(lib, native.build_block(block) if block else "")
 """
 
 
@@ -88,9 +103,10 @@ def log(msg: str) -> None:
 
 
 def _instructions(driver: Path, lib: str, poses: Path, solve: bool,
-                  out: str = "/dev/null") -> tuple[int, int]:
+                  out: str = "/dev/null", block: str = "") -> tuple[int, int]:
     out = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", str(driver), lib,
-                          str(poses), "1" if solve else "0"], capture_output=True, text=True, check=True)
+                          str(poses), "1" if solve else "0"] + ([block] if block else []),
+                         capture_output=True, text=True, check=True)
     refs = re.search(r"I\s+refs:\s+([\d,]+)", out.stderr)
     return int(refs.group(1).replace(",", "")), int(out.stdout.strip() or 0)
 
@@ -123,14 +139,18 @@ def _functions(profile: Path, poses: int, top: int = 14) -> list[tuple[str, floa
     return [(name, n / poses, n / solve) for name, n in heaviest]
 
 
-def count(root: Path, label: str, poses: int, driver: Path, tmp: Path, profile: bool = False) -> dict:
-    """Instructions a pose (the driver's fixed cost, counted without the solve, taken off) and rows."""
+def count(root: Path, label: str, poses: int, driver: Path, tmp: Path, profile: bool = False,
+          block: bool = True) -> dict:
+    """Instructions a pose (the driver's fixed cost, counted without the solve, taken off) and rows.
+    ``block``: through the block chain where the checkout has one (else ``ikc_solve_many``)."""
     data = tmp / f"{label}.{abs(hash(str(root)))}.poses"
-    lib = subprocess.run([sys.executable, "-c", LIBRARY, str(root), label, str(poses), str(data)],
-                         capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1]
+    libs = subprocess.run([sys.executable, "-c", LIBRARY, str(root), label, str(poses), str(data),
+                           "1" if block else "0"],
+                          capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1].split()
+    lib, block_lib = libs[0], (libs[1] if len(libs) > 1 else "")
     out = tmp / f"{label}.callgrind" if profile else Path("/dev/null")
-    total, rows = _instructions(driver, lib, data, True, str(out))
-    fixed, _ = _instructions(driver, lib, data, False)
+    total, rows = _instructions(driver, lib, data, True, str(out), block_lib)
+    fixed, _ = _instructions(driver, lib, data, False, block=block_lib)
     result = {"per_pose": (total - fixed) / poses, "rows": rows}
     if profile:
         result["functions"] = _functions(out, poses)
@@ -143,6 +163,8 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=2000)
     ap.add_argument("--against", help="another checkout, counted on the same poses (before/after)")
     ap.add_argument("--profile", action="store_true", help="where the instructions go, per function")
+    ap.add_argument("--no-block", action="store_true",
+                    help="this checkout through ikc_solve_many (the scalar driver), not its block chain")
     ap.add_argument("--out", default=str(RESULTS / "batch_instructions.md"))
     opts = ap.parse_args(argv)
     if shutil.which("valgrind") is None:
@@ -160,7 +182,8 @@ def main(argv=None) -> int:
             row = [label]
             for root in roots:
                 log(f"{label}: {root}")
-                row.append(count(root, label, opts.poses, driver, tmp, opts.profile and root == ROOT))
+                row.append(count(root, label, opts.poses, driver, tmp, opts.profile and root == ROOT,
+                                 block=not opts.no_block))
             table.append(row)
     head = ["robot", "instructions a pose", "rows"]
     if opts.against:
@@ -171,9 +194,12 @@ def main(argv=None) -> int:
         "",
         f"`python benchmarks/batch_instructions.py --poses {opts.poses}"
         + (f" --against {opts.against}" if opts.against else "")
-        + (" --profile" if opts.profile else "") + "`"
+        + (" --profile" if opts.profile else "") + (" --no-block" if opts.no_block else "") + "`"
         + f" ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}): callgrind instructions of"
-        " `ikc_solve_many` in one thread on compare.py's batch poses (a quarter of the joint values at"
+        + (" `ikc_solve_many`" if opts.no_block else
+           " the batch path (the block chain's `ikc_solve_many_block` where a checkout has one, else"
+           " `ikc_solve_many`)")
+        + " in one thread on compare.py's batch poses (a quarter of the joint values at"
         " 0, +-pi/2, pi), the driver's fixed cost taken off; rows: solutions returned in all.",
         "",
         "| " + " | ".join(head) + " |",

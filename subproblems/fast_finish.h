@@ -1743,3 +1743,109 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
             ikc_run(&jobs[t]);  /* no thread to be had: do its share here */
     }
 }
+
+/* ---- the block path of a batch (docs/design.md section 14, "SIMD over poses") ----
+ * A block chain (ikcompiler/codegen/printers.py c_lane_function, subproblems/lane_kernels.h) writes
+ * the leaves of 4 poses at once: goal entry i of lane l at G[4 i + l], leaf k's joint j at
+ * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT as the
+ * scalar chain's, IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took
+ * a rare branch).  A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and
+ * all, none FAMILY or LOCK: their finish is what ikc_settle returns for it (such leaves go straight to
+ * ikc_finish there) whenever it returns a count.  Every
+ * other lane -- a flag, a near miss, a finish that hands back or misses a family -- is solved by
+ * ikc_solve_goal from the start, so the block path returns what ikc_many returns, target for target
+ * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
+typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
+#define IKC_LANE_IRREGULAR 256  /* lane_kernels.h IKC_IRREGULAR */
+
+typedef struct {
+    ikc_job job;
+    ikc_block_fn block;
+    int leaves;
+} ikc_block_job;
+
+static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, int l, int n, const double *g,
+                           const double *Q, const double *E, const int64_t *F) {
+    const int dof = rb->dof, slots = rb->slots, m = n > 0 ? n : 1;
+    double *q = job->q + i * slots * dof, *res = job->res + i * slots;
+    int *ls = job->ls + i * slots, *cont = job->cont + i * slots;
+    /* a near miss gets Newton steps in the finish, which amplify the lanes' few-ulp angles (libmvec)
+     * along an ill-conditioned least-squares valley (1e-10 .. 4e-9 rad measured): the scalar chain's
+     * leaves start them instead, so every row is the scalar path's to roundoff */
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    int regular = 1;
+    for (int k = 0; k < n && regular; k++)
+        regular = !(F[4 * k + l] & ~(int64_t)IKC_TANGENT_ROOT) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+    int count = IKC_PYTHON;
+    if (regular) {
+        double Ql[m * dof], El[m];
+        int Fl[m];
+        for (int k = 0; k < n; k++) {
+            for (int j = 0; j < dof; j++) Ql[k * dof + j] = Q[4 * (k * dof + j) + l];
+            El[k] = E[4 * k + l];
+            Fl[k] = (int)F[4 * k + l];
+        }
+        ikc_why = 0;
+        count = ikc_finish(rb, g, n, Ql, El, Fl, job->limits, q, res, ls, cont);
+    }
+    if (count < 0) count = ikc_solve_goal(rb, g, job->fr + rb->nfree * i, job->limits, q, res, ls, cont);
+    job->count[i] = count;
+}
+
+static void *ikc_run_block(void *arg) {
+    const ikc_block_job *bj = (const ikc_block_job *)arg;
+    const ikc_job *job = &bj->job;
+    const ikc_robot *rb = job->rb;
+    const int dof = rb->dof, L = bj->leaves, stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
+    double g[4][12], G[48], Q[4 * L * dof], E[4 * L];
+    int64_t F[4 * L];
+    for (int64_t i = job->start; i < job->stop; i += 4) {
+        const int lanes = job->stop - i < 4 ? (int)(job->stop - i) : 4;
+        int ok[4] = {0, 0, 0, 0}, first = -1;
+        for (int l = 0; l < lanes; l++) {
+            const int checked = ikc_goal_checked(rb, job->goals + stride * (i + l), g[l]);
+            ok[l] = checked == 1;
+            if (!ok[l]) job->count[i + l] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
+            else if (first < 0) first = l;
+        }
+        if (first < 0) continue;
+        for (int l = 0; l < 4; l++) {  /* a lane without a pose of its own computes the first one's */
+            const double *src = l < lanes && ok[l] ? g[l] : g[first];
+            for (int e = 0; e < 12; e++) G[4 * e + l] = src[e];
+        }
+        const int n = bj->block(G, Q, E, F);
+        for (int l = 0; l < lanes; l++)
+            if (ok[l]) ikc_block_pose(rb, job, i + l, l, n, g[l], Q, E, F);
+    }
+    return NULL;
+}
+
+/* ikc_many with a block chain of `leaves` leaves (closed-form chains without free joints; anything
+ * else runs ikc_many). */
+static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, int leaves, int64_t n, const double *goals,
+                           const double *fr, int limits, double *q, double *res, int *ls, int *cont, int *count,
+                           int threads) {
+    if (rb->nsearch || rb->polish || rb->nfree || leaves != rb->leaves) {
+        ikc_many(rb, n, goals, fr, limits, q, res, ls, cont, count, threads);
+        return;
+    }
+    if (threads < 1) threads = 1;
+    if (threads > 64) threads = 64;
+    if (n < 256 * threads) threads = 1;
+    ikc_block_job jobs[64];
+    pthread_t ids[64];
+    int started[64] = {0};
+    for (int t = 0; t < threads; t++) {
+        /* each thread's share starts on a multiple of 4 poses */
+        int64_t start = (n * t / threads) & ~(int64_t)3, stop = t + 1 == threads ? n : (n * (t + 1) / threads) & ~(int64_t)3;
+        jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, leaves};
+    }
+    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run_block, &jobs[t]) == 0;
+    ikc_run_block(&jobs[0]);
+    for (int t = 1; t < threads; t++) {
+        if (started[t])
+            pthread_join(ids[t], NULL);
+        else
+            ikc_run_block(&jobs[t]);
+    }
+}

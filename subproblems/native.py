@@ -180,7 +180,8 @@ def _key(*parts: str) -> str:
 # declarations in front, and its entry points' calls renamed to the shared ones.  `__typeof__` takes
 # each signature from the header itself, so the two sides cannot disagree.  The finish calls the
 # chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
-FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ikc_g6_leaves")  # chains call
+FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ikc_g6_leaves",
+                  "ikc_many_block")  # chains call
 # (ikc_last_reason: why this thread's last target was handed back, for the benchmarks' cause counts;
 # ikc_g6_leaves: the general-6r elimination of general6.h, docs/general6.md "Native path")
 SHARED_PREFIX = "ikc_shared_"
@@ -254,6 +255,54 @@ def _build(source: str, include_kernels: bool, machine: tuple[str, ...]) -> Path
     return target if _compile(cc, flags, text, target) else None
 
 
+# -- the block chain of a batch (docs/design.md section 14, "SIMD over poses") ---------------------------
+LANE_HEADER = "lane_kernels.h"  # beside this file, put in front of a block chain (after the kernels)
+
+
+def block_enabled() -> bool:
+    """Whether batches run the block chain where a module has one (``IKC_BLOCK=0``: the scalar driver
+    alone, read at each batch; the tests compare the two)."""
+    return os.environ.get("IKC_BLOCK", "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def libmvec_enabled() -> bool:
+    """Whether a block chain takes its angles from glibc's libmvec (AVX2 atan2 and acos, 4 lanes a
+    call; a few ulps from libm's): on an AVX2 build unless ``IKC_LIBMVEC=0``."""
+    return os.environ.get("IKC_LIBMVEC", "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def build_block(source: str) -> Path | None:
+    """Compile a block chain (``csource.block_c_source``) against the shared finish, with the kernels,
+    the finish's declarations and the lane kernels in front; its path, or None (no split build, no
+    compiler).  With libmvec where the build can link it (else libm's angles, lane by lane)."""
+    global last_error
+    cc = compiler()
+    if cc is None or not enabled():
+        last_error = "no C compiler found (set CC, or install gcc)" if cc is None else "disabled by IKC_NATIVE=0"
+        return None
+    machine = machine_flags()
+    try:
+        lane = Path(__file__).with_name(LANE_HEADER).read_text()
+        directory = _cache_directory()
+    except OSError as exc:
+        last_error = f"the lane kernels or the cache directory are missing: {exc}"
+        return None
+    cc_id = _compiler_id(cc)
+    finish = _finish_library(cc, cc_id, directory, machine)
+    if finish is None:
+        return None
+    text = _chain_prelude() + lane + "\n" + source
+    variants = [((), ())]
+    if "-mavx2" in machine and libmvec_enabled():
+        variants.insert(0, (("-DIKC_LIBMVEC",), ("-lmvec",)))
+    for defines, libs in variants:
+        flags = CHAIN_FLAGS + machine + defines
+        target = directory / f"ikc_block_{_key(text, cc_id, ' '.join(flags), str(finish))}.so"
+        if _compile(cc, flags, text, target, extra=(str(finish),) + libs):
+            return target
+    return None
+
+
 def load(source: str) -> ctypes.CDLL | None:
     """The shared library of ``source``, built on first use; None when disabled or it cannot build."""
     global last_error
@@ -304,7 +353,11 @@ class NativeChain:
         import numpy as np
 
         self._np = np
+        self._lib = lib
         self.dof, self.slots, self.nfree = dof, slots, nfree
+        # the block chain (bind_block, on the first batch): its ikc_solve_many_block and our ikc_robot
+        self._block, self._block_lib, self._robot_data, self._block_tried = None, None, None, False
+        self.block_build_ms = None  # what printing and building the block chain took (None: not tried)
         P, I, L = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64  # noqa: E741
         self._one = lib.ikc_solve_one
         self._one.argtypes = [P, P, I, P, P, P, P]
@@ -372,6 +425,37 @@ class NativeChain:
         16 times the alternative chain's; 0 when settled), or None without the split build."""
         return None if self._reason is None else int(self._reason())
 
+    def bind_block(self, source_fn) -> bool:
+        """Build and load the block chain on first use (``source_fn()``: its C, or None where the chain
+        has none; docs/design.md section 14, "SIMD over poses"); whether :meth:`many` has it.  Tried
+        once: a chain without one (or a failed build) keeps the scalar driver."""
+        with self._lock:
+            if not self._block_tried:
+                self._block_tried = True
+                import time
+
+                start = time.perf_counter()
+                self._bind_block(source_fn)
+                self.block_build_ms = 1e3 * (time.perf_counter() - start)
+            return self._block is not None
+
+    def _bind_block(self, source_fn) -> None:
+        data = getattr(self._lib, "ikc_robot_data", None)
+        source = source_fn() if data is not None else None
+        path = build_block(source) if source is not None else None
+        if path is None:
+            return
+        try:
+            lib = ctypes.CDLL(str(path))
+        except OSError:
+            return
+        P, I, L = ctypes.c_void_p, ctypes.c_int, ctypes.c_int64  # noqa: E741
+        data.argtypes, data.restype = [], P
+        fn = lib.ikc_solve_many_block
+        fn.argtypes = [P, L, P, P, I, P, P, P, P, P, I]
+        fn.restype = None
+        self._robot_data, self._block_lib, self._block = data(), lib, fn
+
     def many(self, goals, free, limits: bool, workers: int | None = None):
         """Solutions of N raw targets ``goals`` ((N, 4, 4) poses, (N, 3, 3) orientations or (N, 3)
         positions, as :meth:`one` takes them) with free values ``free`` (N, nfree).
@@ -388,9 +472,12 @@ class NativeChain:
         ls = np.zeros((N, self.slots), dtype=np.intc)
         cont = np.zeros((N, self.slots), dtype=np.intc)
         count = np.zeros(N, dtype=np.intc)
-        self._many(N, goals.ctypes.data, free.ctypes.data, 1 if limits else 0, Q.ctypes.data,
-                   res.ctypes.data, ls.ctypes.data, cont.ctypes.data, count.ctypes.data,
-                   workers or threads())
+        args = (N, goals.ctypes.data, free.ctypes.data, 1 if limits else 0, Q.ctypes.data, res.ctypes.data,
+                ls.ctypes.data, cont.ctypes.data, count.ctypes.data, workers or threads())
+        if self._block is not None and block_enabled():
+            self._block(self._robot_data, *args)
+        else:
+            self._many(*args)
         valid = np.arange(self.slots)[None, :] < count[:, None]
         res[~valid] = np.inf
         Q[~valid] = 0.0

@@ -31,7 +31,7 @@ import hashlib
 import numpy as np
 
 from ikcompiler.codegen import ir
-from ikcompiler.codegen.printers import Untranslatable, c_function, c_number, wrap
+from ikcompiler.codegen.printers import Untranslatable, c_function, c_lane_function, c_number, wrap
 from subproblems import native
 
 __all__ = [
@@ -134,6 +134,10 @@ def _with_entries(lines, *, leaves: int, alt, kinds, lower, upper, free, target,
         "",
         "int ikc_leaves(const double *goal, const double *fr, double *Q, double *E, int *F) {",
         "    return ikc_chain(goal, fr, 0.0, Q, E, F);",
+        "}",
+        "",
+        "const void *ikc_robot_data(void) {  /* for the block chain's library (block_c_source) */",
+        "    return &ikc_this;",
         "}",
     ]
     return "\n".join(list(lines) + tail) + "\n"
@@ -332,3 +336,37 @@ def module_c_source(ns, general6=None) -> str | None:
         free=list(ns["_FREE"]), target=ns["TARGET"], scale=ns["SCALE"], tol=ns["TOLERANCE"],
         slots=ns["MAX_SOLUTIONS"], twists=ns["_TWISTS"], home=np.asarray(ns["_HOME"], float), A=ns["_A"],
         b=ns["_B"], search=len(ns["_SEARCH"]), grid=ns["_GRID"], polish=ns["_POLISH"], near_singular=near)
+
+
+# -- the block chain of a batch, printed and built on the first solve_batch ----------------------------
+
+
+def block_c_source(ns) -> str | None:
+    """The C of the module's block chain (docs/design.md section 14, "SIMD over poses"): its chain for
+    4 poses at once (:func:`ikcompiler.codegen.printers.c_lane_function`, the kernels of
+    ``subproblems/lane_kernels.h``) and ``ikc_solve_many_block(rb, ...)``, ``ikc_solve_many`` on it
+    (``rb``: the ``ikc_robot`` of the module's own library, ``ikc_robot_data``).  None where the chain
+    has no lane form: a general-6r module, free or searched joints, a snapped plan, a kernel without a
+    lane form.  Printed when a batch first runs, so a module that never solves one never builds it."""
+    from ikcompiler.codegen.fastpath import ChainData, build_program
+
+    if ns["METHOD"] == "general-6r" or ns["_FREE"] or ns["_SEARCH"] or ns["_POLISH"]:
+        return None
+    if ns["TARGET"] not in TARGET_CODES or ns.get("_fast_chain") is None:
+        return None
+    try:
+        lines, leaves = c_lane_function(build_program(ChainData.from_module(ns)), "ikc_block",
+                                        len(ns["JOINT_TYPES"]))
+    except Untranslatable:
+        return None
+    head = ["/* The block chain of this module (ikcompiler/codegen/csource.py block_c_source): ikc_chain's",
+            " * arithmetic for 4 poses a call, on the lane kernels of subproblems/lane_kernels.h. */"]
+    tail = [
+        "void ikc_solve_many_block(const void *rb, int64_t n, const double *goals, const double *fr,",
+        "                          int limits, double *q, double *res, int *ls, int *cont, int *count,",
+        "                          int threads) {",
+        f"    ikc_many_block((const ikc_robot *)rb, ikc_block, {leaves}, n, goals, fr, limits, q, res, ls,",
+        "                   cont, count, threads);",
+        "}",
+    ]
+    return "\n".join(head + lines + tail) + "\n"

@@ -303,3 +303,132 @@ def c_function(program: ir.Program, name: str, dof: int, *,
         "    (void)rep;",
     ]
     return head + [w for line in pr.lines for w in wrap(line)] + ["    return n;", "}", ""], pr.leaves
+
+
+# -- C, four poses a call (the block chain of a batch) ----------------------------------------------------
+#
+# The same tree printed a second time with every value a vector of 4 lanes, one pose a lane
+# (``ikc_v4`` of subproblems/lane_kernels.h; docs/design.md section 14, "SIMD over poses"): every
+# solution slot computed in every lane, each leaf's flags lane by lane.  The lane kernels compute only
+# the regular branch (a lane where the scalar chain takes another is solved again by it), so they take
+# no ``rep``: the arguments kept of each kernel, the leading ones.
+LANE_KERNEL_ARGS = {"plane_r": 5, "point_rr_parallel": 6, "rot_rrr": 4}
+_LANE_CALLS = {"cos": "ikc_v_cos", "sin": "ikc_v_sin", "sqrt": "ikc_v_sqrt", "atan2": "ikc_v_atan2",
+               "max2": "ikc_v_max2"}
+
+
+def _lane_varies(e) -> bool:
+    """Whether ``e`` reads a name (a lane value); else it is one number for every lane."""
+    if isinstance(e, ir.Name):
+        return True
+    if isinstance(e, ir.Free):
+        raise Untranslatable("a free joint's value (the block chain takes poses alone)")
+    return any(_lane_varies(c) for c in ir.children(e))
+
+
+def lane_expr(e, trig=None) -> str:
+    """``e`` as a 4-lane vector expression: a constant subtree is printed as the scalar C expression
+    (a vector operation with a scalar operand applies it to every lane) and broadcast where it stands
+    alone (``IKC_V``)."""
+    if not _lane_varies(e):
+        return f"IKC_V({c_expr(e)})"
+    return _lane(e, trig)
+
+
+def _lane(e, trig) -> str:
+    if not _lane_varies(e):
+        return c_expr(e)
+    if isinstance(e, ir.Name):
+        return e.id
+    if isinstance(e, ir.Call):
+        name = _trig_name(e, trig)
+        if name is not None:
+            return name
+        return f"{_LANE_CALLS[e.fn]}({', '.join(lane_expr(a, trig) for a in e.args)})"
+    if isinstance(e, ir.Neg):
+        return f"(-{_lane(e.operand, trig)})"
+    return f"({_lane(e.left, trig)} {e.op} {_lane(e.right, trig)})"
+
+
+def _lane_arg(a, trig) -> str:
+    if isinstance(a, tuple):
+        return f"(const ikc_v4[]){{{', '.join(lane_expr(x, trig) for x in ir.arg_exprs(a))}}}"
+    return lane_expr(a, trig)
+
+
+class _LanePrinter(_CPrinter):
+    """:class:`_CPrinter`'s walk with lane types, lane kernels and lane leaves."""
+
+    def block(self, block) -> None:
+        for s in block:
+            if isinstance(s, ir.Assign):
+                self.emit(f"const ikc_v4 {s.name} = {lane_expr(s.value, self.trig)};")
+            elif isinstance(s, ir.Loop):
+                self.loop(s)
+            elif isinstance(s, ir.ReferenceLoop):
+                raise Untranslatable(f"reference solver of {s.code}")
+            else:
+                self.leaf(s)
+
+    def loop(self, s: ir.Loop) -> None:
+        if s.kernel not in LANE_KERNEL_ARGS:
+            raise Untranslatable(f"kernel {s.kernel} has no lane form")
+        flag, outs, slots = s.flag, len(s.outs), KERNEL_SLOTS[s.kernel]
+        args = [_lane_arg(a, self.trig) for a in s.args[:LANE_KERNEL_ARGS[s.kernel]]]
+        self.emit("{")
+        self.depth += 1
+        self.emit(f"ikc_v4 {flag}_q[{slots * outs}], {flag}_cs[{2 * slots * outs}];")
+        self.emit(f"ikc_m4 {flag}_f[{slots}];")
+        self.emit(f"ikc_v_{s.kernel}_cs({', '.join(args + [f'{flag}_q', f'{flag}_f', f'{flag}_cs'])});")
+        self.emit(f"for (int {flag}_k = 0; {flag}_k < {slots}; {flag}_k++) {{")
+        self.depth += 1
+        trig = {name: (f"{flag}_c{j}", f"{flag}_s{j}") for j, name in enumerate(s.outs)}
+        for j, name in enumerate(s.outs):
+            cos_name, sin_name = trig[name]
+            self.emit(f"const ikc_v4 {name} = {flag}_q[{flag}_k * {outs} + {j}];")
+            self.emit(f"const ikc_v4 {cos_name} = {flag}_cs[{flag}_k * {2 * outs} + {2 * j}];")
+            self.emit(f"const ikc_v4 {sin_name} = {flag}_cs[{flag}_k * {2 * outs} + {2 * j + 1}];")
+            self.emit(f"(void){cos_name};")
+            self.emit(f"(void){sin_name};")
+            self.trig[name] = trig[name]
+        self.emit(f"const ikc_m4 {flag} = {flag}_f[{flag}_k];")
+        self.slots.append(self.slots[-1] * slots)
+        self.block(s.body)
+        for name in s.outs:
+            self.trig.pop(name, None)
+        self.slots.pop()
+        self.depth -= 1
+        self.emit("}")
+        self.depth -= 1
+        self.emit("}")
+
+    def leaf(self, s: ir.Leaf) -> None:
+        if len(s.q) != self.dof:
+            raise Untranslatable(f"a leaf of {len(s.q)} joint values, the robot has {self.dof}")
+        for j, e in enumerate(s.q):
+            self.emit(f"ikc_v_store(Q + 4 * (n * {self.dof} + {j}), {lane_expr(e, self.trig)});")
+        err = lane_expr(s.errors[0], self.trig) if len(s.errors) == 1 else (
+            f"ikc_v_max2({', '.join(lane_expr(x, self.trig) for x in s.errors)})")
+        self.emit(f"ikc_v_store(E + 4 * n, {err});")
+        flags = s.flags[0] if s.flags else "((ikc_m4){0, 0, 0, 0})"
+        for f in s.flags[1:]:
+            flags = f"({flags} | {f})"
+        self.emit(f"ikc_m_store(F + 4 * n, {flags});")
+        self.emit("n++;")
+        self.leaves += self.slots[-1]
+
+
+def c_lane_function(program: ir.Program, name: str, dof: int) -> tuple[list[str], int]:
+    """(C lines of ``static int NAME(G, Q, E, F)``, the most leaves it writes): the chain for 4 poses,
+    goal entry ``i`` of lane ``l`` at ``G[4*i + l]``, leaf ``n``'s joint ``j`` at ``Q[4*(n*dof + j) + l]``,
+    its error at ``E[4*n + l]`` and its flags at ``F[4*n + l]`` (``IKC_TANGENT_ROOT`` as the scalar
+    chain's; ``IKC_IRREGULAR``: the lane is solved again by the scalar chain); raises
+    :class:`Untranslatable`."""
+    pr = _LanePrinter(dof)
+    for i, g in enumerate(program.goal):
+        pr.emit(f"const ikc_v4 {g} = ikc_v_load(G + 4 * {i});")
+    pr.emit("const ikc_v4 rep = IKC_V(0.0);")
+    pr.emit("(void)rep;")
+    pr.block(program.body)
+    head = [f"static int {name}(const double *G, double *Q, double *E, int64_t *F) {{", "    int n = 0;"]
+    return head + [w for line in pr.lines for w in wrap(line)] + ["    return n;", "}", ""], pr.leaves

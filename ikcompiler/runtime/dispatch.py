@@ -328,6 +328,9 @@ class Solver:
         native = self.native_chain()
         if native is None:
             return None
+        from ikcompiler.codegen.csource import block_c_source
+
+        native.bind_block(lambda: block_c_source(self._ns))  # built on the first batch (section 14)
         Ts = np.asarray(Ts, dtype=float)
         shape = native.target_shape
         if Ts.ndim < len(shape) or Ts.shape[Ts.ndim - len(shape):] != shape:

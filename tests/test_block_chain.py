@@ -1,0 +1,132 @@
+"""The block chain of a batch (4 poses a call, docs/design.md section 14, "SIMD over poses") against the
+scalar driver it stands in for.
+
+With libm's angles in the lanes (``IKC_LIBMVEC=0``) the block path must return what ``ikc_solve_many``
+returns, bit for bit: every value of a lane is the scalar IEEE operation, and a lane the scalar path
+would treat specially goes to it whole; a lane mixed up with another, a slot or a flag lost, a pose
+count that is not a multiple of 4, an invalid target inside a block, all show as a difference.  With
+libmvec's angles (the default on AVX2) the rows are the scalar path's as sets to 1e-12 rad, the same
+exact / least-squares / self-motion marks, and every exact row reproduces its target through the
+module's FK to the contract's precision.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from ikcompiler import compile_robot, load_robot
+from ikcompiler.codegen import csource
+from ikcompiler.verify import sample_configurations
+from subproblems import native
+
+pytestmark = pytest.mark.skipif(native.compiler() is None, reason="no C compiler")
+
+BLOCK_ROBOTS = ("puma560", "ur5", "kr6_r700", "prob")  # the zoo chains with a lane form (Pieper, UR-type)
+ROW_SAME = 1e-12  # rad: the brief's bound for rows of the two paths
+
+_MODULES: dict[str, tuple] = {}
+
+
+def _module(name):
+    """(module, robot), compiled once per session."""
+    if name not in _MODULES:
+        robot = load_robot(name)
+        _MODULES[name] = (compile_robot(robot), robot)
+    return _MODULES[name]
+
+
+def _chains(name, monkeypatch, libmvec: bool):
+    """(module, a NativeChain bound to a block chain built with or without libmvec)."""
+    module, _ = _module(name)
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_LIBMVEC", "1" if libmvec else "0")
+    source = csource.native_source(vars(module))
+    r = module._SOLVER.robot
+    nc = native.bind(source, dof=len(r.joint_names), slots=r.slots, nfree=0, target=r.target)
+    assert nc is not None and nc.bind_block(lambda: csource.block_c_source(vars(module)))
+    return module, nc
+
+
+def _targets(name, n=403, seed=5):
+    """Sampled poses (30% of the joint values at 0, +-pi/2, pi), every joint vector of a grid over
+    {0, +-pi/2, pi} on the first three joints and the last three, and two invalid targets inside a
+    block; n sampled (not a multiple of 4: a partial block at the end)."""
+    module, robot = _module(name)
+    Q = sample_configurations(robot, n, seed=seed, special=0.3)
+    special = [0.0, math.pi / 2, -math.pi / 2, math.pi]
+    grid = [list(a) + list(b) for a in itertools.product(special, repeat=3)
+            for b in [(0.0, 0.0, 0.0), (0.3, math.pi / 2, -0.7), (math.pi, -math.pi / 2, 0.0)]]
+    Ts = [module.fk(q) for q in Q] + [module.fk(np.array(q)) for q in grid]
+    bad = np.eye(4)
+    bad[0, 0] = np.nan
+    skew = np.eye(4)
+    skew[0, 1] = 0.5
+    Ts[5], Ts[6] = bad, skew
+    return np.array(Ts)
+
+
+def _both(nc, Ts, monkeypatch, workers=1, limits=True):
+    free = np.zeros((len(Ts), 0))
+    monkeypatch.setenv("IKC_BLOCK", "0")
+    scalar = nc.many(Ts, free, limits, workers)
+    monkeypatch.setenv("IKC_BLOCK", "1")
+    block = nc.many(Ts, free, limits, workers)
+    return scalar, block
+
+
+@pytest.mark.parametrize("name", BLOCK_ROBOTS)
+def test_block_path_with_libm_angles_is_the_scalar_path_bit_for_bit(name, monkeypatch):
+    module, nc = _chains(name, monkeypatch, libmvec=False)
+    Ts = _targets(name)
+    for workers, limits in ((1, True), (2, True), (1, False)):
+        ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, Ts, monkeypatch, workers, limits)
+        assert np.array_equal(k0, k1)
+        assert (k0 > 0).sum() > 0.9 * len(Ts) - 2 and (k0 == native.INVALID).sum() == 2
+        for a, b in ((Q0, Q1), (v0, v1), (ls0, ls1), (r0, r1), (c0, c1)):
+            assert np.array_equal(a, b)
+
+
+def _row_distance(A, B):
+    d = np.abs(A[:, None, :] - B[None, :, :]) % (2 * np.pi)
+    return np.minimum(d, 2 * np.pi - d).max(axis=2)
+
+
+@pytest.mark.parametrize("name", BLOCK_ROBOTS)
+def test_block_path_with_libmvec_angles_gives_the_scalar_rows(name, monkeypatch):
+    if "-mavx2" not in native.machine_flags():
+        pytest.skip("libmvec's AVX2 variants need an AVX2 build")
+    module, nc = _chains(name, monkeypatch, libmvec=True)
+    Ts = _targets(name, seed=11)
+    ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, Ts, monkeypatch)
+    assert np.array_equal(k0, k1)
+    tol = module.TOLERANCE * module.SCALE
+    for p in np.nonzero(k0 > 0)[0]:
+        A, B = Q0[p][v0[p]], Q1[p][v1[p]]
+        d = _row_distance(A, B)
+        match = d.argmin(axis=1)
+        assert d.min(axis=1).max() <= ROW_SAME and d.min(axis=0).max() <= ROW_SAME, p
+        assert np.array_equal(ls0[p][v0[p]], ls1[p][v1[p]][match])
+        assert np.array_equal(c0[p][v0[p]], c1[p][v1[p]][match])
+        for row, inexact in zip(B, ls1[p][v1[p]]):
+            if not inexact:  # an exact row of the block path reproduces its target through our FK
+                assert np.abs(module.fk(row) - Ts[p]).max() <= tol
+
+
+def test_block_chain_is_built_on_the_first_batch_only():
+    module = compile_robot(load_robot("puma560"))
+    nc = module._native_chain()
+    assert nc is not None and nc.block_build_ms is None
+    module.solve(module.fk(np.full(6, 0.3)))
+    assert nc.block_build_ms is None  # a single pose builds no block chain
+    module.solve_batch(np.array([module.fk(np.full(6, 0.3))] * 3))
+    assert nc.block_build_ms is not None and nc._block is not None
+
+
+def test_chains_without_a_lane_form_have_no_block_source():
+    for name, kw in (("jaco", {}), ("panda", {"free": ("panda_joint7",)})):
+        module = compile_robot(load_robot(name), **kw)
+        assert csource.block_c_source(vars(module)) is None, name
