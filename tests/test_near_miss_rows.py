@@ -105,3 +105,37 @@ def test_talos_perturbed_arm_recovers_the_pair_born_at_a_fold():
     assert joint_distance(rows, SAMPLED[None], chain.joint_types, chain.scale).min() <= 1e-6
     everything = np.asarray(module.solve(T, SAMPLED[2], limits=False))
     assert len(everything) == 8  # the true robot's count (its general 6R elimination finds 8)
+
+
+def test_tiago_perturbed_arm_recovers_a_sample_on_a_branch_the_snapped_arm_lacks():
+    """tiago.urdf (example-robot-data), torso_lift_link -> hand_palm_link, perturbed by 1e-6 (seed 7),
+    free arm_3_joint: at verify's seed-11 pose 35 the sampled vector lies on an arm branch born within
+    the perturbation at a near-fold of the snapped S2-RRR (no real root there); only its near-miss
+    least-squares rows seed the continuation onto the sample and its twin ~0.01 rad away.  Without
+    them no row inside the limits came back (benchmarks/results/perturbed_7r.md: 229/230)."""
+    from ikcompiler import configs, robotdb
+    from ikcompiler.verify import joint_distance, sample_configurations
+
+    try:
+        robotdb.require(robotdb.EXTRA)
+    except robotdb.RobotPackageError as exc:
+        pytest.fail(f"{exc} (tests/test_near_miss_rows.py needs the robots extra)", pytrace=False)
+    cat = robotdb.discover(packages=("example-robot-data",))
+    entry = [e for e in cat.chains if e.rel.endswith("tiago_description/robots/tiago.urdf")
+             and e.base == "torso_lift_link" and e.tip == "hand_palm_link"][0]
+    chain = configs.perturbed(entry.load(), 1e-6, seed=7)
+    compiled = configs.compile_chain(chain)
+    module = compiled.module
+    assert module.METHOD == "closed-form" and module._POLISH and compiled.free == ("arm_3_joint",)
+    # the pose as verify samples it (real_robots.py's fourth random stage of 50 at seed 11)
+    sampled = sample_configurations(chain, 50, 11, 0.0, (module.LOWER, module.UPPER))[35]
+    T = chain.fk(sampled)
+    rows = np.asarray(module.solve(T, sampled[2]))
+    assert len(rows) >= 2
+    G = np.array([chain.fk(r) for r in rows])
+    err = np.maximum(np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1),
+                     chain.scale * np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)))
+    assert (err <= 1e-12 * chain.scale).all()
+    d = joint_distance(rows, sampled[None], chain.joint_types, chain.scale)
+    assert d.min() <= 1e-6
+    assert ((d > 1e-6) & (d < 0.05)).any()  # its twin across the fold, also a solution
