@@ -419,6 +419,11 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         # finds one of the two (panda.urdf perturbed by 1e-6, seed 8: the leaf missed by 1.2e-4 of
         # the size, the sample 0.015 rad from it was lost; docs/calibrated.md item 3)
         born[rest] = ~usable[rest] & ~family[rest] & (err <= etol)
+        # ... a new one: a leaf that ended on a row tracked from an exact leaf shows no pair
+        for i in np.nonzero(born)[0]:
+            mates = np.nonzero(ok & (owner == owner[i]))[0]
+            if len(mates) and (_apart(Q[mates], Q[i], revolute, scale) <= SEPARATE).any():
+                born[i] = False
     # Rows whose count may differ between the snapped and the true robot: failed or colliding
     # tracks, near-miss least-squares leaves, rows at a near-singular configuration.
     threshold = near_singular(twists0, twists1, scale)
