@@ -422,6 +422,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
              * the other joints with it held, as reference.clamped_onto_limits; then the row as returned */
             ikc_newton_steps(rb, g, w, IKC_CLAMPED_NEWTON, 1, held);
+            same = IKC_SPLIT_ROOT;  /* Newton placed this row: a copy of it may stop 1e-7 away */
             for (int j = 0; j < dof; j++)
                 if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
             status = ikc_represent(rb, w, limits, held);

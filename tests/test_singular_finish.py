@@ -141,8 +141,8 @@ def test_clamped_row_at_a_singular_configuration_is_brought_to_the_precision(xar
     clamped[0, 4] = chain.upper[4]
     damped = robot.newton(clamped, T, reference.CLAMPED_NEWTON, hold=(4,))
     assert _errors(chain, damped, T[0])[0] > PRECISION  # what the damped steps alone leave
-    done = reference.clamped_onto_limits(robot, start, np.zeros(1, dtype=int), T)
-    assert done[0, 4] == chain.upper[4]
+    done, moved = reference.clamped_onto_limits(robot, start, np.zeros(1, dtype=int), T)
+    assert moved and done[0, 4] == chain.upper[4]
     assert _errors(chain, done, T[0])[0] <= PRECISION
 
 

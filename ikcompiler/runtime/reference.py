@@ -230,6 +230,7 @@ def _no_flags(n):
 
 def complete(robot, TH, owner, ls, cont, goals, limits):
     """Check candidates on the true robot (a few Newton steps for near misses), wrap, pack slots."""
+    moved = False  # rows Newton placed with a value clamped onto its limit (clamped_onto_limits)
     if len(TH):
         scale, exact = robot.scale, robot.tol * robot.scale
         # Tangent geometry (a double root) costs about half the digits; a few Newton steps restore them.
@@ -243,12 +244,13 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
         # pulled it onto the family since (onto_self_motion moves only rows that miss or lie outside)
         TH = onto_self_motion(robot, TH, owner, cont, goals, limits)
         if limits:
-            TH = clamped_onto_limits(robot, TH, owner, goals)
+            TH, clamped = clamped_onto_limits(robot, TH, owner, goals)
+            moved = moved or clamped
     # Rows Newton carried to where they are (a search's, a snapped plan's: the Python snapped route
     # merges them within SPLIT_ROOT too) and representatives onto_self_motion moved along their family
     # stop where their starts lead: two copies of one solution may land ~1e-8 apart (pybullet's panda
     # at q4 = 0: two rows 8e-9 apart; pr2 perturbed by 1e-6: 7e-9).  docs/design.md section 11.
-    moved = robot.search or robot.method == "numerical" or robot.polish
+    moved = moved or robot.search or robot.method == "numerical" or robot.polish
     dedupe = _fk.SPLIT_ROOT if moved else None
     return _rt.finish(TH, owner, ls, len(goals), twists=robot.twists, kinds=robot.kinds, home=robot.home,
                       independent=robot.independent, targets=goals, scale=robot.scale, tol=robot.tol,
@@ -368,14 +370,16 @@ def _along_family(robot, Q, n, goals):
 def clamped_onto_limits(robot, TH, owner, goals):
     """Rows with a value just outside a limit (a double root at a limit is located to sqrt(eps) only):
     the value clamped onto the limit, then Newton steps on the other joints (the clamped and free ones
-    held), so that the row as returned is exact or flagged, never outside its limits."""
+    held), so that the row as returned is exact or flagged, never outside its limits.  Returns the rows
+    and whether any was clamped (Newton placed it: the finish then merges rows within SPLIT_ROOT, as the
+    C finish does; the Alexander leg at its straight knee, a clamped row 9.9e-7 from an exact one)."""
     ind = list(robot.independent)
     ok = ~np.isnan(TH).any(axis=1)
     Qr, _, out, clamped = _fk.represent(np.nan_to_num(TH[:, ind]), robot.joint_types, robot.lower,
                                         robot.upper, True, clamps=True)
     rows = ok & ~out & clamped.any(axis=1)
     if not rows.any():
-        return TH
+        return TH, False
     TH = TH.copy()
     TH[np.ix_(rows, ind)] = Qr[rows]
     TH[rows] = TH[rows][:, list(robot.vary)] @ robot.A.T + robot.B
@@ -387,4 +391,4 @@ def clamped_onto_limits(robot, TH, owner, goals):
         TH[sel] = robot.newton_until_exact(TH[sel], goals[owner[sel]], CLAMPED_NEWTON, FINISH_MARGIN,
                                            rows=np.ones(len(sel), dtype=bool), per_round=CLAMPED_NEWTON,
                                            hold=hold)
-    return TH
+    return TH, True
