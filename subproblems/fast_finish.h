@@ -1645,7 +1645,16 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
             if (!(E[k] <= exact)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (!(ikc_row_distance(rb, Q + k * dof, Q0 + k * dof) <= IKC_MAX_MOVE)) return ikc_hand_back(IKC_WHY_SNAPPED);
             if (ikc_weakest(rb, Q + k * dof) < rb->near_singular) return ikc_hand_back(IKC_WHY_SNAPPED);
-        } else if (!(E[k] <= exact) && !fold && ikc_weakest(rb, Q + k * dof) < rb->near_singular) {
+        } else if (E[k] <= exact) {
+            /* a least-squares leaf ending exact: a pair born at a fold of the snapped robot, of which
+             * Newton from the one leaf finds one (continuation.correct's `born` rows; panda.urdf at
+             * 1e-6, seed 8: the sampled vector 0.015 rad from the leaf was lost) */
+            return ikc_hand_back(IKC_WHY_SNAPPED);
+        } else if ((E[k] < IKC_NEAR_MISS * rb->scale || !fold) && ikc_weakest(rb, Q + k * dof) < rb->near_singular) {
+            /* ending just above the precision near a singular configuration: a double root the damped
+             * steps stall at (continuation._double_root's rows; kuka_iiwa model.urdf at 1e-6, seed 8, q4 = 0:
+             * the sample came back least-squares at 6e-12) */
+            if (E[k] < IKC_NEAR_MISS * rb->scale) return ikc_hand_back(IKC_WHY_SNAPPED);
             fold = 1;  /* a least-squares leaf ending near a singular configuration */
         }
         if (E[k] <= exact) any_exact = 1;

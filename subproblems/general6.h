@@ -1124,6 +1124,11 @@ static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const dou
         double e = ikc_newton(rb, g, Q + 6 * k, G6_NEWTON);
         E[k] = e;
         F[k] = 0;
+        /* exact, but the steps stopped short of their margin (1e-3 of the precision) at a near-singular
+         * configuration: the row is located only to e / sigma, doubtful when that exceeds G6_SAME
+         * (tiago_pro.urdf at 1e-6, seed 8, q = (0, 0, 0, 0, pi/2, pi/2, 0): sigma 2.7e-7, the row
+         * exact to 7.6e-13 lay 2e-6 from the sampled vector) */
+        if (e <= exact && e > 1e-3 * exact && e > G6_SAME * rb->scale * ikc_weakest(rb, Q + 6 * k)) return -1;
         if (e <= exact) continue;
         /* a clean root that Newton cannot finish, near or far: a double root in disguise or a null
          * vector misread beside a close root (dropping the far ones lost 2 of 8 solutions on Jaco

@@ -87,6 +87,7 @@ from subproblems._class2 import (
     rotation_angle,
     rotation_angle_batch,
     trig_roots,
+    trig_roots_batch,
     trig_roots_nan_batch,
 )
 from subproblems.core import BatchResult, Solution, register
@@ -102,6 +103,49 @@ def _lin_roots(f0, c1, s1, ref):
 def _flat(f0, c1, s1, ref):
     """``f0 + c1 cos + s1 sin`` is within the exactness tolerance of zero for every angle."""
     return np.abs(f0) + np.hypot(c1, s1) <= EXACT_TOL * ref
+
+
+#: Cramer's point ``adj(M) E(a) / det M`` off the unit circle by more than this: ``a`` is a complex root
+#: of the quartic projected onto the circle, and ``b`` also gets its least-squares value.
+OFF_CIRCLE = 1e-9
+
+
+def _ls_b_coefficients(M, E):
+    """Fourier coefficients (f0, c1, s1, c2, s2) of the derivative of ``|M (cos b, sin b) - E|^2 / 2``
+    over ``b`` (``M`` (..., 2, 2), ``E`` (..., 2))."""
+    A = np.einsum("...ki,...kj->...ij", M, M)
+    e = np.einsum("...ki,...k->...i", M, E)
+    zero = np.zeros_like(e[..., 0])
+    return zero, -e[..., 1], e[..., 0], A[..., 0, 1], 0.5 * (A[..., 1, 1] - A[..., 0, 0])
+
+
+def least_squares_b(M, E) -> float:
+    """The ``b`` minimising ``|M (cos b, sin b) - E|``.
+
+    At a complex root ``a`` of the quartic projected onto the circle Cramer's point is off the circle,
+    and where ``M`` is nearly singular (axes 2 and 3 nearly parallel) its direction says little: the
+    puma560 of rtb-data perturbed by 1e-3 (seed 8) had a complex pair whose Cramer candidate missed by
+    1.5e-2 of the size, dropped, while the residual's local minimum beside it (2.6e-4) was the true
+    robot's sampled solution across a fold (benchmarks/real_robots.py --perturb-seed 8)."""
+    f = _ls_b_coefficients(np.asarray(M, dtype=float), np.asarray(E, dtype=float))
+    roots = trig_roots(*(float(x) for x in f)) or []
+    if not roots:
+        return math.atan2(E[1], E[0])
+    cost = [float(np.linalg.norm(M @ [math.cos(b), math.sin(b)] - E)) for b in roots]
+    return roots[int(np.argmin(cost))]
+
+
+def least_squares_b_batch(M, E):
+    """Vectorised :func:`least_squares_b`: ``M`` (N, 2, 2), ``E`` (N, k, 2) -> b (N, k)."""
+    N, k = E.shape[:2]
+    Mk = np.broadcast_to(M[:, None], (N, k, 2, 2))
+    F = np.stack(_ls_b_coefficients(Mk, E), -1).reshape(N * k, 5)
+    F = np.where(np.isfinite(F), F, 0.0)
+    b = trig_roots_batch(F).reshape(N, k, 4)
+    u = np.stack([np.cos(b), np.sin(b)], -1)  # (N, k, 4, 2)
+    r = np.linalg.norm(np.einsum("nkij,nkrj->nkri", Mk, u) - E[:, :, None], axis=-1)
+    r = np.where(np.isfinite(r), r, np.inf)
+    return np.take_along_axis(b, r.argmin(-1)[..., None], -1)[..., 0]
 
 
 def pair_candidates(M, E0, Ec, Es, ref: float):
@@ -132,6 +176,8 @@ def pair_candidates(M, E0, Ec, Es, ref: float):
         for a in roots:
             G = (G0 + Gc * math.cos(a) + Gs * math.sin(a)) / det
             groups[0].append((a, math.atan2(G[1], G[0])))
+            if abs(math.hypot(G[0], G[1]) - 1.0) > OFF_CIRCLE:  # a complex root's projection
+                groups[0].append((a, least_squares_b(M, E0 + Ec * math.cos(a) + Es * math.sin(a))))
     if sv[1] <= 1e-6 * sv[0]:  # (near) rank 1: left null vector u2, row direction v1
         U, S, Vt = np.linalg.svd(M)
         u1, u2, v1 = U[:, 0], U[:, 1], Vt[0]
@@ -239,7 +285,7 @@ def _rtr_system_batch(x2, c0, cc, cs, e0, ec, es, scale):
 
 @np.errstate(all="ignore")
 def pair_candidates_batch(M, E0, Ec, Es, ref):
-    """Vectorised :func:`pair_candidates`: pairs ``(a, b)`` of the first group (N, 12, 2) and of the
+    """Vectorised :func:`pair_candidates`: pairs ``(a, b)`` of the first group (N, 16, 2) and of the
     second (free ``a`` representatives, N, 8, 2), NaN where unused; ``free_a``, ``free_b`` (N,)."""
     N = len(M)
     nm = np.abs(M).max(axis=(-1, -2))
@@ -248,7 +294,7 @@ def pair_candidates_batch(M, E0, Ec, Es, ref):
     regular = ~bfree & (S[:, 1] > RANK_TOL * S[:, 0])
     rank1 = ~bfree & (S[:, 1] <= 1e-6 * S[:, 0])
     nan = np.nan
-    g0 = np.full((N, 12, 2), nan)
+    g0 = np.full((N, 16, 2), nan)
     g1 = np.full((N, 8, 2), nan)
 
     # regular M: Cramer's rule and the unit-norm condition, a quartic in exp(i a)
@@ -265,6 +311,11 @@ def pair_candidates_batch(M, E0, Ec, Es, ref):
     ]
     rb = np.arctan2(G[..., 1], G[..., 0])
     g0[:, 0:4] = np.where(regular[:, None, None], np.stack([ra, rb], -1), nan)
+    # a complex root's projection: b also at its least-squares value (least_squares_b)
+    off = regular[:, None] & (np.abs(np.hypot(G[..., 0], G[..., 1]) - 1.0) > OFF_CIRCLE)
+    if off.any():
+        Ea = E0[:, None] + Ec[:, None] * np.cos(ra)[..., None] + Es[:, None] * np.sin(ra)[..., None]
+        g0[:, 12:16] = np.where(off[..., None], np.stack([ra, least_squares_b_batch(M, Ea)], -1), nan)
     free_a = regular & none_q
 
     # (near) rank 1: left null vector u2 gives the equation in a, the row direction v1 the one in b

@@ -105,3 +105,76 @@ def test_talos_perturbed_arm_recovers_the_pair_born_at_a_fold():
     assert joint_distance(rows, SAMPLED[None], chain.joint_types, chain.scale).min() <= 1e-6
     everything = np.asarray(module.solve(T, SAMPLED[2], limits=False))
     assert len(everything) == 8  # the true robot's count (its general 6R elimination finds 8)
+
+
+def test_tiago_perturbed_arm_recovers_a_sample_on_a_branch_the_snapped_arm_lacks():
+    """tiago.urdf (example-robot-data), torso_lift_link -> hand_palm_link, perturbed by 1e-6 (seed 7),
+    free arm_3_joint: at verify's seed-11 pose 35 the sampled vector lies on an arm branch born within
+    the perturbation at a near-fold of the snapped S2-RRR (no real root there); only its near-miss
+    least-squares rows seed the continuation onto the sample and its twin ~0.01 rad away.  Without
+    them no row inside the limits came back (benchmarks/results/perturbed_7r.md: 229/230)."""
+    from ikcompiler import configs, robotdb
+    from ikcompiler.verify import joint_distance, sample_configurations
+
+    try:
+        robotdb.require(robotdb.EXTRA)
+    except robotdb.RobotPackageError as exc:
+        pytest.fail(f"{exc} (tests/test_near_miss_rows.py needs the robots extra)", pytrace=False)
+    cat = robotdb.discover(packages=("example-robot-data",))
+    entry = [e for e in cat.chains if e.rel.endswith("tiago_description/robots/tiago.urdf")
+             and e.base == "torso_lift_link" and e.tip == "hand_palm_link"][0]
+    chain = configs.perturbed(entry.load(), 1e-6, seed=7)
+    compiled = configs.compile_chain(chain)
+    module = compiled.module
+    assert module.METHOD == "closed-form" and module._POLISH and compiled.free == ("arm_3_joint",)
+    # the pose as verify samples it (real_robots.py's fourth random stage of 50 at seed 11)
+    sampled = sample_configurations(chain, 50, 11, 0.0, (module.LOWER, module.UPPER))[35]
+    T = chain.fk(sampled)
+    rows = np.asarray(module.solve(T, sampled[2]))
+    assert len(rows) >= 2
+    G = np.array([chain.fk(r) for r in rows])
+    err = np.maximum(np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1),
+                     chain.scale * np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)))
+    assert (err <= 1e-12 * chain.scale).all()
+    d = joint_distance(rows, sampled[None], chain.joint_types, chain.scale)
+    assert d.min() <= 1e-6
+    assert ((d > 1e-6) & (d < 0.05)).any()  # its twin across the fold, also a solution
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_puma_perturbed_arm_recovers_the_elbow_its_snapped_s2rrr_lost(native):
+    """puma560_robot.urdf.xacro (rtb-data) perturbed by 1e-3 (seed 8): joints 2 and 3 stay parallel
+    only to ~1e-3 (not snapped), so the snapped S2-RRR's matrix M is nearly singular (sigma ratio
+    2.8e-3).  At verify's seed-11 pose 16 its quartic had two real roots (one elbow) and a complex pair
+    (the other, the sampled one): Cramer's point of that pair's projection gave a th3 0.9 rad off, a
+    candidate missing by 1.5e-2 of the size, beyond S2_FAR, so no near row came back and 4 of the true
+    robot's 8 solutions were lost, the sampled one among them.  Its least-squares th3
+    (s2_rrr.least_squares_b) gives a near row, whose rescue asks the true robot's general 6R solver."""
+    from ikcompiler import configs, robotdb
+    from ikcompiler.verify import joint_distance, sample_configurations
+
+    try:
+        robotdb.require(robotdb.EXTRA)
+    except robotdb.RobotPackageError as exc:
+        pytest.fail(f"{exc} (tests/test_near_miss_rows.py needs the robots extra)", pytrace=False)
+    cat = robotdb.discover(packages=("rtb-data",))
+    entry = [e for e in cat.chains
+             if e.rel.endswith("puma560_robot.urdf.xacro") and e.tip == "link7"][0]
+    chain = configs.perturbed(entry.load(), 1e-3, seed=8)
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "closed-form" and module._POLISH
+    assert "S2-RRR" in module.PLAN
+    module.NATIVE = native
+    sampled = sample_configurations(chain, 50, 11, 0.0, (module.LOWER, module.UPPER))[16]
+    T = chain.fk(sampled)
+    rows = np.asarray(module.solve(T, limits=False))
+    G = np.array([chain.fk(r) for r in rows])
+    err = np.maximum(np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1),
+                     chain.scale * np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)))
+    assert (err <= 1e-12 * chain.scale).all()
+    assert joint_distance(rows, sampled[None], chain.joint_types, chain.scale).min() <= 1e-6
+    # both elbows, both wrists: as many as the true robot's general 6R elimination finds (8)
+    from subproblems import general6
+
+    robot = module._SOLVER.robot
+    assert len(rows) == len(general6.General6(robot.twists, robot.home, robot.scale).solve(T)) == 8

@@ -595,3 +595,79 @@ def test_copies_of_a_snapped_plans_solution_sent_to_the_reference_runtime_are_on
     assert module._POLISH, "the perturbed arm no longer gives a snapped plan: pick another chain"
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=3)
     assert rep.duplicates == 0 and rep.wrong == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+def _perturbed_pose(catalogue, package, name, tip, eps, seed, count, vseed, special, index, native,
+                    snapped=True):
+    """A real arm perturbed as benchmarks/real_robots.py --perturb-seed SEED does, and one pose of its
+    verify stages (count poses at verify seed vseed): (chain, module, sampled vector, free values)."""
+    from ikcompiler.verify import sample_configurations
+
+    chain = configs.perturbed(_entry(catalogue, package, name, tip).load(), eps, seed=seed)
+    compiled = configs.compile_chain(chain)
+    module = compiled.module
+    if snapped:
+        assert module._POLISH, "the perturbed file no longer gives a snapped plan: pick another chain"
+    module.NATIVE = native
+    q = sample_configurations(chain, count, vseed, special, (module.LOWER, module.UPPER))[index]
+    free = [q[chain.independent_names.index(f)] for f in module.FREE_JOINTS]
+    return chain, module, q, free
+
+
+def _distances(chain, rows, q):
+    import numpy as np
+
+    from ikcompiler.verify import joint_distance
+
+    rows = np.asarray(rows)
+    assert len(rows), "no row"
+    G = np.array([chain.fk(r) for r in rows])
+    T = chain.fk(q)
+    err = np.maximum(np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1),
+                     chain.scale * np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)))
+    assert (err <= 1e-12 * chain.scale).all(), err
+    return joint_distance(rows, q[None], chain.joint_types, chain.scale)
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_least_squares_leaf_that_ends_exact_seeds_its_twin(catalogue, native):
+    """panda.urdf (example-robot-data) perturbed by 1e-6 (seed 8), free panda_joint7, verify's seed-10
+    pose 14 (sigma 5.7e-5 there): the snapped S2-RR is tangent (two copies of one least-squares leaf
+    missing by 1.2e-4 of the size, more than the rescue threshold); the true robot has the sampled
+    vector and a twin 0.03 rad away on either side of it.  Plain Newton took both copies to the twin and
+    the sample was lost; a least-squares leaf ending exact now seeds (continuation.correct `born`) and,
+    in C, hands its target back (ikc_polished)."""
+    chain, module, q, free = _perturbed_pose(catalogue, "example-robot-data", "panda.urdf", "panda_hand",
+                                             1e-6, 8, 50, 10, 0.0, 14, native)
+    d = _distances(chain, module.solve(chain.fk(q), *free, limits=False), q)
+    assert d.min() <= 1e-6, d
+    assert ((d > 1e-3) & (d < 0.1)).any(), d  # the twin across the fold
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_least_squares_leaf_stalled_at_a_double_root_goes_to_python(catalogue, native):
+    """model.urdf of pybullet's kuka_iiwa perturbed by 1e-6 (seed 8), free lbr_iiwa_joint_3, verify's special pose 3
+    of seed 1 (q4 = 0, the elbow stretched; sigma 2.3e-7): every leaf of the snapped S3-R is clamped
+    at the fold (missing by 6.7e-5 of the size), the leaf of the sampled branch ends 2.5e-11 from the
+    target after its Newton steps, where the damped steps stall.  The C finish kept it as a
+    least-squares row (another leaf was exact); now it hands the target back, whose continuation takes
+    undamped steps onto the double root (continuation._double_root)."""
+    chain, module, q, free = _perturbed_pose(catalogue, "pybullet", "model.urdf", "lbr_iiwa_link_7",
+                                             1e-6, 8, 30, 1, 1.0, 3, native)
+    assert q[3] == 0.0
+    d = _distances(chain, module.solve(chain.fk(q), *free), q)
+    assert d.min() <= 1e-6, d
+
+
+def test_a_general6_row_exact_short_of_its_margin_at_a_near_double_root_is_doubtful(catalogue):
+    """tiago_pro.urdf (example-robot-data) perturbed by 1e-6 (seed 8), right arm, free arm_right_7_joint
+    (general-6r): at special pose 5 of seed 1, q = (0, 0, 0, 0, pi/2, pi/2, 0), sigma 2.7e-7, the C
+    elimination's damped Newton steps stopped at 7.6e-13 of the size (exact, but short of their 1e-15
+    margin), a row located only to ~3e-6: it came back 2e-6 from the sampled vector.  Such a row now
+    makes the target doubtful under its arrangement (general6.h g6_arrangement_leaves), and the paths
+    after it pin the root."""
+    chain, module, q, free = _perturbed_pose(catalogue, "example-robot-data", "tiago_pro.urdf",
+                                             "gripper_right_base_link", 1e-6, 8, 30, 1, 1.0, 5, True, False)
+    assert module.METHOD == "general-6r" and module.FREE_JOINTS == ("arm_right_7_joint",)
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
