@@ -246,6 +246,10 @@ class _CPrinter:
                 self.emit(f"const double {sin_name} = {flag}_cs[{flag}_k * {2 * outs} + {2 * j + 1}];")
                 self.trig[name] = trig[name]
         self.emit(f"const int {flag} = {flag}_f[{flag}_k];")
+        self.loop_body(s, slots)
+
+    def loop_body(self, s: ir.Loop, slots: int) -> None:
+        """A slot loop's body and its closing braces (the scalar and the lane printer alike)."""
         self.slots.append(self.slots[-1] * slots)
         self.block(s.body)
         for name in s.outs:
@@ -392,15 +396,7 @@ class _LanePrinter(_CPrinter):
             self.emit(f"(void){sin_name};")
             self.trig[name] = trig[name]
         self.emit(f"const ikc_m4 {flag} = {flag}_f[{flag}_k];")
-        self.slots.append(self.slots[-1] * slots)
-        self.block(s.body)
-        for name in s.outs:
-            self.trig.pop(name, None)
-        self.slots.pop()
-        self.depth -= 1
-        self.emit("}")
-        self.depth -= 1
-        self.emit("}")
+        self.loop_body(s, slots)
 
     def leaf(self, s: ir.Leaf) -> None:
         if len(s.q) != self.dof:
