@@ -633,6 +633,30 @@ def _line_and_across(rb: FinishRobot, col, V, s):
     return f, n
 
 
+def _probe(rb: FinishRobot, g, p0, col, step: float, v, iters: int):
+    """Newton steps from p0 moved by step * v (v over the columns col, in radians or sizes): the end
+    point, its error and its step from p0 per column, in the same units (the probes of the line and
+    plane tests)."""
+    x = list(p0)
+    for a in range(len(col)):
+        u = 1.0 if rb.revolute[col[a]] else rb.scale
+        x[col[a]] += step * v[a] * u
+    err = newton_steps(rb, g, x, iters)
+    d = []
+    for a in range(len(col)):
+        u = 1.0 if rb.revolute[col[a]] else rb.scale
+        d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
+    return x, err, d
+
+
+def _dot(d, f) -> float:
+    """sum d[a] f[a], summed in order (as the C accumulates it beside the steps)."""
+    total = 0.0
+    for a in range(len(d)):
+        total += d[a] * f[a]
+    return total
+
+
 def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
     """Whether the tangent line through its exact point p0 is a self-motion alone: a null space of two
     directions, the line's and one along which Newton steps come back to the line (a double root),
@@ -649,16 +673,8 @@ def tangent_line_alone(rb: FinishRobot, g, p0, s) -> bool:
         return False
     f, n = found
     for side in (-1, 1):
-        x = list(p0)
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            x[col[a]] += side * TANGENT_PROBE * n[a] * u
-        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
-        d, along = [], 0.0
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
-            along += d[a] * f[a]
+        x, _, d = _probe(rb, g, p0, col, side * TANGENT_PROBE, n, TANGENT_PROBE_STEPS)
+        along = _dot(d, f)
         off = 0.0
         for a in range(m):
             off += (d[a] - along * f[a]) * (d[a] - along * f[a])
@@ -700,17 +716,10 @@ def plane_misses(rb: FinishRobot, g, p0, s, slack: float, slide_slack: float) ->
         return False
     exact = rb.tol * rb.scale
     for side in (-1, 1):
-        x = list(p0)
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            x[col[a]] += side * PLANE_PROBE * n[a] * u
-        if not newton_steps(rb, g, x, 15) <= exact:
+        x, err, d = _probe(rb, g, p0, col, side * PLANE_PROBE, n, 15)
+        if not err <= exact:
             return False
-        d, along = [], 0.0
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
-            along += d[a] * f[a]
+        along = _dot(d, f)
         off = 0.0
         for a in range(m):
             off += (d[a] - along * f[a]) * (d[a] - along * f[a])
@@ -745,17 +754,8 @@ def _sheet_and_root(rb: FinishRobot, g, p0, col, f, n, r, slack: float, slide_sl
     if not out:
         return False
     for side in (-1, 1):
-        x = list(p0)
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            x[col[a]] += side * TANGENT_PROBE * r[a] * u
-        newton_steps(rb, g, x, TANGENT_PROBE_STEPS)
-        d, along, across = [], 0.0, 0.0
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
-            along += d[a] * f[a]
-            across += d[a] * n[a]
+        x, _, d = _probe(rb, g, p0, col, side * TANGENT_PROBE, r, TANGENT_PROBE_STEPS)
+        along, across = _dot(d, f), _dot(d, n)
         off = 0.0
         for a in range(m):
             off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a])
@@ -764,17 +764,10 @@ def _sheet_and_root(rb: FinishRobot, g, p0, col, f, n, r, slack: float, slide_sl
     exact = rb.tol * rb.scale
     floor = LINE_RANK * LINE_RANK
     for side in (-1, 1):
-        x = list(p0)
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            x[col[a]] += side * PLANE_PROBE * n[a] * u
-        if not newton_steps(rb, g, x, 15) <= exact:
+        x, err, d = _probe(rb, g, p0, col, side * PLANE_PROBE, n, 15)
+        if not err <= exact:
             return False
-        d, along = [], 0.0
-        for a in range(m):
-            u = 1.0 if rb.revolute[col[a]] else rb.scale
-            d.append(joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u)
-            along += d[a] * f[a]
+        along = _dot(d, f)
         off = 0.0
         for a in range(m):
             off += (d[a] - along * f[a]) * (d[a] - along * f[a])
