@@ -809,6 +809,31 @@ static double ikc_row_distance(const ikc_robot *rb, const double *x, const doubl
  * the tenth of the probe that the test asks (8: a margin of 16) */
 #define IKC_TANGENT_PROBE_STEPS 8
 
+/* Newton steps (ikc_newton, `iters`) from p0 moved by step * v (v over the columns col, radians or
+ * sizes): the end point x, its step from p0 per column d in the same units; returns the error (the
+ * probes of the line and plane tests; settle.py _probe) */
+static double ikc_probe(const ikc_robot *rb, const double *g, const double *p0, int m, const int *col, double step,
+                        const double *v, int iters, double *x, double *d) {
+    for (int j = 0; j < rb->dof; j++) x[j] = p0[j];
+    for (int a = 0; a < m; a++) {
+        const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+        x[col[a]] += step * v[a] * u;
+    }
+    const double err = ikc_newton(rb, g, x, iters);
+    for (int a = 0; a < m; a++) {
+        const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
+        d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
+    }
+    return err;
+}
+
+/* sum d[a] f[a] in order (settle.py _dot) */
+static double ikc_dot_m(int m, const double *d, const double *f) {
+    double total = 0.0;
+    for (int a = 0; a < m; a++) total += d[a] * f[a];
+    return total;
+}
+
 /* A self-motion line whose leaves are a tangent root (two roots of one step coincide: located to about
  * sqrt(eps)) has, at its exact point p0 (Newton-polished), a Jacobian null space of two directions: the
  * line's own, f, and one more, n.  Along a double root, n leads to no solution: Newton steps from
@@ -831,19 +856,9 @@ static int ikc_tangent_line_alone(const ikc_robot *rb, const double *g, const do
     double n[m];
     if (!(ikc_null_across(m, V, f, n) > 0.25)) return 0;
     for (int side = -1; side <= 1; side += 2) {
-        double x[dof];
-        for (int j = 0; j < dof; j++) x[j] = p0[j];
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            x[col[a]] += side * IKC_TANGENT_PROBE * n[a] * u;
-        }
-        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
-        double d[m], along = 0.0, off = 0.0;
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
-            along += d[a] * f[a];
-        }
+        double x[dof], d[m], off = 0.0;
+        ikc_probe(rb, g, p0, m, col, side * IKC_TANGENT_PROBE, n, IKC_TANGENT_PROBE_STEPS, x, d);
+        const double along = ikc_dot_m(m, d, f);
         for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
         if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the line: a sheet */
     }
@@ -881,19 +896,9 @@ static int ikc_plane_misses(const ikc_robot *rb, const double *g, const double *
     if (!nout) return 0;
     const double exact = rb->tol * rb->scale;
     for (int side = -1; side <= 1; side += 2) {
-        double x[dof];
-        for (int j = 0; j < dof; j++) x[j] = p0[j];
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
-        }
-        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
-        double d[m], along = 0.0, off = 0.0;
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
-            along += d[a] * f[a];
-        }
+        double x[dof], d[m], off = 0.0;
+        if (!(ikc_probe(rb, g, p0, m, col, side * IKC_PLANE_PROBE, n, 15, x, d) <= exact)) return 0;
+        const double along = ikc_dot_m(m, d, f);
         for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
         if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
         for (int k = 0; k < nout; k++)
@@ -929,39 +934,18 @@ static int ikc_sheet_and_root(const ikc_robot *rb, const double *g, const double
             out[nout++] = a;
     if (!nout) return 0;
     for (int side = -1; side <= 1; side += 2) {
-        double x[dof];
-        for (int j = 0; j < dof; j++) x[j] = p0[j];
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            x[col[a]] += side * IKC_TANGENT_PROBE * r[a] * u;
-        }
-        ikc_newton(rb, g, x, IKC_TANGENT_PROBE_STEPS);
-        double d[m], along = 0.0, across = 0.0, off = 0.0;
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
-            along += d[a] * f[a];
-            across += d[a] * n[a];
-        }
+        double x[dof], d[m], off = 0.0;
+        ikc_probe(rb, g, p0, m, col, side * IKC_TANGENT_PROBE, r, IKC_TANGENT_PROBE_STEPS, x, d);
+        const double along = ikc_dot_m(m, d, f), across = ikc_dot_m(m, d, n);
         for (int a = 0; a < m; a++)
             off += (d[a] - along * f[a] - across * n[a]) * (d[a] - along * f[a] - across * n[a]);
         if (!(sqrt(off) <= 0.1 * IKC_TANGENT_PROBE)) return 0;  /* not back on the sheet: no double root */
     }
     const double exact = rb->tol * rb->scale, floor = IKC_LINE_RANK * IKC_LINE_RANK;
     for (int side = -1; side <= 1; side += 2) {
-        double x[dof];
-        for (int j = 0; j < dof; j++) x[j] = p0[j];
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            x[col[a]] += side * IKC_PLANE_PROBE * n[a] * u;
-        }
-        if (!(ikc_newton(rb, g, x, 15) <= exact)) return 0;
-        double d[m], along = 0.0, off = 0.0;
-        for (int a = 0; a < m; a++) {
-            const double u = rb->revolute[col[a]] ? 1.0 : rb->scale;
-            d[a] = ikc_joint_step(rb, col[a], x[col[a]], p0[col[a]]) / u;
-            along += d[a] * f[a];
-        }
+        double x[dof], d[m], off = 0.0;
+        if (!(ikc_probe(rb, g, p0, m, col, side * IKC_PLANE_PROBE, n, 15, x, d) <= exact)) return 0;
+        const double along = ikc_dot_m(m, d, f);
         for (int a = 0; a < m; a++) off += (d[a] - along * f[a]) * (d[a] - along * f[a]);
         if (!(sqrt(off) >= 0.5 * IKC_PLANE_PROBE)) return 0;  /* back towards the line: no sheet */
         for (int k = 0; k < nout; k++)
