@@ -157,14 +157,24 @@ def test_perturbed_zoo_arm_at_special_angles(name, request):
 
 
 @pytest.mark.parametrize("native", [True, False], ids=["C", "python"])
-def test_near_self_motion_of_the_snapped_robot_returns_every_isolated_solution(native):
+@pytest.mark.parametrize("settler", ["general6", "walk"])
+def test_near_self_motion_of_the_snapped_robot_returns_every_isolated_solution(native, settler, monkeypatch):
     """Rhino perturbed by 1e-4 at q2 = pi: on the snapped robot the slide q1 lies in the plane of the
     parallel axes q3, q4, q5, a self-motion; the true robot has isolated solutions along it, resolved
     to sigma ~2e-5, which the snapped closed form gives no start near (its leaves miss by 50-1700 mm)
-    and Newton reaches only from close by.  The walk along the family (runtime/nearfamily.py) finds
-    them: the sampled vector comes back, on both of the family's loops (the second q lies on the one
-    no corrected row was on), every row exact on the true robot and no two alike."""
-    chain, module = _perturbed("rhino", 1e-4)
+    and Newton reaches only from close by.  Two settlers find them: the true robot's general 6-joint
+    elimination (reference.true_general6, the default since session 13) and, for chains without one,
+    the walk along the family (runtime/nearfamily.py; here forced by taking the elimination away).
+    The sampled vector comes back, on both of the family's loops (the second q lies on the one no
+    corrected row was on), every row exact on the true robot and no two alike."""
+    if settler == "walk":
+        from ikcompiler.runtime import reference
+
+        monkeypatch.setattr(reference, "true_general6", lambda robot: None)
+        chain = perturb_chain(load_robot("rhino"), 1e-4, seed=3)
+        module = compile_robot(chain)  # a fresh module: no general solver cached from another test
+    else:
+        chain, module = _perturbed("rhino", 1e-4)
     module.NATIVE = native
     for q in ([-278.6, math.pi, -0.21, 2.62, 0.81, 0.0], [-277.2, math.pi, -0.2, 0.3, -1.12, math.pi / 2]):
         q = np.array(q)
@@ -178,6 +188,18 @@ def test_near_self_motion_of_the_snapped_robot_returns_every_isolated_solution(n
         assert len(rows) > 3  # the continuation and its rescue seeds alone: 3 rows, not the sampled one
         for k in range(1, len(rows)):
             assert joint_distance(rows[:k], rows[k], "TRRRRR", chain.scale).min() > SAME
+
+
+def test_calibrated_rhino_special_poses_lose_nothing():
+    """The 8 of 2,000 special poses (seed 7) the walk missed (benchmarks/results/near_family.md before
+    session 13) come back with the true robot's general elimination: the sampled vector among the
+    exact rows, no row wrong (1e-9 of the size, forward kinematics on the true robot)."""
+    chain, module = _perturbed("rhino", 1e-4)
+    Q = sample_configurations(chain, 2000, seed=7, special=0.25)
+    Q = Q[[401, 578, 761, 812, 1540, 1559, 1732, 1884]]
+    recovered, wrong, _ = _check(chain, module, Q, True)
+    assert wrong == 0
+    assert recovered == len(Q), f"{recovered} of {len(Q)} recovered"
 
 
 def test_homotopy_ends_at_both_robots():

@@ -75,9 +75,13 @@ def correct(robot, TH, owner, goals, general6, family):
 
 
 def true_general6(robot):
-    """The true robot's general 6R solver (subproblems.general6), or None when the robot is no plain
-    6R pose chain (nor a 7R one with one free joint: freefold.FoldedGeneral6) or the package has no
-    general solver.
+    """The true robot's general 6-joint solver (subproblems.general6), or None when the robot is no
+    plain 6-joint pose chain (nor a 7R one with one free joint: freefold.FoldedGeneral6), the
+    elimination refuses it (adjacent prismatic joints 3 and 4) or the package has no general solver.
+
+    Prismatic joints count: the calibrated Rhino (TRRRRR, 1e-4) lost 8 of 2,000 special poses on the
+    walk along its near-self-motions (nearfamily.py) and loses none with its doubtful targets given to
+    the elimination (benchmarks/results/near_family.md, session 13).
 
     Built here without the plan's arrangements: a snapped plan (the only caller) has none, and
     ``General6`` chooses them on fixed sample poses of the robot itself, so the order is the one the
@@ -88,7 +92,7 @@ def true_general6(robot):
         return None
     if freefold.eligible(robot):  # a 7-joint arm with one free joint
         return freefold.FoldedGeneral6.from_robot(robot)
-    if robot.kinds != "RRRRRR" or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
+    if len(robot.kinds) != 6 or robot.solve_target != "pose" or robot.free_joints or robot.couplings:
         return None
     try:
         return general6.General6(robot.twists, robot.home, robot.scale)
