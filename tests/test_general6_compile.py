@@ -348,3 +348,28 @@ def test_compile_chain_prefers_free_end_joints_to_the_fold():
     assert best.free in (("j7",), ("j1",))
     elbow = configs.compile_chain(chain, first_only=True)
     assert elbow.free == ("j3",) and isinstance(elbow.module._GENERAL6, FoldedGeneral6)
+
+
+def test_a_fold_built_from_a_robot_chooses_its_arrangements_once():
+    # a snapped plan's doubtful targets (reference.true_general6): the arrangements are chosen as the
+    # compiler chooses them, once, on the first call, not again for every free value (~70 ms each)
+    from ikcompiler.runtime import freefold
+
+    chain = _random_7r(3)
+    column = chain.independent_names.index("j3")
+    joint = chain.joints[column]
+    lazy = freefold.FoldedGeneral6(chain.twists, chain.home, chain.scale, column,
+                                   choose_within=(joint.lower, joint.upper))
+    assert lazy.arrangement is None
+    Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(6, 7))
+    T = chain.fk_batch(Q)
+    rows, owner = lazy.rows(T, Q[:, column])
+    chosen = freefold.choose_arrangements(chain.twists, chain.home, chain.scale, column, joint.lower,
+                                          joint.upper)
+    assert lazy.arrangement == chosen
+    fixed = freefold.FoldedGeneral6(chain.twists, chain.home, chain.scale, column, arrangement=chosen)
+    rows2, owner2 = fixed.rows(T, Q[:, column])
+    assert np.array_equal(owner, owner2) and np.array_equal(rows, rows2)
+    for n in range(len(Q)):
+        d = np.abs(np.angle(np.exp(1j * (rows[owner == n] - Q[n])))).max(axis=1)
+        assert d.min() < 1e-6, n

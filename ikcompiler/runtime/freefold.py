@@ -13,7 +13,10 @@ Two users:
   are chosen again on sample poses);
 * a snapped plan's doubtful targets (``reference.correct``; without it a 7-joint arm perturbed by
   1e-6 lost the branches the snapped robot lacks near a singular configuration,
-  ``benchmarks/results/real_robots_unseen.md``): built from the robot, arrangements chosen per value.
+  ``benchmarks/results/real_robots_unseen.md``): built from the robot, the arrangements chosen as the
+  compiler would, once, on the first doubtful target (:meth:`FoldedGeneral6.from_robot`).  Chosen
+  per value instead, they cost ~70 ms a doubtful target: panda.urdf perturbed by 1e-3 spent 92 ms a
+  pose (median of 40) with 12 of 20 random poses doubtful (session 14).
 
 The last few solvers are kept, by free value (a batch at one free value, or a few, builds each once).
 """
@@ -72,7 +75,11 @@ class FoldedGeneral6:
     ``arrangement``: the elimination's arrangements in order (a general-6r module's, chosen at compile
     time), or None (chosen for each free value on sample poses)."""
 
-    def __init__(self, twists, home, scale: float, column: int, arrangement=None):
+    def __init__(self, twists, home, scale: float, column: int, arrangement=None, choose_within=None):
+        """``choose_within``: the free joint's (lower, upper): the arrangements are chosen on the
+        first call of :meth:`solver` (:func:`choose_arrangements`), for every value after it; where
+        that choice fails, each value chooses its own."""
+        self._choose_within = choose_within if arrangement is None else None
         self.twists = np.asarray(twists, dtype=float)
         self.home = np.asarray(home, dtype=float)
         self.scale = float(scale)
@@ -82,8 +89,10 @@ class FoldedGeneral6:
 
     @classmethod
     def from_robot(cls, robot) -> FoldedGeneral6:
-        """The fold of an eligible runtime robot, arrangements chosen per value."""
-        return cls(robot.twists, robot.home, robot.scale, robot.independent[robot.free[0]])
+        """The fold of an eligible runtime robot, its arrangements chosen on first use."""
+        free = robot.free[0]
+        return cls(robot.twists, robot.home, robot.scale, robot.independent[free],
+                   choose_within=(float(robot.lower[free]), float(robot.upper[free])))
 
     def solver(self, value: float):
         """The General6 of the chain folded at ``value``, or None where its geometry degenerates."""
@@ -92,6 +101,12 @@ class FoldedGeneral6:
         if value in self._solvers:
             self._solvers.move_to_end(value)
             return self._solvers[value]
+        if self._choose_within is not None:
+            within, self._choose_within = self._choose_within, None
+            try:
+                self.arrangement = choose_arrangements(self.twists, self.home, self.scale, self.column, *within)
+            except general6.General6Error:
+                self.arrangement = None  # no order usable at every choice value: each value chooses
         try:
             made = general6.General6(*folded(self.twists, self.home, self.column, value), self.scale,
                                      arrangement=self.arrangement)
