@@ -20,7 +20,7 @@ from ikcompiler.codegen import generate
 from ikcompiler.errors import CompileError, FreeJointError
 from ikcompiler.geometry import Tolerance, analyse
 from ikcompiler.geometry.facts import conditioned_rank, configurations, record_step_facts
-from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain
+from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain, snap_move
 from ikcompiler.model import Chain, Joint
 from ikcompiler.model.fold import fold_slides
 from ikcompiler.plan import Plan
@@ -28,6 +28,7 @@ from ikcompiler.rules import Context
 from ikcompiler.search import finalize_steps, search
 from ikcompiler.steps import General6Step, NumericalStep
 from ikcompiler.steps.kinds import WHOLE_CHAIN_SLOTS
+from subproblems.tolerances import SNAP_GENERAL
 
 TARGETS = ("pose", "position", "orientation", "position+direction")
 VIRTUAL_ROLL = "_tool_roll"
@@ -109,6 +110,17 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
     chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
     notes += [f"near-relation snapped: {n}" for n in snap_notes]
+    moved = snap_move(true_chain, chain) if snap_notes else 0.0
+    if moved > SNAP_GENERAL and target == "pose" and unknown == 6:
+        # a calibrated robot this far from its design is a general robot: the elimination is as
+        # complete and has no tail of poses handed to the continuation (tolerances.SNAP_GENERAL)
+        told = notes + [f"the snap moved the geometry by {moved:.1e} (> {SNAP_GENERAL:g}, "
+                        "subproblems.tolerances.SNAP_GENERAL): solved as the general robot it is, not "
+                        "by the snapped closed form (docs/calibrated.md, \"Policy\")"]
+        general = _general6_plan(true_chain, target, free, tuple(analyse(true_chain, tol)), told,
+                                 lambda: None, tol, fold and FOLD_FREE)
+        if general is not None:
+            return general
     ctx = Context(
         twists=chain.twists,
         kinds=chain.joint_types,

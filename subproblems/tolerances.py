@@ -47,6 +47,14 @@ PRECISION = 1e-12
 EXACT = 1e-9
 #: A relation that holds to this (times the size, or radians) but not to EXACT is snapped and corrected.
 SNAP = 1e-3
+#: A 6-joint pose chain whose snap moved its geometry by more than this (an axis direction in radians, an
+#: axis point over the size: ``geometry.snap.snap_move``) is solved as the general robot it is, by the
+#: elimination, not by the snapped closed form and continuation.  Measured (docs/calibrated.md,
+#: "Policy", session 14): from 1e-5 up the snapped path hands 10-60% of the poses to the Python
+#: continuation (p90 80-190 ms a pose on ur5 and panda) where the elimination takes 0.05-0.8 ms (p90
+#: 0.06-0.9 ms), both recovering every sampled pose; below it the snapped closed form's tail is the
+#: smaller one on puma560 (p90 0.05-0.13 ms against 11-16 ms), the elimination's pencil nearly singular.
+SNAP_GENERAL = 1e-5
 
 # ------------------------------------------------------------------------------------ numerical guards
 

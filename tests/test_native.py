@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from ikcompiler import compile_robot, load_robot
+from ikcompiler import compiler as compiler_policy
 from ikcompiler.codegen import csource
 from ikcompiler.inputs.zoo import zoo_names
 from ikcompiler.verify import _same, sample_configurations
@@ -48,7 +49,9 @@ def _compiled(name, **kw):
             robot = _calibrated(load_robot("ur5"), 1e-4)
         else:
             robot = load_robot(name)
-        module = compile_robot(robot, **kw)
+        with pytest.MonkeyPatch.context() as mp:  # the snapped plan, not the policy's elimination
+            mp.setattr(compiler_policy, "SNAP_GENERAL", math.inf)
+            module = compile_robot(robot, **kw)
         _HAS_C[id(module)] = module.NATIVE
         with pytest.MonkeyPatch.context() as mp:  # a developer's IKC_NATIVE=0 must not hide the backend
             mp.delenv("IKC_NATIVE", raising=False)

