@@ -10,8 +10,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ikcompiler import load_robot
 from ikcompiler import compiler as compiler_mod
+from ikcompiler import load_robot
 from ikcompiler.compiler import compile_robot
 from ikcompiler.model import Chain, Joint
 from ikcompiler.verify import verify

@@ -104,7 +104,8 @@ class FoldedGeneral6:
         if self._choose_within is not None:
             within, self._choose_within = self._choose_within, None
             try:
-                self.arrangement = choose_arrangements(self.twists, self.home, self.scale, self.column, *within)
+                self.arrangement = choose_arrangements(self.twists, self.home, self.scale, self.column,
+                                                       *within)
             except general6.General6Error:
                 self.arrangement = None  # no order usable at every choice value: each value chooses
         try:
