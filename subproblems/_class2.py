@@ -35,6 +35,7 @@ from subproblems import tolerances as tol
 from subproblems.angles import wrap, wrap_array, wrap_joints
 from subproblems.core import BatchResult, Solution
 from subproblems.screw import cross as _cross
+from subproblems.screw import cross3
 from subproblems.screw import twist_exp
 
 # Tolerances: subproblems/tolerances.py (each with its reason there; docs/design.md section 10).
@@ -140,13 +141,13 @@ def chain_point_jac(twists, th, p) -> tuple[np.ndarray, np.ndarray]:
     cols = []
     for xi, a in zip(twists, th):
         wp = R @ xi[3:]
-        vp = R @ xi[:3] + np.cross(t, wp)
+        vp = R @ xi[:3] + cross3(t, wp)
         cols.append((vp, wp))
         g = twist_exp(xi, a)
         t = R @ g[:3, 3] + t
         R = R @ g[:3, :3]
     x = R @ p + t
-    J = np.column_stack([vp + np.cross(wp, x) for vp, wp in cols])
+    J = np.column_stack([vp + cross3(wp, x) for vp, wp in cols])
     return x, J
 
 
@@ -174,7 +175,7 @@ def has_free_joint(twists, p, th, scale: float) -> bool:
     x = np.asarray(p, dtype=float)
     for xi, a in zip(twists[::-1], th[::-1]):
         if xi[3:].any():
-            u = x - np.cross(xi[3:], xi[:3])
+            u = x - cross3(xi[3:], xi[:3])
             if np.linalg.norm(u - xi[3:] * (xi[3:] @ u)) <= FREE_POINT_TOL * scale:
                 return True
         g = twist_exp(xi, a)
