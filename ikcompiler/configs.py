@@ -147,8 +147,9 @@ def free_candidates(chain: Chain) -> list[tuple[str, ...]]:
 def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled:
     """Compile ``chain`` for the target its joint count allows: a full pose (up to 6 independent joints;
     fewer are solved from a sufficient subset of the equations and checked against the whole pose),
-    with free joints beyond 6: the first choice of :func:`free_candidates` that compiles closed form,
-    else the first that takes the complete general 6R elimination with its free joints at the chain's
+    with free joints beyond 6: the first choice of :func:`free_candidates` that compiles closed form
+    (for a chain its snap moves beyond tolerances.SNAP_GENERAL: the first with free end joints that
+    takes the elimination, else the first snapped closed form), else the first that takes the complete general 6R elimination with its free joints at the chain's
     ends (fixed twists: the C elimination), else the first with a free joint folded into it (Python
     only: runtime/freefold.py; baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms
     with the elbow), else the first.  ``first_only``: the first choice alone (the third joint, as a user
@@ -168,25 +169,41 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
         plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
         return load_module(plan_source(plan, chain, **options), _module_name(chain.name))
 
-    first = general = folded = None
+    first = general = folded = snapped_far = None
+    far = _snapped_far(chain)
     searched = []
     for free in free_candidates(chain)[:1] if first_only else free_candidates(chain):
         module = compiled(free, fold=False)  # the fold measured only where nothing else is complete
         if first is None:
             first = (module, free)
-        if module.METHOD == "closed-form":
+        if module.METHOD == "closed-form" and not far:
             return Compiled(module, "pose", free, time.perf_counter() - t0)
+        if module.METHOD == "closed-form" and snapped_far is None:
+            # beyond tolerances.SNAP_GENERAL the policy wants the elimination, which this free joint
+            # (between solved ones, not folded here) keeps from it: another choice may allow it
+            snapped_far = (module, free)
         if module.METHOD == GENERAL6 and general is None:
             general = (module, free)
         if free_end_split(chain, free) is None:  # a free joint between solved ones: the fold may apply
             searched.append(free)
-    for free in searched if general is None else ():
+    for free in searched if general is None and snapped_far is None else ():
         module = compiled(free, fold=True)
         if module.METHOD == GENERAL6:
             folded = (module, free)
             break
-    module, free = general or folded or first
+    module, free = general or snapped_far or folded or first
     return Compiled(module, "pose", free, time.perf_counter() - t0)
+
+
+def _snapped_far(chain: Chain) -> bool:
+    """Whether the snap moves ``chain`` by more than tolerances.SNAP_GENERAL: a 6-joint pose problem of it
+    is then solved by the elimination where the free joints allow (compiler.compile_plan; measured in
+    docs/calibrated.md, "Policy")."""
+    from ikcompiler import compiler
+    from ikcompiler.geometry.snap import snap_chain, snap_move
+
+    snapped, notes = snap_chain(chain)
+    return bool(notes) and snap_move(chain, snapped) > compiler.SNAP_GENERAL
 
 
 def generic_rank(chain: Chain, samples: int = 5, seed: int = 0) -> int:
