@@ -716,3 +716,25 @@ def test_a_general6_row_exact_short_of_its_margin_at_a_near_double_root_is_doubt
     assert module.METHOD == "general-6r" and module.FREE_JOINTS == ("arm_right_7_joint",)
     rep = verify(chain, module, samples=30, seed=1, special=1.0, scalar_checks=5)
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0, rep.text()
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_stalled_copy_of_a_root_at_a_wrist_lock_is_one_row(catalogue, native):
+    """tiago_dual.urdf (example-robot-data) perturbed by 1e-6 (seed 7), right arm, free arm_right_3_joint
+    (snapped closed form), verify's special pose 20 of seed 1 (q6 = 0: joints 5 and 7 nearly coaxial,
+    the solved joints' smallest singular value 2.1e-7): two exact rows came back 1.1e-6 apart
+    (residuals 1.7e-16 and 3.1e-13 of the size), above SPLIT_ROOT.  They are one solution: the error
+    grows linearly along the segment from the first through the second (no second zero), and one
+    undamped step from the second lands 6.9e-10 from the first; the damped steps had stalled there
+    (reference.without_stalled_copies)."""
+    import numpy as np
+
+    chain, module, q, free = _perturbed_pose(catalogue, "example-robot-data", "tiago_dual.urdf",
+                                             "hand_right_palm_link", 1e-6, 7, 30, 1, 1.0, 20, native)
+    assert q[5] == 0.0
+    rows = module.solve(chain.fk(q), *free)
+    d = _distances(chain, rows, q)
+    assert d.min() <= 1e-6, d
+    assert (d <= 1e-4).sum() == 1, d  # the sampled solution once, not also its stalled copy
+    Q, valid = module.solve_batch(chain.fk(q)[None], *[np.array([f]) for f in free])
+    assert valid[0].sum() == len(rows)

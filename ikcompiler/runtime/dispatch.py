@@ -10,6 +10,8 @@ finish), and the Python fast chain's leaves, when its finish cannot settle them,
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ikcompiler.runtime import fastchain, reference, selection, selfmotion, targets
@@ -37,6 +39,7 @@ class Solver:
         self._native = []  # [NativeChain] or [None] once bound
         self._general6 = []  # the true robot's general 6R solver, for doubtful snapped targets
         self._free_ends = []  # [NativeFreeEnds or None] once bound
+        self._free_columns = None  # _free_limits(), once
 
     # -- the paths -------------------------------------------------------------------------------
 
@@ -197,7 +200,7 @@ class Solver:
         exact rows' q (``solve``'s answer)."""
         found = self._rows(T, free, limits, exact_only)
         if self.robot.free:
-            found = _unpack(self._free_as_given(_packed(found, exact_only), free, limits), exact_only)
+            found = self._free_as_given_one(found, free, limits, exact_only)
         if exact_only or not self.flags_rows():
             return found
         q, res, ls, cont = found
@@ -321,6 +324,30 @@ class Solver:
             inside = ((given >= r.lower[pos]) & (given <= r.upper[pos])).all(axis=1)
             valid = valid & inside[:, None]
         return Q, valid, ls, res, cont
+
+    def _free_as_given_one(self, found, free, limits, exact_only):
+        """_free_as_given of one target's rows (``rows``' layout: exact rows, or (q, residual, ls,
+        continuum)) on scalars: the batch form's (1, K, n) arrays, masks and fancy indexing cost ~25 us
+        a call, five times panda's C solve (docs/design.md section 14 item 6).  Free values that are not
+        each one finite real number take the batch form, which raises the documented error for them."""
+        given = _plain_free(free, len(self.robot.free))
+        if given is None:
+            return _unpack(self._free_as_given(_packed(found, exact_only), free, limits), exact_only)
+        columns = self._free_limits()
+        inside = not limits or all(lo <= v <= hi for (_, lo, hi), v in zip(columns, given))
+        keep = slice(None) if inside else slice(0)
+        if exact_only:
+            return _with_free(np.array(found, dtype=float)[keep], columns, given)
+        q, res, ls, cont = found
+        return (_with_free(np.array(q)[keep], columns, given), np.array(res)[keep],
+                np.array(ls, dtype=bool)[keep], np.array(cont, dtype=bool)[keep])
+
+    def _free_limits(self):
+        """[(column, lower, upper)] of the free joints as Python numbers, computed once per module."""
+        if self._free_columns is None:
+            r = self.robot
+            self._free_columns = [(int(p), float(r.lower[p]), float(r.upper[p])) for p in r.free]
+        return self._free_columns
 
     def _native_batch(self, Ts, free, limits):
         """solve_batch_info on the C chain (it checks the targets itself), or None when there is none or
@@ -490,6 +517,35 @@ def _scatter(parts, idx, done):
 
 def _joined(parts):
     return tuple(np.concatenate(x) for x in zip(*parts))
+
+
+_REAL = (int, float, np.integer, np.floating)
+
+
+def _plain_free(free, count):
+    """The free values as floats when there are ``count`` of them and each is one finite real number
+    (what targets.initial_values takes without a question), else None."""
+    if len(free) != count:
+        return None
+    out = []
+    for v in free:
+        if not isinstance(v, _REAL):
+            return None
+        try:
+            f = float(v)
+        except (OverflowError, ValueError):
+            return None
+        if not math.isfinite(f):
+            return None
+        out.append(f)
+    return out
+
+
+def _with_free(q, columns, given):
+    """Rows q (k, n), copied already, with each free joint's column set to its given value."""
+    for (p, _, _), v in zip(columns, given):
+        q[:, p] = v
+    return q
 
 
 def _packed(found, exact_only):

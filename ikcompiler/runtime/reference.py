@@ -29,6 +29,9 @@ FINISH_MARGIN = _tol.FINISH_MARGIN  # as the C finish: on to well inside the pre
 # puma560.urdf (rtb-data) at q5 = 0; Newton's damped steps do not move along it (docs/calibrated.md).
 SELF_MOTION_OFFSETS = np.arange(-31, 33) * (np.pi / 32)
 SELF_MOTION_NEWTON = 5  # Newton steps at each offset (across the family: it converges fast)
+#: Exact rows of one target closer than this (rad, or lengths over the size) are tried as a stalled
+#: copy of one root (without_stalled_copies); the merge itself needs SPLIT_ROOT after a step.
+STALLED_PAIR = 1e-4
 CLAMPED_NEWTON = 3  # damped Newton steps on a row with a value clamped onto its limit (the C finish's too)
 
 
@@ -263,11 +266,55 @@ def complete(robot, TH, owner, ls, cont, goals, limits):
     # at q4 = 0: two rows 8e-9 apart; pr2 perturbed by 1e-6: 7e-9).  docs/design.md section 11.
     moved = moved or robot.search or robot.method == "numerical" or robot.polish
     dedupe = _fk.SPLIT_ROOT if moved else None
-    return _rt.finish(TH, owner, ls, len(goals), twists=robot.twists, kinds=robot.kinds, home=robot.home,
-                      independent=robot.independent, targets=goals, scale=robot.scale, tol=robot.tol,
-                      slots=robot.slots, error=robot.error, cont=cont,
-                      limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
-                      vary=robot.vary, dedupe=dedupe, family_dedupe=_fk.SPLIT_ROOT)
+    parts = _rt.finish(TH, owner, ls, len(goals), twists=robot.twists, kinds=robot.kinds, home=robot.home,
+                       independent=robot.independent, targets=goals, scale=robot.scale, tol=robot.tol,
+                       slots=robot.slots, error=robot.error, cont=cont,
+                       limits=(robot.lower, robot.upper) if limits else None, A=robot.A, b=robot.B,
+                       vary=robot.vary, dedupe=dedupe, family_dedupe=_fk.SPLIT_ROOT)
+    return without_stalled_copies(robot, parts, goals) if moved else parts
+
+
+def without_stalled_copies(robot, parts, goals):
+    """Finished rows (Q, valid, ls, res, cont) without the exact rows that are a stalled copy of an
+    earlier exact row of their target: one undamped pseudo-inverse step from the row
+    (``tolerances.SINGULAR_CUTOFF``) lands within ``SPLIT_ROOT`` of it.  The damped steps move a row
+    only ~5e-8 a step along a direction whose singular value is ~1e-7, so a copy of one root stops
+    where its residual first passes the precision, up to its tolerance over that singular value from
+    the root (tiago_dual's right arm perturbed by 1e-6 at a wrist lock: two exact rows 1.1e-6 apart,
+    residuals 1.7e-16 and 3.1e-13; the step from the second lands 6.9e-10 from the first).  Only the
+    pairs within STALLED_PAIR are tried; no kept row changes."""
+    Q, valid, ls, res, cont = (np.array(x) for x in parts)
+    exact = valid & ~ls
+    N, S, _ = Q.shape
+    kinds = [robot.kinds[i] for i in robot.independent]
+    pairs = []  # (target, earlier slot, later slot)
+    for j in range(1, S):
+        near = exact[:, :j] & exact[:, j:j + 1]
+        dist = np.zeros(near.shape)
+        for k, kind in enumerate(kinds):
+            dist = np.maximum(dist, _fk.angle_distance(Q[:, :j, k] - Q[:, j:j + 1, k], kind == "R"))
+        near &= (dist > _fk.SPLIT_ROOT) & (dist <= STALLED_PAIR)
+        pairs += [(n, i, j) for n, i in zip(*np.nonzero(near))]
+    if not pairs:
+        return parts
+    n, i, j = (np.array(x) for x in zip(*pairs))
+    dof = Q.shape[2]  # the rows' joints; virtual joints (the rest of vary) at 0, as Robot.fk
+    rows = np.concatenate([Q[n, j], np.zeros((len(n), len(robot.vary) - dof))], axis=1)
+    stepped = _rt.polish(rows @ robot.A.T + robot.B, goals[n], twists=robot.twists, home=robot.home,
+                         A=robot.A, b=robot.B, independent=robot.vary, target=robot.solve_target, iters=1,
+                         hold=robot.free, cutoff=_tol.SINGULAR_CUTOFF)[:, list(robot.vary)[:dof]]
+    dist = np.zeros(len(n))
+    for k, kind in enumerate(kinds):
+        dist = np.maximum(dist, _fk.angle_distance(stepped[:, k] - Q[n, i, k], kind == "R"))
+    copy = dist <= _fk.SPLIT_ROOT
+    if not copy.any():
+        return parts
+    valid[n[copy], j[copy]] = False
+    order = np.argsort(~valid, axis=1, kind="stable")
+    out = [np.take_along_axis(Q, order[..., None], axis=1)]
+    out += [np.take_along_axis(x, order, axis=1) for x in (valid, ls, res, cont)]
+    out[3] = np.where(out[1], out[3], np.inf)
+    return tuple(out)
 
 
 def resolved_families(robot, TH, owner, ls, cont, goals):

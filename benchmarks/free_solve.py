@@ -1,0 +1,156 @@
+"""Single-pose ``solve`` of chains with a free joint: its time against the C call under it, and, with
+``--against DIR``, the same poses on another checkout: the time before/after and the rows bit for bit.
+
+One command::
+
+    python benchmarks/free_solve.py [--against DIR] [--cases NAME ...] [--poses N]
+
+Why: a free joint's value comes back as given (dispatch ``_free_as_given``); done on the batch arrays
+for one pose, that bookkeeping cost five times panda's C solve (docs/design.md section 14 item 6).
+``special_poses.py`` times whole solves, where a regression of the Python layer hides in the load of a
+shared machine; here each solve is timed beside the C call it wraps (``NativeChain.exact``), in CPU
+time, fastest of 3 a pose, so the ratio of the two stays readable under load.
+
+Cases ``ROBOT[_eps]_jK``: a zoo robot with its K-th joint free, ``_eps`` perturbed by 1e-6 of its size
+(``configs.perturbed``, seed 7): panda with its last joint free (as special_poses.py compiles it), the
+same perturbed, and two 6R arms with one joint free (kr6_r700's last, ur5's first).  (panda with its
+third or first joint free is a general 6R on the Python path: 1-7 ms a solve, the same rows.)  Poses: ``--poses`` random joint vectors inside the
+limits (seed 7, as special_poses.py), as many at special angles ({0, +-pi/2, pi}), and a tenth as many
+with the free value outside its limits.  Compared, bit for bit (``np.array_equal``): ``solve`` with and
+without limits, and ``solve_info``'s rows, residuals and flags.  Exits 1 when a row differs.  Writes
+``benchmarks/results/free_solve.md``; progress to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+CASES = ("panda_j7", "kr6_r700_j6", "ur5_j1")  # also panda_eps_j7: ~20 min a checkout (its solve_info)
+REPEATS = 3
+
+# runs in a subprocess per checkout: the case's poses solved and timed, saved for the parent
+SOLVE = r"""
+import sys, time
+import numpy as np
+root, case, poses, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+sys.path.insert(0, root)
+from ikcompiler import configs, load_robot
+from ikcompiler.compiler import compile_robot
+
+name, joint = case.rsplit("_j", 1)  # robot[_eps]_jK: the zoo robot, its K-th joint free
+chain = load_robot(name.removesuffix("_eps"))
+if name.endswith("_eps"):
+    chain = configs.perturbed(chain, 1e-6, seed=7)
+free = (chain.independent_names[int(joint) - 1],)
+module = compile_robot(chain, free=free)
+native = module._native_chain()
+col = module.JOINT_NAMES.index(free[0])
+rng = np.random.default_rng(7)
+lo, hi = np.maximum(module.LOWER, -np.pi), np.minimum(module.UPPER, np.pi)
+Q = np.concatenate([rng.uniform(lo, hi, (poses, len(lo))),
+                    rng.choice((0.0, np.pi / 2, -np.pi / 2, np.pi), (poses, len(lo)))])
+T = np.array([module.fk(q) for q in Q])
+F = Q[:, col].copy()
+outside = rng.choice(len(F), max(1, poses // 10), replace=False)
+F[outside] = np.where(outside % 2, module.UPPER[col] + 0.25, module.LOWER[col] - 0.25)
+
+def many(fn, *args, reps=20):  # process_time ticks are coarse: a block of calls, per call
+    t0 = time.process_time()
+    for _ in range(reps):
+        fn(*args)
+    return (time.process_time() - t0) / reps
+
+rows = {}
+t_solve, t_c = [], []
+for i in range(len(T)):
+    f = float(F[i])
+    rows[f"solve{i}"] = module.solve(T[i], f)
+    rows[f"unlimited{i}"] = module.solve(T[i], f, limits=False)
+    info = module.solve_info(T[i], f)
+    for k in ("q", "residual", "ls", "continuum"):
+        rows[f"info_{k}{i}"] = getattr(info, k)
+    t_solve.append(min(many(module.solve, T[i], f) for _ in range(3)))
+    if native is not None:
+        t_c.append(min(many(native.exact, T[i], (f,), True) for _ in range(3)))
+np.savez(out, T=T, F=F, t_solve=np.array(t_solve), t_c=np.array(t_c), method=module.METHOD,
+         path="native" if native is not None else "python", **rows)
+"""
+
+
+def log(msg: str) -> None:
+    print(f"[free_solve {time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
+
+
+def run(root: Path, case: str, poses: int, out: Path) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    subprocess.run(["nice", sys.executable, "-c", SOLVE, str(root), case, str(poses), str(out)], env=env,
+                   check=True, capture_output=True, text=True)
+    with np.load(out) as data:
+        return {k: data[k] for k in data.files}
+
+
+def differing(now: dict, before: dict) -> int:
+    """Poses whose solve, unlimited solve or solve_info differ in any bit (shape and dtype included)."""
+    keys = [k for k in now if k[:5] in ("solve", "unlim", "info_")]
+    bad = {int("".join(c for c in k if c.isdigit())) for k in keys
+           if k not in before or now[k].dtype != before[k].dtype or not np.array_equal(now[k], before[k])}
+    return len(bad)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--against", help="another checkout: its times and rows beside this one's")
+    ap.add_argument("--cases", nargs="*", default=list(CASES))
+    ap.add_argument("--poses", type=int, default=150, help="random poses (as many special ones)")
+    ap.add_argument("--out", default=str(RESULTS / "free_solve.md"))
+    opts = ap.parse_args(argv)
+    head = ["case", "method", "path", "solve median (us CPU)", "C call median", "ratio"]
+    if opts.against:
+        head += [f"before ({Path(opts.against).name})", "before ratio", "poses differing"]
+    lines = ["# Single-pose solve with a free joint", "",
+             f"Written by `python benchmarks/free_solve.py --poses {opts.poses}"
+             + (f" --against {opts.against}" if opts.against else "") + "`: "
+             f"{2 * opts.poses} poses a case ({opts.poses} random, {opts.poses} special, "
+             f"{max(1, opts.poses // 10)} of them with the free value outside its limits); CPU time a "
+             "call, fastest of 3 blocks of 20 calls, medians over the poses; *C call*: "
+             "`NativeChain.exact` alone; *ratio*: solve over the C call.", "",
+             "| " + " | ".join(head) + " |", "|" + "---|" * 3 + "---:|" * (len(head) - 3)]
+    failed = False
+    load = [os.getloadavg()[0]]
+    with tempfile.TemporaryDirectory(prefix="ikc_free_") as tmp:
+        for case in opts.cases:
+            log(f"{case}: this checkout")
+            now = run(ROOT, case, opts.poses, Path(tmp) / "now.npz")
+            s, c = 1e6 * np.median(now["t_solve"]), 1e6 * np.median(now["t_c"]) if len(now["t_c"]) else np.nan
+            cells = [case, str(now["method"]), str(now["path"]), f"{s:.1f}", f"{c:.1f}", f"{s / c:.2f}"]
+            if opts.against:
+                log(f"{case}: {opts.against}")
+                before = run(Path(opts.against).resolve(), case, opts.poses, Path(tmp) / "before.npz")
+                if not np.array_equal(now["T"], before["T"]) or not np.array_equal(now["F"], before["F"]):
+                    raise SystemExit(f"{case}: the two checkouts sampled different poses")
+                bs = 1e6 * np.median(before["t_solve"])
+                bc = 1e6 * np.median(before["t_c"]) if len(before["t_c"]) else np.nan
+                bad = differing(now, before)
+                failed |= bad > 0
+                cells += [f"{bs:.1f}", f"{bs / bc:.2f}", str(bad)]
+            lines.append("| " + " | ".join(cells) + " |")
+            log(lines[-1])
+    load.append(os.getloadavg()[0])
+    lines += ["", f"Load average (1 min) at the start and end of the run: {load[0]:.1f}, {load[1]:.1f}.", ""]
+    Path(opts.out).write_text("\n".join(lines))
+    print(f"wrote {opts.out}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
