@@ -293,6 +293,44 @@ static double ikc_newton(const ikc_robot *rb, const double *g, double *q, int it
     return ikc_newton_steps(rb, g, q, iters, 1, NULL);
 }
 
+/* ikc_newton once per start: the steps are a function of the start row alone (and of the goal and
+ * iters, the same for one memo), so a row starting bit for bit where an earlier row of the memo started
+ * takes that row's end and error.  The copies of a self-motion leaf (a lock's two slots, split copies
+ * of a root) are equal rows: ur5's wrist-locked targets paid 60 steps for each copy.  Storage for `cap`
+ * rows is the caller's (start, end: cap x dof; err: cap). */
+typedef struct {
+    int n, cap;
+    double *start, *end, *err;
+} ikc_newton_memo;
+
+static int ikc_same_row(int dof, const double *a, const double *b) {  /* bit for bit (-0.0 is not 0.0) */
+    for (int c = 0; c < dof; c++) {
+        uint64_t x, y;
+        __builtin_memcpy(&x, a + c, sizeof x);
+        __builtin_memcpy(&y, b + c, sizeof y);
+        if (x != y) return 0;
+    }
+    return 1;
+}
+
+static double ikc_newton_once(const ikc_robot *rb, const double *g, double *q, int iters, ikc_newton_memo *m) {
+    const int dof = rb->dof;
+    for (int k = 0; k < m->n; k++)
+        if (ikc_same_row(dof, m->start + k * dof, q)) {
+            for (int c = 0; c < dof; c++) q[c] = m->end[k * dof + c];
+            return m->err[k];
+        }
+    const int k = m->n < m->cap ? m->n++ : -1;
+    if (k >= 0)
+        for (int c = 0; c < dof; c++) m->start[k * dof + c] = q[c];
+    const double e = ikc_newton(rb, g, q, iters);
+    if (k >= 0) {
+        for (int c = 0; c < dof; c++) m->end[k * dof + c] = q[c];
+        m->err[k] = e;
+    }
+    return e;
+}
+
 /* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit: fmod returns d itself below 2 pi, so the
  * libm call (~10 a pose in the finish's duplicate test) is made only above. */
 static inline double ikc_mod_two_pi(double d) {
@@ -1317,13 +1355,15 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         if (rep <= -IKC_PI_F) continue;
         double *Q2 = RQ + (r - 1) * L * dof, *E2 = RE + (r - 1) * L;
         const int *F2 = RF + (r - 1) * L;
+        double PS[L * dof], PQ[L * dof], PE[L];  /* this representative's polishes, once per start */
+        ikc_newton_memo polish = {0, L, PS, PQ, PE};
         for (int j = 0; j < n; j++) {
             if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_EMPTY | IKC_LOCK)) || !(F2[j] & IKC_FAMILY) ||
                 (F2[j] & (IKC_DEFER | IKC_EMPTY)))
                 continue;  /* a lock is settled by its line alone (below) */
             if (E[j] <= exact_tol && (!limits || ikc_row_inside(rb, Q + j * dof))) continue;  /* settled */
             double *row = Q2 + j * dof, e = E2[j];
-            if (exact_tol < e && e < near) e = ikc_newton(rb, g, row, 8);  /* a tangent root: polish */
+            if (exact_tol < e && e < near) e = ikc_newton_once(rb, g, row, 8, &polish);  /* a tangent root */
             int inside = !limits || ikc_row_inside(rb, row);
             if (e <= exact_tol && inside) {
                 for (int c = 0; c < dof; c++) Q[j * dof + c] = row[c];
@@ -1335,8 +1375,9 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
             }
         }
     }
-    double Q3[L * dof], E3[L];
+    double Q3[L * dof], E3[L], NS[L * dof], NQ[L * dof], NE[L];
     int F3[L];
+    ikc_newton_memo best = {0, L, NS, NQ, NE};  /* the 60 steps from each best variant, once per start */
     for (int j = 0; j < n; j++) {
         if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_DEFER | IKC_EMPTY))) continue;
         const int lock = F[j] & IKC_LOCK;  /* exact or not, a lock needs its line */
@@ -1372,7 +1413,7 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
             }
         }
         if (lock) return ikc_hand_back(IKC_WHY_LOCK);  /* no line: the rest of the chain may fix it */
-        double e = ikc_newton(rb, g, B + j * dof, 60);
+        double e = ikc_newton_once(rb, g, B + j * dof, 60, &best);
         if (e <= exact_tol && (!limits || ikc_row_inside(rb, B + j * dof))) {
             for (int c = 0; c < dof; c++) Q[j * dof + c] = B[j * dof + c];
             E[j] = e;

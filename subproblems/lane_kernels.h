@@ -95,17 +95,15 @@ static inline ikc_v4 ikc_v_acos(ikc_v4 x) {
 }
 #endif
 
-/* cos and sin that a chain reads of a value other than a kernel's output (rare): libm's, lane by lane,
- * so they round as ikc_chain's */
+/* cos and sin that a chain reads of a value other than a kernel's output (ur5's q4, a difference of
+ * angles): libm's, lane by lane, so they round as ikc_chain's.  Written lane by lane, not as a loop, so
+ * that GCC pairs cos and sin of one lane into one sincos call, as it does in ikc_chain (the same
+ * values: glibc's sincos is its sin and cos; 8 libm calls a leaf became 4 on ur5) */
 static inline ikc_v4 ikc_v_cos(ikc_v4 x) {
-    ikc_v4 r;
-    for (int i = 0; i < IKC_LANES; i++) r[i] = cos(x[i]);
-    return r;
+    return (ikc_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
 }
 static inline ikc_v4 ikc_v_sin(ikc_v4 x) {
-    ikc_v4 r;
-    for (int i = 0; i < IKC_LANES; i++) r[i] = sin(x[i]);
-    return r;
+    return (ikc_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
 }
 
 static inline ikc_v4 ikc_v_dot(const ikc_v4 *a, const ikc_v4 *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }

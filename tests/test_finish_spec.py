@@ -129,3 +129,47 @@ def test_special_poses_settle_in_c_with_the_reference_runtimes_solutions(name, l
         inside = ((q >= module.LOWER) & (q <= module.UPPER)).all()
         assert sampled_found or not inside or c.continuum.any(), (name, q.tolist())
     assert settled >= expect, (name, settled)
+
+
+def test_wrist_locked_copies_take_their_newton_steps_once_with_the_same_rows(monkeypatch):
+    """ur5 with q5 = 0: the wrong shoulder branch meets the wrist lock too, its family leaves miss the
+    target at every representative, and each copy's best variant gets 60 Newton steps -- copies that
+    start bit for bit alike, which the C takes once (fast_finish.h ikc_newton_once).  The C rows must be
+    the specification's, and the case must be met (starts repeated within one target)."""
+    module, robot, chain = _compiled("ur5")
+    rb = _spec_robot(module)
+    starts, repeated = [], [0]
+    plain = settle.newton_steps
+
+    def counted(rb_, g, q, iters, *args, **kw):
+        if iters == 60:
+            key = tuple(float(x).hex() for x in q)
+            repeated[0] += key in starts
+            starts.append(key)
+        return plain(rb_, g, q, iters, *args, **kw)
+
+    monkeypatch.setattr(settle, "newton_steps", counted)
+    rng = np.random.default_rng(13)
+    Q = rng.uniform(-np.pi, np.pi, size=(120, 6))
+    Q[:, 4] = 0.0
+    Q[::2, 2] = rng.choice(SPECIAL, size=60)  # half of them with the elbow at a special value too
+    settled = 0
+    for q in Q:
+        T = module.fk(q)
+        goal = fast.goal_entries(T, "pose")
+        if goal is None:
+            continue
+        del starts[:]
+        c_rows = chain.one(T, (), True)
+        spec = settle.settle(rb, goal, (), True)
+        if spec == settle.PYTHON:
+            assert c_rows is None, q
+            continue
+        assert c_rows is not None, q
+        settled += 1
+        cq, cres, cls, ccont = c_rows
+        assert len(cq) == len(spec), q
+        for k, (sq, sres, sls, scont) in enumerate(spec):
+            assert np.array_equal(cq[k], np.array(sq)) and cres[k] == sres, (q, k)
+            assert (bool(cls[k]), bool(ccont[k])) == (sls, scont), (q, k)
+    assert settled > 0 and repeated[0] > 0, (settled, repeated)
