@@ -52,6 +52,9 @@
 #define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
 #define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
+#define G6_MAX_ARRANGEMENTS 16 /* arrangements the eigenvalue path takes (a 6-joint chain has at most 12) */
+#define G6_DEGENERATE (-2) /* g6_candidates: B' rank-deficient or the coefficient check failed (det M(th)
+                                * vanishes at every th): the pencil at the target says nothing */
 
 typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
@@ -935,7 +938,7 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     int perm[8];
     for (int c = 0; c < nc; c++)
         for (int i = 0; i < 14; i++) Bp[c][i] = B[1 + G->cols[c]][i];
-    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return -1;
+    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return G6_DEGENERATE;
     double Nl[6][14];
     for (int e = 0; e < 6; e++) {
         for (int i = 0; i < 14; i++) Nl[e][i] = (i == 8 + e) ? 1.0 : 0.0;
@@ -1012,7 +1015,7 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     double big = 0.0, tail = 0.0;
     for (int f = 0; f <= 8; f++) big = fmax(big, fmax(fabs(a[f]), fabs(b[f])));
     for (int f = 9; f <= 10; f++) tail = fmax(tail, fmax(fabs(a[f]), fabs(b[f])));
-    if (!(tail <= G6_COEF_CHECK * big)) return -1;
+    if (!(tail <= G6_COEF_CHECK * big)) return G6_DEGENERATE;
     double roots[16];
     /* D's interpolation error: the vanishing coefficients measure it (each of the 17 is as noisy) */
     const int n = g6_roots(a, b, G6_NOISE * (tail > 1e-16 * big ? tail : 1e-16 * big), roots);
@@ -1109,11 +1112,12 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
 
 /* One arrangement's leaves for goal g: every candidate after G6_NEWTON Newton steps on the true robot,
  * exact ones as plain leaves, far ones empty; their count, or -1 when the target is doubtful under this
- * arrangement (a candidate stalled short of exact, two candidates that met). */
+ * arrangement (a candidate stalled short of exact, two candidates that met), G6_DEGENERATE when
+ * its elimination degenerates at the target (B' rank-deficient, or the pencil singular). */
 static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E,
                                  int *F) {
     int n = ikc_g6_candidates(G, g, Q);
-    if (n < 0) return -1;
+    if (n < 0) return n;
     const double exact = rb->tol * rb->scale;
     int clean[16];
     for (int k = 0; k < n; k++) {
@@ -1188,13 +1192,17 @@ static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int 
 /* A target doubtful under every arrangement (a double root at a singular configuration, a pencil
  * singular at the target: 189 of 300 Jaco poses with every joint at 0, +-pi/2, pi; docs/general6.md
  * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  The eigenvalue
- * candidates (g6_eigen_roots) of every arrangement for the target and for four copies rotated by
- * +-G6_COPY_ANGLE about two fixed axes (a double root splits; a singular pencil becomes regular), each
- * polished toward the true target by truncated Newton steps (g6_truncated_newton: they keep the weak
- * direction the eigenvector read gave), the stalled ones by plain steps; the exact rows pooled.  -1 when
- * no arrangement gave candidates (the Python general6 takes the target). */
-static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
-                           int *F) {
+ * candidates (g6_eigen_roots) of the target under every arrangement whose pencil is regular there
+ * (regular[k]: the certified path's rank and coefficient checks passed; its eigenvalues include every real root,
+ * a double one as a near-real pair), each polished toward the true target by truncated Newton steps
+ * (g6_truncated_newton: they keep the weak direction the eigenvector read gave), the stalled ones by
+ * plain steps; the exact rows pooled.  Where fewer than two arrangements have a regular pencil at the
+ * target, also those of four copies rotated by +-G6_COPY_ANGLE about two fixed axes under every
+ * arrangement (a singular pencil becomes regular; general6.py runs the copies always: on the Jaco's
+ * special poses with a regular pencil they added no solution, docs/general6.md).  -1 when no source
+ * gave candidates (the Python general6 takes the target). */
+static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const int *regular, const double *g,
+                           double *Q, double *E, int *F) {
     if (rb->dof != 6 || rb->nfree) return -1;  /* the six solved joints alone (g6_truncated_newton) */
     for (int j = 0; j < 6; j++)  /* revolute chains only: a prismatic pencil's real spurious roots and
                                   * absent columns are not treated here (a modular RRRRTT lost 2 of 10
@@ -1202,9 +1210,12 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
         if (G->prism[j]) return -1;
     const double exact = rb->tol * rb->scale;
     double P[6 * G6_POOL], PE[G6_POOL];
-    int np = 0, answered = 0;
+    int np = 0, answered = 0, targets = 0;
+    for (int k = 0; k < count; k++) targets += regular[k] != 0;
     for (int c = 0; c < 5; c++)
         for (int k = 0; k < count; k++) {
+            /* the target itself where its pencil is regular; the copies where fewer than two are */
+            if (c == 0 ? !regular[k] : targets >= 2) continue;
             double Qc[6 * 32], gr[12];
             if (c == 0)
                 for (int i = 0; i < 12; i++) gr[i] = g[i];
@@ -1217,6 +1228,13 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
                 double *q = Qc + 6 * j;
                 double e = g6_truncated_newton(rb, g, q, G6_TRUNCATED_STEPS, G6_PINV_RCOND);
                 if (e > exact && e < G6_STALLED * rb->scale)  /* stalled: a near-double root (_undamped) */
+                    e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
+                /* exact but short of the truncated steps' margin: at a double root the truncated steps
+                 * leave the row 1e-6..1e-5 rad off (the error is quadratic or flatter along the weak
+                 * direction); plain steps take it deeper (the best iterate kept, so never worse).  With
+                 * the copies skipped for a regular pencil there are fewer rows near each double root: without
+                 * this the tests' 400 all-special Jaco poses recovered 394 sampled vectors at 1e-6, with it 400 */
+                if (e <= exact && e > 1e-3 * exact)
                     e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
                 if (!(e <= exact)) continue;
                 for (int i = 0; i < 6; i++) P[6 * np + i] = q[i];
@@ -1242,11 +1260,14 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
  * DEFER leaf, for the Python general6. */
 static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
                          int *F) {
+    int regular[G6_MAX_ARRANGEMENTS];
     for (int k = 0; k < count; k++) {
         int n = g6_arrangement_leaves(rb, G + k, g, Q, E, F);
         if (n >= 0) return n;
+        if (k < G6_MAX_ARRANGEMENTS) regular[k] = n != G6_DEGENERATE;
     }
-    const int n = g6_eigen_leaves(rb, G, count, g, Q, E, F);
+    if (count > G6_MAX_ARRANGEMENTS) count = G6_MAX_ARRANGEMENTS;
+    const int n = g6_eigen_leaves(rb, G, count, regular, g, Q, E, F);
     if (n >= 0) return n;
     for (int j = 0; j < 6; j++) Q[j] = 0.0;
     E[0] = 0.0;
