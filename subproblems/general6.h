@@ -602,10 +602,25 @@ static int g6_hqr(int n, double *a, double *wr, double *wi) {
 }
 
 /* One-sided Jacobi SVD of the n x n matrix a (row-major, in place: its columns become U Sigma): the
- * singular values sv (unsorted) and the right singular vectors, V's columns (row-major v).  The
- * doubtful targets' path only (twin roots' 2-D null spaces, the truncated Newton below). */
-static void g6_svd(int n, double *a, double *sv, double *v) {
-    for (int i = 0; i < n * n; i++) v[i] = (i % (n + 1) == 0) ? 1.0 : 0.0;
+ * singular values sv (unsorted) and the right singular vectors, V's columns (row-major v).  With warm
+ * set, v holds on entry an orthogonal guess of V (the previous Newton step's: the Jacobian moved
+ * little), a is first multiplied by it and the rotations continue from there: the columns start
+ * nearly orthogonal, so fewer sweeps.  The doubtful targets' path only (twin roots' 2-D null spaces,
+ * the truncated Newton below). */
+static void g6_svd_from(int n, double *a, double *sv, double *v, int warm) {
+    if (warm) {
+        double row[12];
+        for (int i = 0; i < n; i++) {
+            for (int j = 0; j < n; j++) {
+                double acc = 0.0;
+                for (int k = 0; k < n; k++) acc += a[n * i + k] * v[n * k + j];
+                row[j] = acc;
+            }
+            for (int j = 0; j < n; j++) a[n * i + j] = row[j];
+        }
+    } else {
+        for (int i = 0; i < n * n; i++) v[i] = (i % (n + 1) == 0) ? 1.0 : 0.0;
+    }
     for (int sweep = 0; sweep < 40; sweep++) {
         int rotated = 0;
         for (int p = 0; p < n - 1; p++)
@@ -637,13 +652,15 @@ static void g6_svd(int n, double *a, double *sv, double *v) {
     }
 }
 
+static void g6_svd(int n, double *a, double *sv, double *v) { g6_svd_from(n, a, sv, v, 0); }
+
 /* Truncated Gauss-Newton on the true robot toward goal g (general6.py _newton): columns scaled to unit
  * norm, singular values of the Jacobian below rcond times the largest left out, so that at a double
  * root the step never moves along the weak direction, which the eigenvalue read gave accurately (the
  * damped ikc_newton runs along it); steps bounded to 0.5 rad; the best iterate kept.  Returns its
  * error.  (A 6-joint robot: rb->dof == 6.) */
 static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *q, int iters, double rcond) {
-    double G[12], J[36], best[6], x[6];
+    double G[12], J[36], best[6], x[6], V[36];  /* V: the last step's right singular vectors */
     for (int i = 0; i < 6; i++) x[i] = best[i] = q[i];
     double best_err = INFINITY;
     const double done = 1e-3 * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
@@ -666,14 +683,14 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
             e[4] += 0.5 * (a2 * b0 - a0 * b2);
             e[5] += 0.5 * (a0 * b1 - a1 * b0);
         }
-        double col[6], Js[36], sv[6], V[36];
+        double col[6], Js[36], sv[6];
         for (int j = 0; j < 6; j++) {
             double s = 0.0;
             for (int r = 0; r < 6; r++) s += J[r * 6 + j] * J[r * 6 + j];
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
             for (int r = 0; r < 6; r++) Js[r * 6 + j] = J[r * 6 + j] / col[j];
         }
-        g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
+        g6_svd_from(6, Js, sv, V, it > 0);  /* Js V = U S: the columns of Js are now U S */
         double top = 0.0;
         for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
         double dq[6] = {0, 0, 0, 0, 0, 0};
