@@ -48,9 +48,9 @@
 #define G6_UNDAMPED_RCOND 1e-13 /* ... for candidates it left between exact and G6_STALLED */
 #define G6_STALLED 1e-3    /* ... (of the size) */
 #define G6_COPY_ANGLE 1e-4 /* the eigenvalue path: two copies of the target rotated by this much (rad) */
-#define G6_COPIES 2        /* ... the copies taken, by +G6_COPY_ANGLE about each axis (general6.py: 4, also by
-                            * -G6_COPY_ANGLE; on the Jaco's 104 special and taught poses with a singular pencil
-                            * the other two added no solution) */
+#define G6_COPIES 2        /* ... the copies taken, by +G6_COPY_ANGLE about each axis, general6.py's two (the C
+                            * took four before, also by -G6_COPY_ANGLE: on the Jaco's 104 special and taught
+                            * poses with a singular pencil the other two added no solution) */
 #define G6_POOL 192        /* the eigenvalue path: exact candidates pooled per target */
 #define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
@@ -1218,8 +1218,9 @@ static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int 
  * (g6_truncated_newton: they keep the weak direction the eigenvector read gave), the stalled ones by
  * plain steps; the exact rows pooled.  Where fewer than two arrangements have a regular pencil at the
  * target, also those of G6_COPIES copies rotated by G6_COPY_ANGLE about two fixed axes under every
- * arrangement (a singular pencil becomes regular; general6.py runs the copies always: on the Jaco's
- * special poses with a regular pencil they added no solution, docs/general6.md).  -1 when no source
+ * arrangement (a singular pencil becomes regular; general6.py runs its copies for every target
+ * doubtful under every order: on the Jaco's special poses with a regular pencil they added no
+ * solution, docs/general6.md).  -1 when no source
  * gave candidates (the Python general6 takes the target). */
 static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const int *regular, const double *g,
                            double *Q, double *E, int *F) {
