@@ -5,8 +5,8 @@ Usage::
     python benchmarks/compile_time.py [--robots NAME ...] [--repeat N]
 
 Per robot, each in a fresh process (so nothing is cached in memory), into one cache directory made for
-the run (``IKC_CACHE``) whose shared finish library is built first (once per machine in real use,
-docs/design.md section 14):
+the run (``IKC_CACHE``) whose shared finish library and precompiled chain prelude are built first
+(once per machine in real use, docs/design.md section 14):
 
 * *cold*: ``compile_robot`` then the C build of its chain (neither the chain's library nor its printed
   C text in the cache yet);
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     rows = []
     with tempfile.TemporaryDirectory(prefix="ikc_ctime_") as tmp:
         shared = Path(tmp) / "cache"
-        run("rhino", shared)  # the shared finish library, once; the package's bytecode written
+        run("rhino", shared)  # the shared finish library and prelude, once; the package's bytecode written
         for name in opts.robots:
             cold, warm, one, nobyte = [], [], [], []
             for r in range(opts.repeat):
@@ -110,9 +110,9 @@ def main(argv=None) -> int:
         f"{os.cpu_count()} cores, {cc[0] if cc else 'cc'}; 1-min load average {load0:.2f} at the start, "
         f"{load1:.2f} at the end (a shared machine: wall times wait for the cores, CPU times do not). "
         f"Median of {opts.repeat} runs, each in a fresh process.", "",
-        "Cold: the chain not in the cache (the shared finish library is: it is built once per machine "
-        "and compiler, docs/design.md section 14). Warm: the chain found in the cache. One-piece: kernels, "
-        "finish and chain compiled as one file (the build before this change; still the fallback). "
+        "Cold: the chain not in the cache (the shared finish library and the precompiled prelude are: "
+        "they are built once per machine and compiler, docs/design.md section 14). Warm: the chain found in the cache. One-piece: kernels, "
+        "finish and chain compiled as one file (the build before the split; still the fallback). "
         "CPU: the process's own time plus its compiler's (the alternative chain compiled as cold code, "
         "-O1, the chain without -fschedule-insns2: docs/design.md section 14). Python's bytecode "
         "cache is on, as for an installed package; the last column is the cold total without it "

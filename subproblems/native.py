@@ -27,6 +27,7 @@ import functools
 import hashlib
 import os
 import platform
+import re
 import shutil
 import subprocess
 import tempfile
@@ -140,21 +141,27 @@ def replace_atomically(target: Path, fill) -> None:
     os.replace(partial, target)
 
 
-def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
-    """Compile ``text`` into the shared library ``target`` (kept when it exists); False with
-    :data:`last_error` set when the compiler fails."""
+def _compile(cc: str, flags, text: str, target: Path, extra=(), prelude: str = "") -> bool:
+    """Compile ``prelude + text`` into the shared library ``target`` (kept when it exists); False with
+    :data:`last_error` set when the compiler fails.  A ``prelude`` (the headers in front of a chain)
+    is read from its precompiled form where the compiler made one (:func:`_precompiled`): the same
+    code, without parsing the headers again; where that compile fails, the whole text is compiled."""
     global last_error
     if target.exists():
         return True
+    header = _precompiled(cc, flags, prelude) if prelude else None
     with tempfile.TemporaryDirectory(prefix="ikc-build-") as tmp:
         src = Path(tmp) / "chain.c"
-        src.write_text(text)
         lib = Path(tmp) / "chain.so"
-        try:
-            done = subprocess.run(cc.split() + list(flags) + ["-o", str(lib), str(src), *extra, "-lm"],
-                                  capture_output=True, text=True, timeout=300)
-        except (OSError, subprocess.SubprocessError) as exc:
-            last_error = f"{cc} failed to run: {exc}"
+        done = None
+        if header is not None:
+            src.write_text(text)
+            done = _run(cc, [*flags, "-include", str(header), "-o", str(lib), str(src), *extra, "-lm"])
+        if done is None or done.returncode != 0:
+            src.write_text(prelude + text)
+            done = _run(cc, [*flags, "-o", str(lib), str(src), *extra, "-lm"])
+        if isinstance(done, str):
+            last_error = done
             return False
         if done.returncode != 0:
             last_error = f"{cc} failed: {done.stderr.strip()[:2000]}"
@@ -167,6 +174,43 @@ def _compile(cc: str, flags, text: str, target: Path, extra=()) -> bool:
                           "set IKC_CACHE to a writable one")
             return False
     return True
+
+
+def _run(cc: str, args):
+    """The finished compiler process, or a message (str) when it could not run."""
+    try:
+        return subprocess.run(cc.split() + list(args), capture_output=True, text=True, timeout=300)
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"{cc} failed to run: {exc}"
+
+
+def _precompiled(cc: str, flags, prelude: str) -> Path | None:
+    """The cached header ``ikc_prelude_<key>.h`` with its precompiled form ``.h.gch`` beside it (built
+    on first use, once per machine: key the header text, the compiler, the flags), or None where the
+    compiler cannot make one.  ``-include`` of the header then reads the .gch (GCC checks that it fits
+    the compile's flags and falls back to the header's text where it does not: the same code either
+    way; docs/design.md section 14)."""
+    pch_flags = [f for f in flags if f != "-shared"]
+    try:
+        directory = _cache_directory()
+    except OSError:
+        return None
+    header = directory / f"ikc_prelude_{_key(prelude, _compiler_id(cc), ' '.join(pch_flags))}.h"
+    gch = header.with_name(header.name + ".gch")
+    if header.exists() and gch.exists():
+        return header
+    with tempfile.TemporaryDirectory(prefix="ikc-pch-") as tmp:
+        text, out = Path(tmp) / "prelude.h", Path(tmp) / "prelude.h.gch"
+        text.write_text(prelude)
+        done = _run(cc, [*pch_flags, "-x", "c-header", "-o", str(out), str(text)])
+        if isinstance(done, str) or done.returncode != 0 or not out.exists():
+            return None
+        try:  # the text first: a process finding both finds the .gch whole
+            replace_atomically(header, lambda partial: partial.write_text(prelude))
+            replace_atomically(gch, lambda partial: shutil.copyfile(out, partial))
+        except OSError:
+            return None
+    return header
 
 
 def _key(*parts: str) -> str:
@@ -187,11 +231,68 @@ FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ik
 SHARED_PREFIX = "ikc_shared_"
 
 
+# Kernels a chain calls from the shared finish library instead of compiling its own copy (the split
+# build): GCC inlines none of their call sites in a chain (several sites each, bodies too large), so a
+# chain's copies were out-of-line code compiled once per chain (~110 M compiler instructions of ur5's
+# ~1.2 G).  The library's copies are the same C, so the same operations and bits (no -ffast-math,
+# no contraction at any -O level); a call goes through the PLT instead of a local call.
+OUT_OF_LINE_KERNELS = ("ikc_angle_about_cs", "ikc_trig_roots_cs")
+KERNEL_MARK = "\n * the kernels */\n"  # fast_kernels.h: the subproblem kernels after this line
+SHARED_KERNELS_MACRO = "IKC_SHARED_KERNELS"  # defined by the split build's chain prelude
+
+
+def _shared_name(name: str) -> str:
+    return SHARED_PREFIX + "k_" + name[4:]
+
+
+@functools.lru_cache(maxsize=4)
+def shared_kernels(text: str | None = None) -> tuple[str, ...]:
+    """The kernels the finish library exports for the chains: the subproblem kernels of
+    ``fast_kernels.h`` (which a cold chain calls there rather than compile them: docs/design.md
+    section 14) and :data:`OUT_OF_LINE_KERNELS` (which every chain calls there)."""
+    text = text if text is not None else Path(__file__).with_name(HEADERS[0]).read_text()
+    names = re.findall(r"^static inline [^(]*?\b(ikc_\w+)\(", text.split(KERNEL_MARK, 1)[-1], re.M)
+    return tuple(dict.fromkeys([*OUT_OF_LINE_KERNELS, *names]))
+
+
+def cold_kernel_renames(text: str) -> list[str]:
+    """C lines that make the cold code after them (``text``: its C) call the finish library's copies
+    of the kernels it calls, in the split build (its prelude defines :data:`SHARED_KERNELS_MACRO`); the
+    one-piece build keeps its own.  A cold chain needs no inlining, so compiling the kernels into it
+    was a third of puma560's chain build (docs/design.md section 14)."""
+    called = set(re.findall(r"\b(ikc_\w+)\(", text))
+    lines = [f"#define {name} {_shared_name(name)}" for name in shared_kernels()
+             if name in called and name not in OUT_OF_LINE_KERNELS]
+    return [f"#ifdef {SHARED_KERNELS_MACRO}", *lines, "#endif"] if lines else []
+
+
+def _declaration_only(text: str, name: str) -> str:
+    """``text`` (a header) with the static inline definition of ``name`` made a plain declaration (its
+    body runs from the signature's brace to the first line that is ``}``)."""
+    m = re.search(r"^static inline ([^(]*?\b" + name + r"\([^)]*\))\s*\{", text, re.M)
+    if m is None:
+        raise ValueError(f"no definition of {name} in the kernels")
+    end = text.index("\n}\n", m.end()) + 3
+    return text[:m.start()] + m.group(1) + ";\n" + text[end:]
+
+
 def _finish_library_source() -> str:
     aliases = [f'__typeof__({name}) {SHARED_PREFIX}{name[4:]} __attribute__((alias("{name}")));'
                for name in FINISH_ENTRIES]
+    aliases += [f'__typeof__({name}) {_shared_name(name)} __attribute__((alias("{name}")));'
+                for name in shared_kernels()]
     head = "\n/* exported for the chains (subproblems/native.py) */\n"
     return kernels_source() + head + "\n".join(aliases) + "\n"
+
+
+def _chain_kernels_source() -> str:
+    """The kernels and finish as a chain of the split build sees them: the out-of-line kernels
+    declared only (their calls, inlined kernels' too, renamed to the library's copies)."""
+    renames = [f"#define {name} {_shared_name(name)}" for name in OUT_OF_LINE_KERNELS]
+    text = kernels_source()
+    for name in OUT_OF_LINE_KERNELS:
+        text = _declaration_only(text, name)
+    return "\n".join(renames) + "\n" + text
 
 
 def _chain_prelude() -> str:
@@ -199,7 +300,11 @@ def _chain_prelude() -> str:
     for name in FINISH_ENTRIES:
         lines.append(f"extern __typeof__({name}) {SHARED_PREFIX}{name[4:]};")
         lines.append(f"#define {name} {SHARED_PREFIX}{name[4:]}")
-    return kernels_source() + "\n" + "\n".join(lines) + "\n"
+    lines.append("/* and its kernels, for cold code (native.cold_kernel_renames) */")
+    lines += [f"extern __typeof__({name}) {_shared_name(name)};" for name in shared_kernels()
+              if name not in OUT_OF_LINE_KERNELS]
+    lines.append(f"#define {SHARED_KERNELS_MACRO} 1")
+    return _chain_kernels_source() + "\n" + "\n".join(lines) + "\n"
 
 
 def _finish_library(cc: str, cc_id: str, directory: Path, machine: tuple[str, ...] = ()) -> Path | None:
@@ -244,10 +349,10 @@ def _build(source: str, include_kernels: bool, machine: tuple[str, ...]) -> Path
     if include_kernels:
         finish = _finish_library(cc, cc_id, directory, machine)
         if finish is not None:
-            text = _chain_prelude() + source
+            prelude = _chain_prelude()
             flags = CHAIN_FLAGS + machine
-            target = directory / f"ikc_{_key(text, cc_id, ' '.join(flags), str(finish))}.so"
-            if _compile(cc, flags, text, target, extra=(str(finish),)):
+            target = directory / f"ikc_{_key(prelude + source, cc_id, ' '.join(flags), str(finish))}.so"
+            if _compile(cc, flags, source, target, extra=(str(finish),), prelude=prelude):
                 return target
     text = (kernels + "\n" if include_kernels else "") + source
     flags = FLAGS + machine
@@ -291,14 +396,14 @@ def build_block(source: str) -> Path | None:
     finish = _finish_library(cc, cc_id, directory, machine)
     if finish is None:
         return None
-    text = _chain_prelude() + lane + "\n" + source
+    prelude = _chain_prelude() + lane + "\n"
     variants = [((), ())]
     if "-mavx2" in machine and libmvec_enabled():
         variants.insert(0, (("-DIKC_LIBMVEC",), ("-lmvec",)))
     for defines, libs in variants:
         flags = CHAIN_FLAGS + machine + defines
-        target = directory / f"ikc_block_{_key(text, cc_id, ' '.join(flags), str(finish))}.so"
-        if _compile(cc, flags, text, target, extra=(str(finish),) + libs):
+        target = directory / f"ikc_block_{_key(prelude + source, cc_id, ' '.join(flags), str(finish))}.so"
+        if _compile(cc, flags, source, target, extra=(str(finish),) + libs, prelude=prelude):
             return target
     return None
 

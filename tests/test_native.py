@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 import shutil
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -440,6 +442,78 @@ def test_one_piece_fallback_gives_the_split_builds_answers(monkeypatch, tmp_path
     assert not list(tmp_path.glob("ikc_finish_*.so"))
     _, Ts, _ = _poses(module, chain, 60, seed=19)
     _same_results(module, whole, Ts)
+
+
+def _rows_bit_for_bit(module, chain, a, b, seed):
+    """``a``, ``b`` (NativeChain of one module's C) return the same rows bit for bit, limits on and off,
+    on poses of which a third of the joint values are special (the alternative chain runs on some)."""
+    _, Ts, _ = _poses(module, chain, 300, seed=seed, special=0.35)
+    for limits in (True, False):
+        x, y = a.many(Ts, np.zeros((len(Ts), 0)), limits), b.many(Ts, np.zeros((len(Ts), 0)), limits)
+        for u, v in zip([*x[0], x[1]], [*y[0], y[1]]):
+            assert np.array_equal(u, v, equal_nan=True)
+
+
+@pytest.mark.parametrize("name", ["puma560", "ur5", "prob"])
+def test_the_split_build_gives_the_rows_of_the_one_piece_build(name, monkeypatch, tmp_path):
+    """The split build (the prelude precompiled, the out-of-line and the cold chain's kernels called in
+    the finish library: docs/design.md section 14) and the one-piece build (every kernel compiled into
+    the chain) return the same rows bit for bit."""
+    module, chain, split = _compiled(name)
+    assert split is not None
+    source = csource.native_source(vars(module))
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path / "split"))
+    shape = dict(dof=len(module.JOINT_TYPES), slots=module.MAX_SOLUTIONS, nfree=0, target="pose")
+    monkeypatch.setattr(native, "_loaded", {})
+    now = native.bind(source, **shape)
+    assert now is not None, native.last_error
+    assert list((tmp_path / "split").glob("ikc_prelude_*.h.gch")), "no precompiled prelude"
+    called = {n for n in native.shared_kernels() if n.replace("ikc_", native.SHARED_PREFIX + "k_").encode()
+              in Path(native.build(source)).read_bytes()}
+    assert set(native.OUT_OF_LINE_KERNELS) <= called  # the chain calls the library's copies
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path / "whole"))
+    monkeypatch.setattr(native, "_loaded", {})
+    monkeypatch.setattr(native, "_finish_library", lambda *args, **kw: None)
+    whole = native.bind(source, **shape)
+    assert whole is not None, native.last_error
+    _rows_bit_for_bit(module, chain, now, whole, seed=31)
+
+
+@pytest.mark.parametrize("broken", ["garbage", "include_fails"])
+def test_a_refused_precompiled_prelude_falls_back_to_the_plain_build(broken, monkeypatch, tmp_path):
+    """A .gch the compiler refuses (here: not a .gch at all) is read from the header's text by GCC
+    itself; a compile with ``-include`` that fails is retried on the whole text.  Either way the chain
+    builds silently, with the rows of the precompiled build bit for bit."""
+    module, chain, split = _compiled("puma560")
+    assert split is not None
+    source = csource.native_source(vars(module))
+    monkeypatch.delenv("IKC_NATIVE", raising=False)
+    shape = dict(dof=len(module.JOINT_TYPES), slots=module.MAX_SOLUTIONS, nfree=0, target="pose")
+    monkeypatch.setenv("IKC_CACHE", str(tmp_path / "good"))
+    monkeypatch.setattr(native, "_loaded", {})
+    good = native.bind(source, **shape)
+    assert good is not None, native.last_error
+    bad_cache = tmp_path / "bad"
+    monkeypatch.setenv("IKC_CACHE", str(bad_cache))
+    monkeypatch.setattr(native, "_loaded", {})
+    if broken == "garbage":
+        real = native._precompiled
+
+        def spoiled(cc, flags, prelude):
+            header = real(cc, flags, prelude)
+            header.with_name(header.name + ".gch").write_bytes(b"not a precompiled header")
+            return header
+
+        monkeypatch.setattr(native, "_precompiled", spoiled)
+    else:
+        bad_cache.mkdir()
+        missing = bad_cache / "ikc_no_such_prelude.h"  # -include of a missing file: the compile fails
+        monkeypatch.setattr(native, "_precompiled", lambda cc, flags, prelude: missing)
+    monkeypatch.setattr(native, "last_error", None)
+    plain = native.bind(source, **shape)
+    assert plain is not None and native.last_error is None, native.last_error
+    _rows_bit_for_bit(module, chain, good, plain, seed=37)
 
 
 @pytest.mark.parametrize("name", ["puma560", "prob"])
