@@ -48,16 +48,10 @@
 #define G6_UNDAMPED_RCOND 1e-13 /* ... for candidates it left between exact and G6_STALLED */
 #define G6_STALLED 1e-3    /* ... (of the size) */
 #define G6_COPY_ANGLE 1e-4 /* the eigenvalue path: two copies of the target rotated by this much (rad) */
-#define G6_COPIES 2        /* ... the copies taken, by +G6_COPY_ANGLE about each axis, general6.py's two (the C
-                            * took four before, also by -G6_COPY_ANGLE: on the Jaco's 104 special and taught
-                            * poses with a singular pencil the other two added no solution) */
 #define G6_POOL 192        /* the eigenvalue path: exact candidates pooled per target */
 #define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
 #define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
-#define G6_MAX_ARRANGEMENTS 16 /* arrangements the eigenvalue path takes (a 6-joint chain has at most 12) */
-#define G6_DEGENERATE (-2) /* g6_candidates: B' rank-deficient or the coefficient check failed (det M(th)
-                                * vanishes at every th): the pencil at the target says nothing */
 
 typedef struct {
     int sign;         /* +1 the chain, -1 its inverse */
@@ -605,25 +599,10 @@ static int g6_hqr(int n, double *a, double *wr, double *wi) {
 }
 
 /* One-sided Jacobi SVD of the n x n matrix a (row-major, in place: its columns become U Sigma): the
- * singular values sv (unsorted) and the right singular vectors, V's columns (row-major v).  With warm
- * set, v holds on entry an orthogonal guess of V (the previous Newton step's: the Jacobian moved
- * little), a is first multiplied by it and the rotations continue from there: the columns start
- * nearly orthogonal, so fewer sweeps.  The doubtful targets' path only (twin roots' 2-D null spaces,
- * the truncated Newton below). */
-static void g6_svd_from(int n, double *a, double *sv, double *v, int warm) {
-    if (warm) {
-        double row[12];
-        for (int i = 0; i < n; i++) {
-            for (int j = 0; j < n; j++) {
-                double acc = 0.0;
-                for (int k = 0; k < n; k++) acc += a[n * i + k] * v[n * k + j];
-                row[j] = acc;
-            }
-            for (int j = 0; j < n; j++) a[n * i + j] = row[j];
-        }
-    } else {
-        for (int i = 0; i < n * n; i++) v[i] = (i % (n + 1) == 0) ? 1.0 : 0.0;
-    }
+ * singular values sv (unsorted) and the right singular vectors, V's columns (row-major v).  The
+ * doubtful targets' path only (twin roots' 2-D null spaces, the truncated Newton below). */
+static void g6_svd(int n, double *a, double *sv, double *v) {
+    for (int i = 0; i < n * n; i++) v[i] = (i % (n + 1) == 0) ? 1.0 : 0.0;
     for (int sweep = 0; sweep < 40; sweep++) {
         int rotated = 0;
         for (int p = 0; p < n - 1; p++)
@@ -655,15 +634,13 @@ static void g6_svd_from(int n, double *a, double *sv, double *v, int warm) {
     }
 }
 
-static void g6_svd(int n, double *a, double *sv, double *v) { g6_svd_from(n, a, sv, v, 0); }
-
 /* Truncated Gauss-Newton on the true robot toward goal g (general6.py _newton): columns scaled to unit
  * norm, singular values of the Jacobian below rcond times the largest left out, so that at a double
  * root the step never moves along the weak direction, which the eigenvalue read gave accurately (the
  * damped ikc_newton runs along it); steps bounded to 0.5 rad; the best iterate kept.  Returns its
  * error.  (A 6-joint robot: rb->dof == 6.) */
 static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *q, int iters, double rcond) {
-    double G[12], J[36], best[6], x[6], V[36];  /* V: the last step's right singular vectors */
+    double G[12], J[36], best[6], x[6];
     for (int i = 0; i < 6; i++) x[i] = best[i] = q[i];
     double best_err = INFINITY;
     const double done = 1e-3 * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
@@ -686,14 +663,14 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
             e[4] += 0.5 * (a2 * b0 - a0 * b2);
             e[5] += 0.5 * (a0 * b1 - a1 * b0);
         }
-        double col[6], Js[36], sv[6];
+        double col[6], Js[36], sv[6], V[36];
         for (int j = 0; j < 6; j++) {
             double s = 0.0;
             for (int r = 0; r < 6; r++) s += J[r * 6 + j] * J[r * 6 + j];
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
             for (int r = 0; r < 6; r++) Js[r * 6 + j] = J[r * 6 + j] / col[j];
         }
-        g6_svd_from(6, Js, sv, V, it > 0);  /* Js V = U S: the columns of Js are now U S */
+        g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
         double top = 0.0;
         for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
         double dq[6] = {0, 0, 0, 0, 0, 0};
@@ -958,7 +935,7 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     int perm[8];
     for (int c = 0; c < nc; c++)
         for (int i = 0; i < 14; i++) Bp[c][i] = B[1 + G->cols[c]][i];
-    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return G6_DEGENERATE;
+    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return -1;
     double Nl[6][14];
     for (int e = 0; e < 6; e++) {
         for (int i = 0; i < 14; i++) Nl[e][i] = (i == 8 + e) ? 1.0 : 0.0;
@@ -1035,7 +1012,7 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     double big = 0.0, tail = 0.0;
     for (int f = 0; f <= 8; f++) big = fmax(big, fmax(fabs(a[f]), fabs(b[f])));
     for (int f = 9; f <= 10; f++) tail = fmax(tail, fmax(fabs(a[f]), fabs(b[f])));
-    if (!(tail <= G6_COEF_CHECK * big)) return G6_DEGENERATE;
+    if (!(tail <= G6_COEF_CHECK * big)) return -1;
     double roots[16];
     /* D's interpolation error: the vanishing coefficients measure it (each of the 17 is as noisy) */
     const int n = g6_roots(a, b, G6_NOISE * (tail > 1e-16 * big ? tail : 1e-16 * big), roots);
@@ -1132,12 +1109,11 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
 
 /* One arrangement's leaves for goal g: every candidate after G6_NEWTON Newton steps on the true robot,
  * exact ones as plain leaves, far ones empty; their count, or -1 when the target is doubtful under this
- * arrangement (a candidate stalled short of exact, two candidates that met), G6_DEGENERATE when
- * its elimination degenerates at the target (B' rank-deficient, or the pencil singular). */
+ * arrangement (a candidate stalled short of exact, two candidates that met). */
 static int g6_arrangement_leaves(const ikc_robot *rb, const ikc_g6 *G, const double *g, double *Q, double *E,
                                  int *F) {
     int n = ikc_g6_candidates(G, g, Q);
-    if (n < 0) return n;
+    if (n < 0) return -1;
     const double exact = rb->tol * rb->scale;
     int clean[16];
     for (int k = 0; k < n; k++) {
@@ -1212,18 +1188,13 @@ static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int 
 /* A target doubtful under every arrangement (a double root at a singular configuration, a pencil
  * singular at the target: 189 of 300 Jaco poses with every joint at 0, +-pi/2, pi; docs/general6.md
  * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  The eigenvalue
- * candidates (g6_eigen_roots) of the target under every arrangement whose pencil is regular there
- * (regular[k]: the certified path's rank and coefficient checks passed; its eigenvalues include every real root,
- * a double one as a near-real pair), each polished toward the true target by truncated Newton steps
- * (g6_truncated_newton: they keep the weak direction the eigenvector read gave), the stalled ones by
- * plain steps; the exact rows pooled.  Where fewer than two arrangements have a regular pencil at the
- * target, also those of G6_COPIES copies rotated by G6_COPY_ANGLE about two fixed axes under every
- * arrangement (a singular pencil becomes regular; general6.py runs its copies for every target
- * doubtful under every order: on the Jaco's special poses with a regular pencil they added no
- * solution, docs/general6.md).  -1 when no source
- * gave candidates (the Python general6 takes the target). */
-static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const int *regular, const double *g,
-                           double *Q, double *E, int *F) {
+ * candidates (g6_eigen_roots) of every arrangement for the target and for four copies rotated by
+ * +-G6_COPY_ANGLE about two fixed axes (a double root splits; a singular pencil becomes regular), each
+ * polished toward the true target by truncated Newton steps (g6_truncated_newton: they keep the weak
+ * direction the eigenvector read gave), the stalled ones by plain steps; the exact rows pooled.  -1 when
+ * no arrangement gave candidates (the Python general6 takes the target). */
+static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
+                           int *F) {
     if (rb->dof != 6 || rb->nfree) return -1;  /* the six solved joints alone (g6_truncated_newton) */
     for (int j = 0; j < 6; j++)  /* revolute chains only: a prismatic pencil's real spurious roots and
                                   * absent columns are not treated here (a modular RRRRTT lost 2 of 10
@@ -1231,12 +1202,9 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
         if (G->prism[j]) return -1;
     const double exact = rb->tol * rb->scale;
     double P[6 * G6_POOL], PE[G6_POOL];
-    int np = 0, answered = 0, targets = 0;
-    for (int k = 0; k < count; k++) targets += regular[k] != 0;
-    for (int c = 0; c <= G6_COPIES; c++)
+    int np = 0, answered = 0;
+    for (int c = 0; c < 5; c++)
         for (int k = 0; k < count; k++) {
-            /* the target itself where its pencil is regular; the copies where fewer than two are */
-            if (c == 0 ? !regular[k] : targets >= 2) continue;
             double Qc[6 * 32], gr[12];
             if (c == 0)
                 for (int i = 0; i < 12; i++) gr[i] = g[i];
@@ -1249,13 +1217,6 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
                 double *q = Qc + 6 * j;
                 double e = g6_truncated_newton(rb, g, q, G6_TRUNCATED_STEPS, G6_PINV_RCOND);
                 if (e > exact && e < G6_STALLED * rb->scale)  /* stalled: a near-double root (_undamped) */
-                    e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
-                /* exact but short of the truncated steps' margin: at a double root the truncated steps
-                 * leave the row 1e-6..1e-5 rad off (the error is quadratic or flatter along the weak
-                 * direction); plain steps take it deeper (the best iterate kept, so never worse).  With
-                 * the copies skipped for a regular pencil there are fewer rows near each double root: without
-                 * this the tests' 400 all-special Jaco poses recovered 394 sampled vectors at 1e-6, with it 400 */
-                if (e <= exact && e > 1e-3 * exact)
                     e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
                 if (!(e <= exact)) continue;
                 for (int i = 0; i < 6; i++) P[6 * np + i] = q[i];
@@ -1281,14 +1242,11 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
  * DEFER leaf, for the Python general6. */
 static int ikc_g6_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
                          int *F) {
-    int regular[G6_MAX_ARRANGEMENTS];
     for (int k = 0; k < count; k++) {
         int n = g6_arrangement_leaves(rb, G + k, g, Q, E, F);
         if (n >= 0) return n;
-        if (k < G6_MAX_ARRANGEMENTS) regular[k] = n != G6_DEGENERATE;
     }
-    if (count > G6_MAX_ARRANGEMENTS) count = G6_MAX_ARRANGEMENTS;
-    const int n = g6_eigen_leaves(rb, G, count, regular, g, Q, E, F);
+    const int n = g6_eigen_leaves(rb, G, count, g, Q, E, F);
     if (n >= 0) return n;
     for (int j = 0; j < 6; j++) Q[j] = 0.0;
     E[0] = 0.0;
