@@ -110,8 +110,8 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
     # a reduced chain's snapped leaves are carried over by plain Newton only: snap its runs wider
     chain, snap_notes = snap_chain(chain, tol, REDUCED_RUN_FACTOR if unknown < dof_needed else 1.0)
     notes += [f"near-relation snapped: {n}" for n in snap_notes]
-    moved = snap_move(true_chain, chain) if snap_notes else 0.0
-    if moved > SNAP_GENERAL and target == "pose" and unknown == 6:
+    moved = beyond_snap_general(true_chain, chain, snap_notes)
+    if moved and target == "pose" and unknown == 6:
         # a calibrated robot this far from its design is a general robot: the elimination is as
         # complete and has no tail of poses handed to the continuation (tolerances.SNAP_GENERAL)
         told = notes + [f"the snap moved the geometry by {moved:.1e} (> {SNAP_GENERAL:g}, "
@@ -199,6 +199,13 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         alternative=tuple(alt_steps),
         plan_twists=plan_twists,
     )
+
+
+def beyond_snap_general(true_chain: Chain, snapped: Chain, snap_notes) -> float:
+    """How far the snap moved the chain where that is beyond SNAP_GENERAL (a 6-joint pose problem of it
+    is then solved by the elimination, docs/calibrated.md "Policy"), else 0.0."""
+    moved = snap_move(true_chain, snapped) if snap_notes else 0.0
+    return moved if moved > SNAP_GENERAL else 0.0
 
 
 SEARCH_GRID = {1: 128, 2: 40}

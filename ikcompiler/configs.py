@@ -149,10 +149,11 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
     fewer are solved from a sufficient subset of the equations and checked against the whole pose),
     with free joints beyond 6: the first choice of :func:`free_candidates` that compiles closed form
     (for a chain its snap moves beyond tolerances.SNAP_GENERAL: the first with free end joints that
-    takes the elimination, else the first snapped closed form), else the first that takes the complete general 6R elimination with its free joints at the chain's
-    ends (fixed twists: the C elimination), else the first with a free joint folded into it (Python
-    only: runtime/freefold.py; baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms
-    with the elbow), else the first.  ``first_only``: the first choice alone (the third joint, as a user
+    takes the elimination, else the first snapped closed form), else the first that takes the
+    complete general 6R elimination with its free joints at the chain's ends (fixed twists: the C
+    elimination), else the first with a free joint folded into it (Python only: runtime/freefold.py;
+    baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms with the elbow), else the
+    first.  ``first_only``: the first choice alone (the third joint, as a user
     naming it free; ``benchmarks/real_robots.py --first-free``)."""
     from ikcompiler.compiler import (
         GENERAL6,
@@ -196,14 +197,11 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
 
 
 def _snapped_far(chain: Chain) -> bool:
-    """Whether the snap moves ``chain`` by more than tolerances.SNAP_GENERAL: a 6-joint pose problem of it
-    is then solved by the elimination where the free joints allow (compiler.compile_plan; measured in
-    docs/calibrated.md, "Policy")."""
-    from ikcompiler import compiler
-    from ikcompiler.geometry.snap import snap_chain, snap_move
+    """Whether the compiler's policy wants the elimination for ``chain`` (compiler.beyond_snap_general)."""
+    from ikcompiler.compiler import beyond_snap_general
+    from ikcompiler.geometry.snap import snap_chain
 
-    snapped, notes = snap_chain(chain)
-    return bool(notes) and snap_move(chain, snapped) > compiler.SNAP_GENERAL
+    return bool(beyond_snap_general(chain, *snap_chain(chain)))
 
 
 def generic_rank(chain: Chain, samples: int = 5, seed: int = 0) -> int:

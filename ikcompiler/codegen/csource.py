@@ -86,7 +86,8 @@ def chain_c_source(program: ir.Program, *, kinds: str, lower, upper, free, targe
         " * _fast_chain, with the kernels and the finish of subproblems/fast_kernels.h, fast_finish.h. */",
     ]
     # ... and calls the shared finish library's kernels where it has them (native.cold_kernel_renames)
-    cold = [*native.COLD_DEFINITION.splitlines(), *native.cold_kernel_renames("\n".join(alt[0]))] if alt else []
+    cold = ([*native.COLD_DEFINITION.splitlines(), *native.cold_kernel_renames("\n".join(alt[0]))]
+            if alt else [])
     body = main[0] + (cold + alt[0] if alt else [])
     return _with_entries(head + body, leaves=main[1], alt=alt[1] if alt else None, kinds=kinds, lower=lower,
                          upper=upper, free=free, target=target, scale=scale, tol=tol, slots=slots,
