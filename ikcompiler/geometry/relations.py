@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from subproblems import tolerances
+from subproblems.screw import cross3  # np.cross of 3-vectors written out: same bits, no axis handling
 
 
 @dataclass(frozen=True)
@@ -41,15 +42,6 @@ def lines_meet(lines, scale: float) -> tuple[np.ndarray | None, float]:
     x = np.linalg.solve(A, b)
     miss = max(float(np.linalg.norm((np.eye(3) - np.outer(w, w)) @ (x - r))) for w, r in lines)
     return x, miss / scale
-
-
-def cross3(a, b) -> np.ndarray:
-    """``np.cross`` of two 3-vectors, written out: the same products and differences, so the same
-    bits, without np.cross's axis handling (~10 us a call, 1,500 calls in puma560's search;
-    docs/design.md section 14, compile time)."""
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), dtype=float)
 
 
 def parallel_miss(w1, w2) -> float:
