@@ -1,4 +1,4 @@
-"""The native general-6r path's hand-back to the Python general6, and the compile-time route, measured
+"""The native general-6r path's hand-back to the Python general6, measured
 (issue 10 / 11; docs/general6.md, "Native path" and "When it is used").
 
 * The zoo's Jaco at POSES poses inside its limits (seed 21) with a share of the joint values at 0,
@@ -7,8 +7,9 @@
   and with its first arrangement alone (what the C did before); single-pose ``solve`` median, p90 and
   p99 (wall, warm); recovered sampled vectors and rows of ``solve_batch``.
 * Compile: ``compile_robot`` wall time (warm process, the C build cached) for the Jaco.
-* The route (ikcompiler/general6_route.py) on the Jaco and rtb-data's abb_irb140: the plan's method
-  and verdict note.
+
+The route (1-D search or general-6r, ikcompiler/general6_route.py) is measured by
+``benchmarks/general6.py`` ("The 1-D search or general-6r: the compile-time decision").
 
 ``python benchmarks/general6_fallback.py [--poses 400]`` writes ``benchmarks/results/general6_fallback.md``.
 The machine is shared (2 cores): the load average is written with the results; wall times are
@@ -88,26 +89,6 @@ def jaco_section(poses: int, log) -> list[str]:
     return lines
 
 
-def route_section(log) -> list[str]:
-    from ikcompiler import robotdb
-    from ikcompiler.compiler import compile_plan
-
-    robots = [load_robot("jaco")]
-    if robotdb.installed("rtb-data"):
-        entry = next(e for e in robotdb.discover(["rtb-data"]).chains if e.urdf.name == "irb140.urdf")
-        robots.insert(0, entry.load())
-    lines = ["", "## The route: 1-D search or general-6r (both modules measured as they run)", "",
-             "| robot | method | compile_plan s | verdict (plan note) |", "|---|---|---|---|"]
-    for chain in robots:
-        log(f"route: {chain.name}")
-        t = time.perf_counter()
-        plan = compile_plan(chain)
-        dt = time.perf_counter() - t
-        verdict = next((n for n in plan.notes if "1d-search kept" in n or "chosen over" in n), "-")
-        lines.append(f"| {chain.name} | {plan.method} | {dt:.2f} | {verdict} |")
-    return lines
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--poses", type=int, default=400)
@@ -117,12 +98,11 @@ def main(argv=None) -> int:
         print(msg, file=sys.stderr, flush=True)
 
     load = os.getloadavg()
-    lines = ["# General-6r native path: hand-back and route", "",
+    lines = ["# General-6r native path: hand-back", "",
              f"Command: `python benchmarks/general6_fallback.py --poses {args.poses}`. "
              "Machine: shared, 2 cores, "
              f"load average at start {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}.", ""]
     lines += jaco_section(args.poses, log)
-    lines += route_section(log)
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text("\n".join(lines) + "\n")
     log(f"wrote {OUT}")
