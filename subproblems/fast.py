@@ -34,6 +34,7 @@ Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 * :func:`dist_t`    S3-T  ``|p + v th - q| = d``               2 slots
 * :func:`point_r`   S2-R  ``exp(w th)(p) = q``                 1 slot
 * :func:`turn_slide2` S1-RTT ``exp(xi1 t1) exp(v2 t2) exp(v3 t3) = T``  1 slot
+* :func:`slide1`    S2-T, S1-T ``v t = b``                       1 slot
 * :func:`slide3`    S2-TTT, S1-TTT ``v1 t1 + v2 t2 + v3 t3 = b`` 1 slot
 * :func:`slide2_turn` S2-TTR ``v1 t1 + v2 t2 + exp(xi3 t3)(p) = q``  2 slots
 * :func:`point_rr_meet`  S2-RR, axes meeting at ``c``          2 slots
@@ -274,6 +275,13 @@ def dist_t(m, v, p, q, d):
     root = m.sqrt(m.pos(disc))
     tangent = (abs(disc) <= TANGENT * (ve * ve + d * d + dot(p, p) + dot(q, q) + 1.0)) * TANGENT_ROOT
     return (-ve + root, tangent), (-ve - root, tangent)
+
+
+def slide1(m, v, b):
+    """S2-T / S1-T: ``v t = b``: the component of ``b`` along the slide (what is left across it, and a
+    rotation S1-T's target may hold, the chain's pose error measures); defer a (nearly) zero slide."""
+    vv = dot(v, v)
+    return (dot(v, b) / (vv + TINY), (vv <= NEAR2) * DEFER),
 
 
 def slide3(m, v1, v2, v3, b):

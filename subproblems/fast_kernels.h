@@ -11,7 +11,7 @@
  *  - a kernel takes the Python kernel's arguments in order, without the backend m: 3-vectors and the
  *    row-major rotation R (9 entries) as const double *, scalars as double; then its outputs:
  *    double *q, slots x outs values slot-major (slot k, output j at q[k * outs + j]), and int *f,
- *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide3 1x3,
+ *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide1 1x1, slide3 1x3,
  *    turn_slide2 1x3, slide2_turn 2x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
  *    rot_rrr 2x3;
  *  - the angle kernels (plane_r, dist_r, point_r, point_rr_meet, point_rr_parallel, rot_r, rot_rr,
@@ -232,6 +232,14 @@ static inline void ikc_dist_t(const double *v, const double *p, const double *qq
     q[1] = -ve - root;
     f[0] = tangent;
     f[1] = tangent;
+}
+
+/* S2-T / S1-T: v t = b, the component of b along the slide (the chain's pose error measures the
+ * rest); defer a (nearly) zero slide.  1 slot x 1 */
+static inline void ikc_slide1(const double *v, const double *b, double *q, int *f) {
+    double vv = ikc_dot(v, v);
+    q[0] = ikc_dot(v, b) / (vv + IKC_TINY);
+    f[0] = (vv <= IKC_NEAR2) ? IKC_DEFER : 0;
 }
 
 /* S2-TTT / S1-TTT: v1 t1 + v2 t2 + v3 t3 = b (Cramer).  1 slot x 3 */

@@ -34,6 +34,12 @@ from subproblems.screw import twist_exp
 # Price of each subproblem beyond its branching: closed-form geometry is cheap, eliminations are not.
 PRICE = {"S1": 0.6, "S2": 0.5, "S3": 0.5, "O": 0.3, "H": 0.4, "SUM": 0.05}
 GENERAL_PRICE = {"S2-RRR": 3.0, "S2-RRT": 1.0, "S2-TRR": 1.0, "S2-RTR": 1.5, "S1-RRR": 0.5}
+# Class I pairs have no plain-arithmetic kernel: the fast chain calls their reference solver, 1-3 ms a
+# pose (2-joint legs and fingers of the robot-description packages took 1.3-40 ms a solve, with the
+# snapped robots' correction).  Priced so that a point step and an orientation step (S2-R or S2-T with
+# a point on the other joint's axis, then O-R: kernels, ~4 us) win where the rules offer them; where
+# they do not (two slides), the pair still solves.  docs/design.md section 5.
+REFERENCE_PRICE = {"S1-RR": 0.5, "S1-RT": 0.5, "S1-TR": 0.5, "S1-TT": 0.5}
 
 
 def move_cost(code: str) -> float:
@@ -44,7 +50,8 @@ def move_cost(code: str) -> float:
     prefix = code.split("-")[0]
     if code not in codes():
         return math.inf  # no solver registered for this subproblem type
-    return math.log2(max(1, max_solutions(code))) + PRICE.get(prefix, 1.0) + GENERAL_PRICE.get(code, 0.0)
+    extra = GENERAL_PRICE.get(code, 0.0) + REFERENCE_PRICE.get(code, 0.0)
+    return math.log2(max(1, max_solutions(code))) + PRICE.get(prefix, 1.0) + extra
 
 
 @dataclass

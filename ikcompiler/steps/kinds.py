@@ -41,7 +41,9 @@ class S1Step(Step):
     def lower(self, em, Td) -> None:
         G_u, _, sign, Tp = em.rewrite(self, Td)
         tws = [em.twist(j, G_u[j], sign) for j in self.solve]
-        if self.code == "S1-TTT":
+        if self.code == "S1-T":
+            call = em.kernel("slide1", tws[0][0], Tp[9:])
+        elif self.code == "S1-TTT":
             call = em.kernel("slide3", tws[0][0], tws[1][0], tws[2][0], Tp[9:])
         elif self.code == "S1-RTT":
             call = em.kernel("turn_slide2", tws[0][0], tws[0][1], tws[1][0], tws[2][0], Tp[:9], Tp[9:])
@@ -134,9 +136,10 @@ class PointStep(Step):
             (w1, r1), (w2, r2) = args
             fn = "point_rr_parallel" if self.axes == "parallel" else "point_rr_meet"
             call = em.kernel(fn, w1, r1, w2, r2, point, Tpp, em.lock_rep())
-        elif self.code == "S2-TTT":
+        elif self.code in ("S2-T", "S2-TTT"):
             b = [em.c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
-            call = em.kernel("slide3", args[0][0], args[1][0], args[2][0], b)
+            slides = [a[0] for a in args]
+            call = em.kernel("slide1" if len(slides) == 1 else "slide3", *slides, b)
         elif self.code == "S2-TTR":
             (v1,), (v2,), (w, r) = args
             call = em.kernel("slide2_turn", v1, v2, w, r, point, Tpp, em.rep())

@@ -1005,3 +1005,29 @@ def test_slide2_turn_backends_agree_and_parallel_slides_defer():
             assert abs(slot_one[0] - slot_many[0][k]) <= 1e-12 * max(1.0, abs(slot_one[0]))
             assert angle_distance(slot_one[2], slot_many[2][k]) <= 1e-12
     assert all(int(s[-1][-1]) & fast.DEFER for s in many)
+
+
+def test_slide1_solves_s2_t_and_agrees_with_the_reference_and_both_backends():
+    """``slide1`` (S2-T / S1-T): on reachable instances the drawn slide, equal to the reference S2-T's
+    exact row; the ARRAY backend equal to SCALAR; a zero slide defers."""
+    rng = np.random.default_rng(37)
+    cases = []
+    for _ in range(100):
+        v = _unit(rng.normal(size=3)) * rng.choice([1.0, 0.5, 3.0])
+        p, t = rng.uniform(-1, 1, 3), rng.choice([rng.uniform(-2, 2), 0.0, 1.0])
+        q = p + v * t
+        (got, flag), = fast.slide1(fast.SCALAR, tuple(v), tuple(q - p))
+        assert flag == 0 and abs(got - t) <= 1e-12 * max(1.0, abs(t)), (v, p, q, got, t)
+        ref = solve("S2-T", twists=[np.concatenate([v / np.linalg.norm(v), np.zeros(3)])], p=p, q=q)
+        size = float(np.linalg.norm(v))  # the reference slides along the unit direction
+        assert not ref.ls[0] and abs(ref.q[0][0] - t * size) <= 1e-12 * max(1.0, abs(t * size))
+        cases.append((v, q - p))
+    ex = np.eye(3)[0]
+    cases.append((np.zeros(3), ex))
+    stacked = [tuple(np.array([c[i][j] for c in cases]) for j in range(3)) for i in range(2)]
+    many = fast.slide1(fast.ARRAY, *stacked)
+    for k, c in enumerate(cases):
+        (one, flag), = fast.slide1(fast.SCALAR, *(tuple(a) for a in c))
+        assert int(flag) == int(many[0][-1][k])
+        assert abs(one - many[0][0][k]) <= 1e-12 * max(1.0, abs(one))
+    assert int(many[0][-1][-1]) & fast.DEFER

@@ -8,7 +8,7 @@ The header is a port of :mod:`subproblems.fast` in the same order of operations,
   points on or near axes, normals along or across an axis or zero, meeting / parallel / antiparallel /
   nearly parallel / coincident axes, gimbal locks, special angles 0, +-pi/2, pi, reachable and
   unreachable right-hand sides), for the ten kernels it specifies;
-* raw instances from this file for all thirteen (``slide3``, ``turn_slide2``, ``slide2_turn``
+* raw instances from this file for all fourteen (``slide1``, ``slide3``, ``turn_slide2``, ``slide2_turn``
   included): each vector argument drawn as a fresh one, a copy, a multiple or a near copy of an
   earlier one, zero, or on an earlier axis, so that coincidences of every pair of arguments come up;
 * hand-built corner cases, and a bulk run of numpy-random instances.
@@ -46,6 +46,7 @@ KERNELS = {
     "plane_t": ("vpvss", 1, "T"),
     "dist_r": ("uppps" + "s", 2, "R"),
     "dist_t": ("upps", 2, "T"),
+    "slide1": ("vp", 1, "T"),
     "slide3": ("vvvp", 1, "TTT"),
     "turn_slide2": ("upvvRp", 1, "RTT"),
     "slide2_turn": ("vvuppps", 2, "TTR"),
@@ -236,6 +237,16 @@ def test_raw_instances(name, data):
 def _more_corners(name):
     z, (ex, ey, ez) = np.zeros(3), np.eye(3)
     R90 = rotation_exp(ez, math.pi / 2).ravel()
+    if name == "slide1":
+        return [
+            [ex, np.array([1.0, 2.0, 3.0])],
+            [-2.0 * ey, np.array([1.0, 2.0, 3.0])],  # not unit, antiparallel
+            [ex, ey],  # across the slide: 0 (the chain's pose error measures the rest)
+            [z, ex],  # a zero slide: defer
+            [1e-8 * ez, ez],  # below NEAR: defer
+            [1e-6 * ez, ez],  # above it
+            [z, z],
+        ]
     if name == "slide3":
         return [
             [ex, ey, ez, np.array([1.0, 2.0, 3.0])],
@@ -286,6 +297,8 @@ def _rng_args(name, rng):
         th = src.joints(spec.kinds)
         inst = {**g, **(spec.rhs(g, th) if rng.random() < 0.5 else spec.arbitrary(src, g))}
         return [inst[a] for a in spec.args]
+    if name == "slide1":
+        return [rng.uniform(-2, 2, 3) for _ in range(2)]
     if name == "slide3":
         return [rng.uniform(-2, 2, 3) for _ in range(4)]
     if name == "slide2_turn":
