@@ -43,7 +43,8 @@ CASES = {
     # a planar leg: hip and knee parallel (the double pendulum, solo's legs)
     "parallel-RR": (
         _chain("leg", [Joint("hip", "R", revolute_twist([1, 0, 0], [0, 0.035, 0])),
-                       Joint("knee", "R", revolute_twist([1, 0, 0], [0, 0.135, 0]))], _home(0.03, 0.0, 0.135)),
+                       Joint("knee", "R", revolute_twist([1, 0, 0], [0, 0.135, 0]))],
+               _home(0.03, 0.0, 0.135)),
         ["S2-R", "O-R"],
     ),
     # the same with the knee axis off parallel by 4.6e-5 rad (pybullet's quadruped as shipped)
@@ -56,7 +57,8 @@ CASES = {
     # a wheel on a suspension slide (tiago_dual), the cart-pole
     "slide-turn": (
         _chain("wheel", [Joint("suspension", "T", prismatic_twist([0, 0, 1]), -0.02, 0.02),
-                         Joint("wheel", "R", revolute_twist([0, 1, 0], [0.1, 0.2, 0.05]))], _home(0.1, 0.25, 0.05)),
+                         Joint("wheel", "R", revolute_twist([0, 1, 0], [0.1, 0.2, 0.05]))],
+               _home(0.1, 0.25, 0.05)),
         ["S2-T", "O-R"],
     ),
     # a gripper finger
