@@ -1284,6 +1284,21 @@ static int ikc_quick_lines(const ikc_robot *rb, ikc_chain_fn chain, int L, int n
     return kept == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : kept;
 }
 
+/* Whether any of the n flags is set. */
+static int ikc_any_set(int n, const int *x) {
+    for (int j = 0; j < n; j++)
+        if (x[j]) return 1;
+    return 0;
+}
+
+/* Whether family leaf j still looks for an exact representative inside the limits in ikc_settle_chain's
+ * polish (settle._polish_pending): a later representative can change only those. */
+static int ikc_polish_pending(const ikc_robot *rb, const double *Q, const double *E, const int *F, int j,
+                              int limits) {
+    if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_EMPTY | IKC_LOCK))) return 0;
+    return !(E[j] <= rb->tol * rb->scale && (!limits || ikc_row_inside(rb, Q + j * rb->dof)));
+}
+
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont,
                             int try_alt) {
@@ -1321,10 +1336,14 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         tangent[j] = !(E0[j] <= exact_tol);
         root[j] = (F0[j] & IKC_TANGENT_ROOT) != 0;
     }
+    int ran[IKC_REPS];  /* whether the chain ran at representative r (its leaves in RQ, RE, RF) */
+    for (int r = 0; r < IKC_REPS; r++) ran[r] = 0;
     for (int r = 1; r < IKC_REPS; r++) {  /* the representatives' leaves, and which lie on a line */
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
+        if (r > 1 && !ikc_any_set(n, line)) break;  /* no line to fit: the polish runs the chain on demand */
+        ran[r] = 1;
         double *Q2 = RQ + (r - 1) * L * dof;
         int *F2 = RF + (r - 1) * L;
         int n2 = ikc_lock_leaves(chain, g, fr, rep, Q2, RE + (r - 1) * L, F2);
@@ -1353,8 +1372,15 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         int step = (r + 1) / 2;
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
+        int pending = 0;
+        for (int j = 0; j < n && !pending; j++) pending = ikc_polish_pending(rb, Q, E, F, j, limits);
+        if (!pending) break;  /* every family leaf settled: the later representatives change nothing */
         double *Q2 = RQ + (r - 1) * L * dof, *E2 = RE + (r - 1) * L;
-        const int *F2 = RF + (r - 1) * L;
+        int *F2 = RF + (r - 1) * L;
+        if (!ran[r]) {
+            if (ikc_lock_leaves(chain, g, fr, rep, Q2, E2, F2) != n) return ikc_hand_back(IKC_WHY_REPS);
+            ran[r] = 1;
+        }
         double PS[L * dof], PQ[L * dof], PE[L];  /* this representative's polishes, once per start */
         ikc_newton_memo polish = {0, L, PS, PQ, PE};
         for (int j = 0; j < n; j++) {
