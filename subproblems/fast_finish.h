@@ -1833,9 +1833,12 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
      * along an ill-conditioned least-squares valley (1e-10 .. 4e-9 rad measured): the scalar chain's
      * leaves start them instead, so every row is the scalar path's to roundoff */
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    /* a gimbal lock's leaves (IKC_FAMILY, the scalar kernel's values) go to the finish as ikc_settle_chain
+     * gives them, unless an alternative chain is to be tried first */
+    const int64_t allowed = IKC_TANGENT_ROOT | (rb->chain_alt ? 0 : IKC_FAMILY);
     int regular = 1;
     for (int k = 0; k < n && regular; k++)
-        regular = !(F[4 * k + l] & ~(int64_t)IKC_TANGENT_ROOT) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+        regular = !(F[4 * k + l] & ~allowed) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
     int count = IKC_PYTHON;
     if (regular) {
         double Ql[m * dof], El[m];
