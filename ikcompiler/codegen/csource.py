@@ -371,5 +371,10 @@ def block_c_source(ns) -> str | None:
         f"    ikc_many_block((const ikc_robot *)rb, ikc_block, {leaves}, n, goals, fr, limits, q, res, ls,",
         "                   cont, count, threads);",
         "}",
+        "",
+        "/* the leaves of 4 goals, as ikc_many_block reads them (tests/test_block_chain.py) */",
+        "int ikc_block_leaves(const double *G, double *Q, double *E, int64_t *F) {",
+        "    return ikc_block(G, Q, E, F);",
+        "}",
     ]
     return "\n".join(head + lines + tail) + "\n"
