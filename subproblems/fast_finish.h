@@ -1817,30 +1817,48 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
  * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
 typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
 #define IKC_LANE_IRREGULAR 256  /* lane_kernels.h IKC_IRREGULAR */
+#define IKC_LANE_AGAIN 512      /* lane_kernels.h IKC_LANE_AGAIN: a tangent root with libmvec's angles */
 
 typedef struct {
     ikc_job job;
-    ikc_block_fn block;
+    ikc_block_fn block, block_libm;  /* block_libm: the block chain with libm's angles, or 0 */
     int leaves;
 } ikc_block_job;
 
-static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, int l, int n, const double *g,
-                           const double *Q, const double *E, const int64_t *F) {
-    const int dof = rb->dof, slots = rb->slots, m = n > 0 ? n : 1;
-    double *q = job->q + i * slots * dof, *res = job->res + i * slots;
-    int *ls = job->ls + i * slots, *cont = job->cont + i * slots;
-    /* a near miss gets Newton steps in the finish, which amplify the lanes' few-ulp angles (libmvec)
-     * along an ill-conditioned least-squares valley (1e-10 .. 4e-9 rad measured): the scalar chain's
-     * leaves start them instead, so every row is the scalar path's to roundoff */
+/* What becomes of lane l of a block call (n leaves; `libm`: the call had libm's angles, so its leaves are
+ * ikc_chain's bit for bit): IKC_LANE_FINISH, its leaves go to ikc_finish; IKC_LANE_LIBM, the lane again
+ * with libm's angles (a tangent root, or a near miss: its Newton steps in the finish amplify the lanes'
+ * few-ulp angles along an ill-conditioned least-squares valley, 1e-10 .. 4e-9 rad measured), where the
+ * block chain has that form; IKC_LANE_SCALAR, the scalar path from the start (every other flag). */
+#define IKC_LANE_FINISH 0
+#define IKC_LANE_LIBM 1
+#define IKC_LANE_SCALAR 2
+static int ikc_lane_kind(const ikc_robot *rb, const ikc_block_job *bj, int n, int l, const double *E,
+                         const int64_t *F, int libm) {
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     /* a gimbal lock's leaves (IKC_FAMILY, the scalar kernel's values) go to the finish as ikc_settle_chain
      * gives them, unless an alternative chain is to be tried first */
     const int64_t allowed = IKC_TANGENT_ROOT | (rb->chain_alt ? 0 : IKC_FAMILY);
-    int regular = 1;
-    for (int k = 0; k < n && regular; k++)
-        regular = !(F[4 * k + l] & ~allowed) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+    int again = 0;
+    for (int k = 0; k < n; k++) {
+        const int64_t f = F[4 * k + l] & ~allowed;
+        if (f & ~(int64_t)IKC_LANE_AGAIN) return IKC_LANE_SCALAR;
+        again |= f != 0 || (!libm && exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+    }
+    if (!again) return IKC_LANE_FINISH;
+    return !libm && bj->block_libm ? IKC_LANE_LIBM : IKC_LANE_SCALAR;
+}
+
+/* Pose i from lane l of a block call: its leaves' finish (`finish`: what ikc_settle returns for it
+ * whenever it returns a count), else -- or where that finish hands back or misses a family -- the
+ * scalar path from the start. */
+static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, int l, int n, const double *g,
+                           const double *Q, const double *E, const int64_t *F, int finish) {
+    const int dof = rb->dof, slots = rb->slots, m = n > 0 ? n : 1;
+    double *q = job->q + i * slots * dof, *res = job->res + i * slots;
+    int *ls = job->ls + i * slots, *cont = job->cont + i * slots;
     int count = IKC_PYTHON;
-    if (regular) {
+    if (finish) {
         double Ql[m * dof], El[m];
         int Fl[m];
         for (int k = 0; k < n; k++) {
@@ -1855,37 +1873,67 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     job->count[i] = count;
 }
 
+/* Up to 4 goals (poses idx[0..lanes-1]) through the block chain; each lane settled as ikc_lane_kind
+ * says, except that the lanes to run again with libm's angles are gathered in `again` (idx, goals) and
+ * their count returned; with `libm` the call is that run. */
+static int ikc_block_lanes(const ikc_block_job *bj, int lanes, const int64_t *idx, double (*g)[12], int libm,
+                           int64_t *again_idx, double (*again)[12], int na) {
+    const ikc_job *job = &bj->job;
+    const ikc_robot *rb = job->rb;
+    const int dof = rb->dof, L = bj->leaves;
+    double G[48], Q[4 * L * dof], E[4 * L];
+    int64_t F[4 * L];
+    for (int l = 0; l < 4; l++)  /* a lane without a pose of its own computes the first one's */
+        for (int e = 0; e < 12; e++) G[4 * e + l] = g[l < lanes ? l : 0][e];
+    const int n = (libm ? bj->block_libm : bj->block)(G, Q, E, F);
+    for (int l = 0; l < lanes; l++) {
+        const int kind = ikc_lane_kind(rb, bj, n, l, E, F, libm);
+        if (kind == IKC_LANE_LIBM) {
+            again_idx[na] = idx[l];
+            for (int e = 0; e < 12; e++) again[na][e] = g[l][e];
+            na++;
+        } else {
+            ikc_block_pose(rb, job, idx[l], l, n, g[l], Q, E, F, kind == IKC_LANE_FINISH);
+        }
+    }
+    return na;
+}
+
 static void *ikc_run_block(void *arg) {
     const ikc_block_job *bj = (const ikc_block_job *)arg;
     const ikc_job *job = &bj->job;
     const ikc_robot *rb = job->rb;
-    const int dof = rb->dof, L = bj->leaves, stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
-    double g[4][12], G[48], Q[4 * L * dof], E[4 * L];
-    int64_t F[4 * L];
+    const int stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
+    double g[4][12], again[8][12];  /* lanes to run again with libm's angles: at most 4 + 3 pending */
+    int64_t idx[4], again_idx[8];
+    int na = 0;
     for (int64_t i = job->start; i < job->stop; i += 4) {
         const int lanes = job->stop - i < 4 ? (int)(job->stop - i) : 4;
-        int ok[4] = {0, 0, 0, 0}, first = -1;
+        int ok = 0;
         for (int l = 0; l < lanes; l++) {
-            const int checked = ikc_goal_checked(rb, job->goals + stride * (i + l), g[l]);
-            ok[l] = checked == 1;
-            if (!ok[l]) job->count[i + l] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
-            else if (first < 0) first = l;
+            const int checked = ikc_goal_checked(rb, job->goals + stride * (i + l), g[ok]);
+            if (checked != 1) job->count[i + l] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
+            else idx[ok++] = i + l;
         }
-        if (first < 0) continue;
-        for (int l = 0; l < 4; l++) {  /* a lane without a pose of its own computes the first one's */
-            const double *src = l < lanes && ok[l] ? g[l] : g[first];
-            for (int e = 0; e < 12; e++) G[4 * e + l] = src[e];
+        if (!ok) continue;
+        na = ikc_block_lanes(bj, ok, idx, g, 0, again_idx, again, na);
+        if (na >= 4) {
+            ikc_block_lanes(bj, 4, again_idx, again, 1, NULL, NULL, 0);
+            na -= 4;
+            for (int a = 0; a < na; a++) {
+                again_idx[a] = again_idx[4 + a];
+                for (int e = 0; e < 12; e++) again[a][e] = again[4 + a][e];
+            }
         }
-        const int n = bj->block(G, Q, E, F);
-        for (int l = 0; l < lanes; l++)
-            if (ok[l]) ikc_block_pose(rb, job, i + l, l, n, g[l], Q, E, F);
     }
+    if (na) ikc_block_lanes(bj, na, again_idx, again, 1, NULL, NULL, 0);
     return NULL;
 }
 
 /* ikc_many with a block chain of `leaves` leaves (closed-form chains without free joints; anything
  * else runs ikc_many). */
-static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, int leaves, int64_t n, const double *goals,
+static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, ikc_block_fn block_libm, int leaves, int64_t n,
+                           const double *goals,
                            const double *fr, int limits, double *q, double *res, int *ls, int *cont, int *count,
                            int threads) {
     if (rb->nsearch || rb->polish || rb->nfree || leaves != rb->leaves) {
@@ -1901,7 +1949,8 @@ static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, int leaves, 
     for (int t = 0; t < threads; t++) {
         /* each thread's share starts on a multiple of 4 poses */
         int64_t start = (n * t / threads) & ~(int64_t)3, stop = t + 1 == threads ? n : (n * (t + 1) / threads) & ~(int64_t)3;
-        jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, leaves};
+        jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, block_libm,
+                                  leaves};
     }
     for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run_block, &jobs[t]) == 0;
     ikc_run_block(&jobs[0]);

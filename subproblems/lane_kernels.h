@@ -27,12 +27,19 @@ typedef int64_t ikc_m4 __attribute__((vector_size(32), aligned(32)));  /* a lane
  * libmvec's ABI take these vector types as they are) */
 #define IKC_LANES 4
 #define IKC_IRREGULAR 256  /* a lane the scalar chain must solve (fast_finish.h IKC_LANE_IRREGULAR) */
-/* A tangent root's flag.  With libmvec's angles a tangent root is irregular too: its two copies (phi +-
- * acos(x), x within ulps of +-1) split by about the square root of an angle's ulps, so a few ulps of
- * atan2 moved the copy the finish keeps by 1.4e-7 rad (ur5; both exact rows of a double root). */
+/* A tangent root's flag.  With libmvec's angles a tangent root needs the lane again with libm's
+ * (IKC_LANE_AGAIN): its two copies (phi +- acos(x), x within ulps of +-1) split by about the square root
+ * of an angle's ulps, so a few ulps of atan2 moved the copy the finish keeps by 1.4e-7 rad (ur5; both
+ * exact rows of a double root).  ikc_block_libm runs the block chain with libm's angles in every lane
+ * (ikc_lane_libm set, this thread only): its lanes are ikc_chain's leaves bit for bit, tangent roots and
+ * all (fast_finish.h ikc_run_block gathers such lanes 4 at a time). */
+#define IKC_LANE_AGAIN 512  /* fast_finish.h IKC_LANE_AGAIN */
+static __thread int ikc_lane_libm __attribute__((tls_model("initial-exec")));
 #if defined(IKC_LIBMVEC) && defined(__AVX2__)
-#define IKC_LANE_TANGENT IKC_IRREGULAR
+#define IKC_LANE_VECTOR_ANGLES 1
+#define IKC_LANE_TANGENT (ikc_lane_libm ? IKC_TANGENT_ROOT : IKC_LANE_AGAIN)
 #else
+#define IKC_LANE_VECTOR_ANGLES 0
 #define IKC_LANE_TANGENT IKC_TANGENT_ROOT
 #endif
 #define IKC_V(x) ((ikc_v4){(x), (x), (x), (x)})
@@ -76,23 +83,33 @@ static inline ikc_v4 ikc_v_max2(ikc_v4 a, ikc_v4 b) {
     return ikc_v_sel((a != a) | (b != b), IKC_V(NAN), ikc_v_sel(a > b, a, b));
 }
 
-#if defined(IKC_LIBMVEC) && defined(__AVX2__)
-/* glibc's AVX2 vector variants (libmvec.so.1) */
-extern ikc_v4 _ZGVdN4vv_atan2(ikc_v4 y, ikc_v4 x);
-extern ikc_v4 _ZGVdN4v_acos(ikc_v4 x);
-static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) { return _ZGVdN4vv_atan2(y, x); }
-static inline ikc_v4 ikc_v_acos(ikc_v4 x) { return _ZGVdN4v_acos(x); }
-#else
-static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) {
+/* libm's angles, lane by lane */
+static inline ikc_v4 ikc_v_atan2_libm(ikc_v4 y, ikc_v4 x) {
     ikc_v4 r;
     for (int i = 0; i < IKC_LANES; i++) r[i] = atan2(y[i], x[i]);
     return r;
 }
-static inline ikc_v4 ikc_v_acos(ikc_v4 x) {
+static inline ikc_v4 ikc_v_acos_libm(ikc_v4 x) {
     ikc_v4 r;
     for (int i = 0; i < IKC_LANES; i++) r[i] = acos(x[i]);
     return r;
 }
+#if IKC_LANE_VECTOR_ANGLES
+/* glibc's AVX2 vector variants (libmvec.so.1), libm's where ikc_block_libm asks for them (out of line:
+ * inlined, the four libm calls made the callers' hot path slower: +2% of ur5's instructions) */
+extern ikc_v4 _ZGVdN4vv_atan2(ikc_v4 y, ikc_v4 x);
+extern ikc_v4 _ZGVdN4v_acos(ikc_v4 x);
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_atan2_again(ikc_v4 y, ikc_v4 x) { return ikc_v_atan2_libm(y, x); }
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_acos_again(ikc_v4 x) { return ikc_v_acos_libm(x); }
+static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_atan2_again(y, x) : _ZGVdN4vv_atan2(y, x);
+}
+static inline ikc_v4 ikc_v_acos(ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_acos_again(x) : _ZGVdN4v_acos(x);
+}
+#else
+static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) { return ikc_v_atan2_libm(y, x); }
+static inline ikc_v4 ikc_v_acos(ikc_v4 x) { return ikc_v_acos_libm(x); }
 #endif
 
 /* cos and sin that a chain reads of a value other than a kernel's output (ur5's q4, a difference of
