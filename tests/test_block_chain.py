@@ -179,3 +179,39 @@ def test_a_wrist_lock_is_settled_in_the_lanes_with_the_scalar_chains_leaves(libm
                 else:
                     assert np.array_equal(LQ[k, lane], np.array(leaf[:-2])) and LE[k, lane] == leaf[-2]
     assert locks >= 16, locks  # every pose has its lock leaves
+
+
+def test_tangent_lanes_run_again_with_libm_angles_and_give_the_scalar_rows(monkeypatch):
+    """A lane with a tangent root (or a near miss) under libmvec's angles is flagged IKC_LANE_AGAIN
+    (512) and runs the block chain again with libm's angles, 4 such lanes a call (lane_kernels.h,
+    fast_finish.h ikc_run_block); those leaves are the scalar chain's, so the rows of such poses are
+    the scalar path's bit for bit.  Fails where such a lane goes to the finish from libmvec's leaves
+    (rows moved by Newton at the double root), where the flag is lost, or where a gathered lane is mixed
+    up with another (measured: a gathered pose's index swapped fails this and the libmvec tests above)."""
+    from subproblems import fast
+
+    if "-mavx2" not in native.machine_flags():
+        pytest.skip("libmvec's AVX2 variants need an AVX2 build")
+    module, nc = _chains("ur5", monkeypatch, libmvec=True)
+    _, robot = _module("ur5")
+    Q = sample_configurations(robot, 600, seed=17, special=0.5)
+    Ts, goals = [], []
+    for q in Q:
+        T = module.fk(q)
+        goal = fast.goal_entries(T, "pose")
+        leaves = module._fast_chain(fast.SCALAR, goal, (), 0.0)
+        flags = [leaf[-1] for leaf in leaves]
+        if any(f & fast.TANGENT_ROOT for f in flags) and not any(f & ~fast.TANGENT_ROOT for f in flags):
+            Ts.append(T)
+            goals.append(goal)
+    assert len(Ts) >= 9, len(Ts)  # more than two calls' worth, and a partial one
+    Ts, goals = Ts[:9], goals[:9]
+    again = 0
+    for block in range(0, 8, 4):
+        _, _, LF = _lane_leaves(nc, goals[block:block + 4])
+        again += int(((LF & 512) != 0).any(axis=0).sum())
+    assert again == 8, again
+    ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, np.array(Ts), monkeypatch)
+    assert np.array_equal(k0, k1) and (k0 > 0).all()
+    for a, b in ((Q0, Q1), (v0, v1), (ls0, ls1), (r0, r1), (c0, c1)):
+        assert np.array_equal(a, b)
