@@ -1807,14 +1807,17 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
 /* ---- the block path of a batch (docs/design.md section 14, "SIMD over poses") ----
  * A block chain (ikcompiler/codegen/printers.py c_lane_function, subproblems/lane_kernels.h) writes
  * the leaves of 4 poses at once: goal entry i of lane l at G[4 i + l], leaf k's joint j at
- * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT as the
- * scalar chain's, IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took
- * a rare branch).  A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and
- * all, none FAMILY or LOCK: their finish is what ikc_settle returns for it (such leaves go straight to
- * ikc_finish there) whenever it returns a count.  Every
- * other lane -- a flag, a near miss, a finish that hands back or misses a family -- is solved by
- * ikc_solve_goal from the start, so the block path returns what ikc_many returns, target for target
- * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
+ * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT and
+ * IKC_FAMILY as the scalar chain's, IKC_LANE_AGAIN for a tangent root with libmvec's angles,
+ * IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took a rare branch).
+ * A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and all, none LOCK:
+ * their finish is what ikc_settle returns for it (such leaves go straight to ikc_finish there, a gimbal
+ * lock's FAMILY leaves too where the plan has no alternative chain) whenever it returns a count.  A
+ * lane with a tangent root or a near miss runs the block chain again with libm's angles (4 such lanes a
+ * call, ikc_block_libm: its leaves are ikc_chain's bit for bit) before its finish.  Every other lane --
+ * an irregular leaf, a finish that hands back or misses a family -- is solved by ikc_solve_goal from the
+ * start, so the block path returns what ikc_many returns, target for target (bit for bit with libm's
+ * angles in the lanes; to a few ulps of the angles with libmvec's). */
 typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
 #define IKC_LANE_IRREGULAR 256  /* lane_kernels.h IKC_IRREGULAR */
 #define IKC_LANE_AGAIN 512      /* lane_kernels.h IKC_LANE_AGAIN: a tangent root with libmvec's angles */

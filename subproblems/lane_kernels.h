@@ -6,11 +6,13 @@
  * kernels here compute only the regular branch of their fast_kernels.h form -- the arithmetic a kernel
  * does where it takes no other branch -- in the same order of operations, and return per slot its flag
  * bits: IKC_TANGENT_ROOT where the scalar kernel sets that flag and nothing else changes (the roots are
- * the same formulas; with libm's angles only, IKC_LANE_TANGENT), IKC_IRREGULAR wherever it would set another flag (DEFER, FAMILY, LOCK) or take
- * another branch (a gimbal lock, a locked S2-RR angle, every angle a root, a tangent root of O-RRR,
- * which asks whether it is a lock).  A lane whose leaves carry no IKC_IRREGULAR is, value for value and
- * flag for flag, what ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar
- * IEEE operation: no -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
+ * the same formulas; with libmvec's angles IKC_LANE_AGAIN instead, below), IKC_IRREGULAR wherever it
+ * would set another flag (DEFER, FAMILY, LOCK) or take another branch (a locked S2-RR angle, every angle
+ * a root).  The exception is O-RRR: a lane whose roots or angles are flagged takes the scalar kernel's
+ * values and flags (ikc_v_rot_rrr_lane), so a gimbal lock reaches the leaves as IKC_FAMILY, as in
+ * ikc_chain.  A lane whose leaves carry no IKC_IRREGULAR is, value for value and flag for flag, what
+ * ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar IEEE operation: no
+ * -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
  * whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
  * angles (atan2, acos: the joint values themselves, never the cosines and sines the chain reads) come
  * from glibc's libmvec, within a few ulps of libm's (benchmarks/results/batch_simd.md).
