@@ -380,6 +380,7 @@ def block_c_source(ns) -> str | None:
         "void ikc_solve_many_block(const void *rb, int64_t n, const double *goals, const double *fr,",
         "                          int limits, double *q, double *res, int *ls, int *cont, int *count,",
         "                          int threads) {",
+        "    __atomic_store_n(&ikc_lane_locks, ((const ikc_robot *)rb)->chain_alt == 0, __ATOMIC_RELAXED);",
         f"    ikc_many_block((const ikc_robot *)rb, ikc_block, ikc_block_libm, {leaves}, n, goals, fr, limits,",
         "                   q, res, ls, cont, count, threads);",
         "}",
