@@ -1284,6 +1284,21 @@ static int ikc_quick_lines(const ikc_robot *rb, ikc_chain_fn chain, int L, int n
     return kept == IKC_FAMILY_MISS ? ikc_hand_back(IKC_WHY_FAMILY) : kept;
 }
 
+/* Whether any of the n flags is set. */
+static int ikc_any_set(int n, const int *x) {
+    for (int j = 0; j < n; j++)
+        if (x[j]) return 1;
+    return 0;
+}
+
+/* Whether family leaf j still looks for an exact representative inside the limits in ikc_settle_chain's
+ * polish (settle._polish_pending): a later representative can change only those. */
+static int ikc_polish_pending(const ikc_robot *rb, const double *Q, const double *E, const int *F, int j,
+                              int limits) {
+    if (!(F[j] & IKC_FAMILY) || (F[j] & (IKC_EMPTY | IKC_LOCK))) return 0;
+    return !(E[j] <= rb->tol * rb->scale && (!limits || ikc_row_inside(rb, Q + j * rb->dof)));
+}
+
 static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, const double *g,
                             const double *fr, int limits, double *q, double *res, int *ls, int *cont,
                             int try_alt) {
@@ -1321,10 +1336,14 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         tangent[j] = !(E0[j] <= exact_tol);
         root[j] = (F0[j] & IKC_TANGENT_ROOT) != 0;
     }
+    int ran[IKC_REPS];  /* whether the chain ran at representative r (its leaves in RQ, RE, RF) */
+    for (int r = 0; r < IKC_REPS; r++) ran[r] = 0;
     for (int r = 1; r < IKC_REPS; r++) {  /* the representatives' leaves, and which lie on a line */
         int step = (r + 1) / 2;  /* 1, 1, 2, 2, ...: pi/8, -pi/8, pi/4, -pi/4, ... */
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
+        if (r > 1 && !ikc_any_set(n, line)) break;  /* no line to fit: the polish runs the chain on demand */
+        ran[r] = 1;
         double *Q2 = RQ + (r - 1) * L * dof;
         int *F2 = RF + (r - 1) * L;
         int n2 = ikc_lock_leaves(chain, g, fr, rep, Q2, RE + (r - 1) * L, F2);
@@ -1353,8 +1372,15 @@ static int ikc_settle_chain(const ikc_robot *rb, ikc_chain_fn chain, int L, cons
         int step = (r + 1) / 2;
         double rep = (r % 2 ? 1.0 : -1.0) * step * (IKC_TWO_PI / IKC_REPS);
         if (rep <= -IKC_PI_F) continue;
+        int pending = 0;
+        for (int j = 0; j < n && !pending; j++) pending = ikc_polish_pending(rb, Q, E, F, j, limits);
+        if (!pending) break;  /* every family leaf settled: the later representatives change nothing */
         double *Q2 = RQ + (r - 1) * L * dof, *E2 = RE + (r - 1) * L;
-        const int *F2 = RF + (r - 1) * L;
+        int *F2 = RF + (r - 1) * L;
+        if (!ran[r]) {
+            if (ikc_lock_leaves(chain, g, fr, rep, Q2, E2, F2) != n) return ikc_hand_back(IKC_WHY_REPS);
+            ran[r] = 1;
+        }
         double PS[L * dof], PQ[L * dof], PE[L];  /* this representative's polishes, once per start */
         ikc_newton_memo polish = {0, L, PS, PQ, PE};
         for (int j = 0; j < n; j++) {
@@ -1781,37 +1807,61 @@ static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const 
 /* ---- the block path of a batch (docs/design.md section 14, "SIMD over poses") ----
  * A block chain (ikcompiler/codegen/printers.py c_lane_function, subproblems/lane_kernels.h) writes
  * the leaves of 4 poses at once: goal entry i of lane l at G[4 i + l], leaf k's joint j at
- * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT as the
- * scalar chain's, IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took
- * a rare branch).  A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and
- * all, none FAMILY or LOCK: their finish is what ikc_settle returns for it (such leaves go straight to
- * ikc_finish there) whenever it returns a count.  Every
- * other lane -- a flag, a near miss, a finish that hands back or misses a family -- is solved by
- * ikc_solve_goal from the start, so the block path returns what ikc_many returns, target for target
- * (bit for bit with libm's angles in the lanes; to a few ulps of the angles with libmvec's). */
+ * Q[4 (k dof + j) + l], its error at E[4 k + l], its flags at F[4 k + l] (IKC_TANGENT_ROOT and
+ * IKC_FAMILY as the scalar chain's, IKC_LANE_AGAIN for a tangent root with libmvec's angles,
+ * IKC_LANE_IRREGULAR where the scalar chain's leaf has another flag or its kernels took a rare branch).
+ * A lane without an irregular leaf holds ikc_chain's leaves of its pose, flags and all, none LOCK:
+ * their finish is what ikc_settle returns for it (such leaves go straight to ikc_finish there, a gimbal
+ * lock's FAMILY leaves too where the plan has no alternative chain) whenever it returns a count.  A
+ * lane with a tangent root or a near miss runs the block chain again with libm's angles (4 such lanes a
+ * call, ikc_block_libm: its leaves are ikc_chain's bit for bit) before its finish.  Every other lane --
+ * an irregular leaf, a finish that hands back or misses a family -- is solved by ikc_solve_goal from the
+ * start, so the block path returns what ikc_many returns, target for target (bit for bit with libm's
+ * angles in the lanes; to a few ulps of the angles with libmvec's). */
 typedef int (*ikc_block_fn)(const double *G, double *Q, double *E, int64_t *F);
 #define IKC_LANE_IRREGULAR 256  /* lane_kernels.h IKC_IRREGULAR */
+#define IKC_LANE_AGAIN 512      /* lane_kernels.h IKC_LANE_AGAIN: a tangent root with libmvec's angles */
 
 typedef struct {
     ikc_job job;
-    ikc_block_fn block;
+    ikc_block_fn block, block_libm;  /* block_libm: the block chain with libm's angles, or 0 */
     int leaves;
 } ikc_block_job;
 
+/* What becomes of lane l of a block call (n leaves; `libm`: the call had libm's angles, so its leaves are
+ * ikc_chain's bit for bit): IKC_LANE_FINISH, its leaves go to ikc_finish; IKC_LANE_LIBM, the lane again
+ * with libm's angles (a tangent root, or a near miss: its Newton steps in the finish amplify the lanes'
+ * few-ulp angles along an ill-conditioned least-squares valley, 1e-10 .. 4e-9 rad measured), where the
+ * block chain has that form; IKC_LANE_SCALAR, the scalar path from the start (every other flag). */
+#define IKC_LANE_FINISH 0
+#define IKC_LANE_LIBM 1
+#define IKC_LANE_SCALAR 2
+static int ikc_lane_kind(const ikc_robot *rb, const ikc_block_job *bj, int n, int l, const double *E,
+                         const int64_t *F, int libm) {
+    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
+    /* a gimbal lock's leaves (IKC_FAMILY, the scalar kernel's values) go to the finish as ikc_settle_chain
+     * gives them, unless an alternative chain is to be tried first */
+    const int64_t allowed = IKC_TANGENT_ROOT | (rb->chain_alt ? 0 : IKC_FAMILY);
+    int again = 0;
+    for (int k = 0; k < n; k++) {
+        const int64_t f = F[4 * k + l] & ~allowed;
+        if (f & ~(int64_t)IKC_LANE_AGAIN) return IKC_LANE_SCALAR;
+        again |= f != 0 || (!libm && exact_tol < E[4 * k + l] && E[4 * k + l] < near);
+    }
+    if (!again) return IKC_LANE_FINISH;
+    return !libm && bj->block_libm ? IKC_LANE_LIBM : IKC_LANE_SCALAR;
+}
+
+/* Pose i from lane l of a block call: its leaves' finish (`finish`: what ikc_settle returns for it
+ * whenever it returns a count), else -- or where that finish hands back or misses a family -- the
+ * scalar path from the start. */
 static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, int l, int n, const double *g,
-                           const double *Q, const double *E, const int64_t *F) {
+                           const double *Q, const double *E, const int64_t *F, int finish) {
     const int dof = rb->dof, slots = rb->slots, m = n > 0 ? n : 1;
     double *q = job->q + i * slots * dof, *res = job->res + i * slots;
     int *ls = job->ls + i * slots, *cont = job->cont + i * slots;
-    /* a near miss gets Newton steps in the finish, which amplify the lanes' few-ulp angles (libmvec)
-     * along an ill-conditioned least-squares valley (1e-10 .. 4e-9 rad measured): the scalar chain's
-     * leaves start them instead, so every row is the scalar path's to roundoff */
-    const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
-    int regular = 1;
-    for (int k = 0; k < n && regular; k++)
-        regular = !(F[4 * k + l] & ~(int64_t)IKC_TANGENT_ROOT) && !(exact_tol < E[4 * k + l] && E[4 * k + l] < near);
     int count = IKC_PYTHON;
-    if (regular) {
+    if (finish) {
         double Ql[m * dof], El[m];
         int Fl[m];
         for (int k = 0; k < n; k++) {
@@ -1826,37 +1876,67 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     job->count[i] = count;
 }
 
+/* Up to 4 goals (poses idx[0..lanes-1]) through the block chain; each lane settled as ikc_lane_kind
+ * says, except that the lanes to run again with libm's angles are gathered in `again` (idx, goals) and
+ * their count returned; with `libm` the call is that run. */
+static int ikc_block_lanes(const ikc_block_job *bj, int lanes, const int64_t *idx, double (*g)[12], int libm,
+                           int64_t *again_idx, double (*again)[12], int na) {
+    const ikc_job *job = &bj->job;
+    const ikc_robot *rb = job->rb;
+    const int dof = rb->dof, L = bj->leaves;
+    double G[48], Q[4 * L * dof], E[4 * L];
+    int64_t F[4 * L];
+    for (int l = 0; l < 4; l++)  /* a lane without a pose of its own computes the first one's */
+        for (int e = 0; e < 12; e++) G[4 * e + l] = g[l < lanes ? l : 0][e];
+    const int n = (libm ? bj->block_libm : bj->block)(G, Q, E, F);
+    for (int l = 0; l < lanes; l++) {
+        const int kind = ikc_lane_kind(rb, bj, n, l, E, F, libm);
+        if (kind == IKC_LANE_LIBM) {
+            again_idx[na] = idx[l];
+            for (int e = 0; e < 12; e++) again[na][e] = g[l][e];
+            na++;
+        } else {
+            ikc_block_pose(rb, job, idx[l], l, n, g[l], Q, E, F, kind == IKC_LANE_FINISH);
+        }
+    }
+    return na;
+}
+
 static void *ikc_run_block(void *arg) {
     const ikc_block_job *bj = (const ikc_block_job *)arg;
     const ikc_job *job = &bj->job;
     const ikc_robot *rb = job->rb;
-    const int dof = rb->dof, L = bj->leaves, stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
-    double g[4][12], G[48], Q[4 * L * dof], E[4 * L];
-    int64_t F[4 * L];
+    const int stride = rb->target == 1 ? 3 : (rb->target == 2 ? 9 : 16);
+    double g[4][12], again[8][12];  /* lanes to run again with libm's angles: at most 4 + 3 pending */
+    int64_t idx[4], again_idx[8];
+    int na = 0;
     for (int64_t i = job->start; i < job->stop; i += 4) {
         const int lanes = job->stop - i < 4 ? (int)(job->stop - i) : 4;
-        int ok[4] = {0, 0, 0, 0}, first = -1;
+        int ok = 0;
         for (int l = 0; l < lanes; l++) {
-            const int checked = ikc_goal_checked(rb, job->goals + stride * (i + l), g[l]);
-            ok[l] = checked == 1;
-            if (!ok[l]) job->count[i + l] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
-            else if (first < 0) first = l;
+            const int checked = ikc_goal_checked(rb, job->goals + stride * (i + l), g[ok]);
+            if (checked != 1) job->count[i + l] = checked == 0 ? IKC_INVALID : IKC_PYTHON;
+            else idx[ok++] = i + l;
         }
-        if (first < 0) continue;
-        for (int l = 0; l < 4; l++) {  /* a lane without a pose of its own computes the first one's */
-            const double *src = l < lanes && ok[l] ? g[l] : g[first];
-            for (int e = 0; e < 12; e++) G[4 * e + l] = src[e];
+        if (!ok) continue;
+        na = ikc_block_lanes(bj, ok, idx, g, 0, again_idx, again, na);
+        if (na >= 4) {
+            ikc_block_lanes(bj, 4, again_idx, again, 1, NULL, NULL, 0);
+            na -= 4;
+            for (int a = 0; a < na; a++) {
+                again_idx[a] = again_idx[4 + a];
+                for (int e = 0; e < 12; e++) again[a][e] = again[4 + a][e];
+            }
         }
-        const int n = bj->block(G, Q, E, F);
-        for (int l = 0; l < lanes; l++)
-            if (ok[l]) ikc_block_pose(rb, job, i + l, l, n, g[l], Q, E, F);
     }
+    if (na) ikc_block_lanes(bj, na, again_idx, again, 1, NULL, NULL, 0);
     return NULL;
 }
 
 /* ikc_many with a block chain of `leaves` leaves (closed-form chains without free joints; anything
  * else runs ikc_many). */
-static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, int leaves, int64_t n, const double *goals,
+static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, ikc_block_fn block_libm, int leaves, int64_t n,
+                           const double *goals,
                            const double *fr, int limits, double *q, double *res, int *ls, int *cont, int *count,
                            int threads) {
     if (rb->nsearch || rb->polish || rb->nfree || leaves != rb->leaves) {
@@ -1872,7 +1952,8 @@ static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, int leaves, 
     for (int t = 0; t < threads; t++) {
         /* each thread's share starts on a multiple of 4 poses */
         int64_t start = (n * t / threads) & ~(int64_t)3, stop = t + 1 == threads ? n : (n * (t + 1) / threads) & ~(int64_t)3;
-        jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, leaves};
+        jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, block_libm,
+                                  leaves};
     }
     for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run_block, &jobs[t]) == 0;
     ikc_run_block(&jobs[0]);

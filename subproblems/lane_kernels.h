@@ -6,11 +6,13 @@
  * kernels here compute only the regular branch of their fast_kernels.h form -- the arithmetic a kernel
  * does where it takes no other branch -- in the same order of operations, and return per slot its flag
  * bits: IKC_TANGENT_ROOT where the scalar kernel sets that flag and nothing else changes (the roots are
- * the same formulas; with libm's angles only, IKC_LANE_TANGENT), IKC_IRREGULAR wherever it would set another flag (DEFER, FAMILY, LOCK) or take
- * another branch (a gimbal lock, a locked S2-RR angle, every angle a root, a tangent root of O-RRR,
- * which asks whether it is a lock).  A lane whose leaves carry no IKC_IRREGULAR is, value for value and
- * flag for flag, what ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar
- * IEEE operation: no -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
+ * the same formulas; with libmvec's angles IKC_LANE_AGAIN instead, below), IKC_IRREGULAR wherever it
+ * would set another flag (DEFER, FAMILY, LOCK) or take another branch (a locked S2-RR angle, every angle
+ * a root).  The exception is O-RRR: a lane whose roots or angles are flagged takes the scalar kernel's
+ * values and flags (ikc_v_rot_rrr_lane), so a gimbal lock reaches the leaves as IKC_FAMILY, as in
+ * ikc_chain.  A lane whose leaves carry no IKC_IRREGULAR is, value for value and flag for flag, what
+ * ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar IEEE operation: no
+ * -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
  * whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
  * angles (atan2, acos: the joint values themselves, never the cosines and sines the chain reads) come
  * from glibc's libmvec, within a few ulps of libm's (benchmarks/results/batch_simd.md).
@@ -27,12 +29,19 @@ typedef int64_t ikc_m4 __attribute__((vector_size(32), aligned(32)));  /* a lane
  * libmvec's ABI take these vector types as they are) */
 #define IKC_LANES 4
 #define IKC_IRREGULAR 256  /* a lane the scalar chain must solve (fast_finish.h IKC_LANE_IRREGULAR) */
-/* A tangent root's flag.  With libmvec's angles a tangent root is irregular too: its two copies (phi +-
- * acos(x), x within ulps of +-1) split by about the square root of an angle's ulps, so a few ulps of
- * atan2 moved the copy the finish keeps by 1.4e-7 rad (ur5; both exact rows of a double root). */
+/* A tangent root's flag.  With libmvec's angles a tangent root needs the lane again with libm's
+ * (IKC_LANE_AGAIN): its two copies (phi +- acos(x), x within ulps of +-1) split by about the square root
+ * of an angle's ulps, so a few ulps of atan2 moved the copy the finish keeps by 1.4e-7 rad (ur5; both
+ * exact rows of a double root).  ikc_block_libm runs the block chain with libm's angles in every lane
+ * (ikc_lane_libm set, this thread only): its lanes are ikc_chain's leaves bit for bit, tangent roots and
+ * all (fast_finish.h ikc_run_block gathers such lanes 4 at a time). */
+#define IKC_LANE_AGAIN 512  /* fast_finish.h IKC_LANE_AGAIN */
+static __thread int ikc_lane_libm __attribute__((tls_model("initial-exec")));
 #if defined(IKC_LIBMVEC) && defined(__AVX2__)
-#define IKC_LANE_TANGENT IKC_IRREGULAR
+#define IKC_LANE_VECTOR_ANGLES 1
+#define IKC_LANE_TANGENT (ikc_lane_libm ? IKC_TANGENT_ROOT : IKC_LANE_AGAIN)
 #else
+#define IKC_LANE_VECTOR_ANGLES 0
 #define IKC_LANE_TANGENT IKC_TANGENT_ROOT
 #endif
 #define IKC_V(x) ((ikc_v4){(x), (x), (x), (x)})
@@ -76,23 +85,33 @@ static inline ikc_v4 ikc_v_max2(ikc_v4 a, ikc_v4 b) {
     return ikc_v_sel((a != a) | (b != b), IKC_V(NAN), ikc_v_sel(a > b, a, b));
 }
 
-#if defined(IKC_LIBMVEC) && defined(__AVX2__)
-/* glibc's AVX2 vector variants (libmvec.so.1) */
-extern ikc_v4 _ZGVdN4vv_atan2(ikc_v4 y, ikc_v4 x);
-extern ikc_v4 _ZGVdN4v_acos(ikc_v4 x);
-static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) { return _ZGVdN4vv_atan2(y, x); }
-static inline ikc_v4 ikc_v_acos(ikc_v4 x) { return _ZGVdN4v_acos(x); }
-#else
-static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) {
+/* libm's angles, lane by lane */
+static inline ikc_v4 ikc_v_atan2_libm(ikc_v4 y, ikc_v4 x) {
     ikc_v4 r;
     for (int i = 0; i < IKC_LANES; i++) r[i] = atan2(y[i], x[i]);
     return r;
 }
-static inline ikc_v4 ikc_v_acos(ikc_v4 x) {
+static inline ikc_v4 ikc_v_acos_libm(ikc_v4 x) {
     ikc_v4 r;
     for (int i = 0; i < IKC_LANES; i++) r[i] = acos(x[i]);
     return r;
 }
+#if IKC_LANE_VECTOR_ANGLES
+/* glibc's AVX2 vector variants (libmvec.so.1), libm's where ikc_block_libm asks for them (out of line:
+ * inlined, the four libm calls made the callers' hot path slower: +2% of ur5's instructions) */
+extern ikc_v4 _ZGVdN4vv_atan2(ikc_v4 y, ikc_v4 x);
+extern ikc_v4 _ZGVdN4v_acos(ikc_v4 x);
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_atan2_again(ikc_v4 y, ikc_v4 x) { return ikc_v_atan2_libm(y, x); }
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_acos_again(ikc_v4 x) { return ikc_v_acos_libm(x); }
+static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_atan2_again(y, x) : _ZGVdN4vv_atan2(y, x);
+}
+static inline ikc_v4 ikc_v_acos(ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_acos_again(x) : _ZGVdN4v_acos(x);
+}
+#else
+static inline ikc_v4 ikc_v_atan2(ikc_v4 y, ikc_v4 x) { return ikc_v_atan2_libm(y, x); }
+static inline ikc_v4 ikc_v_acos(ikc_v4 x) { return ikc_v_acos_libm(x); }
 #endif
 
 /* cos and sin that a chain reads of a value other than a kernel's output (ur5's q4, a difference of
@@ -241,9 +260,38 @@ static inline void ikc_v_point_rr_parallel_cs(const ikc_v4 *w1, const ikc_v4 *r1
     }
 }
 
-/* O-RRR (ikc_rot_rrr_cs) where neither slot is a gimbal lock and neither root is a tangent one.  2 slots
- * x 3; IKC_IRREGULAR: either root flagged (a tangent root may be a lock), or an angle about w1 or w3
- * deferred (a lock) */
+/* The scalar O-RRR kernel for lane l (ikc_rot_rrr_cs at the block chain's rep = 0, the finish library's
+ * copy: the same C, so the same values and flags as ikc_chain's) in place of the lane's regular
+ * branch: a gimbal lock (the wrist of a UR arm at q5 = 0) keeps its lock values, flagged IKC_FAMILY, and
+ * the lane goes on in the block chain; any other flag but IKC_TANGENT_ROOT (DEFER, the representative's
+ * angle deferred) makes it irregular.  Cold: 12% of ur5's batch poses, 1-2% of puma560's. */
+__attribute__((cold, noinline)) static void ikc_v_rot_rrr_lane(const ikc_v4 *w1, const ikc_v4 *w2,
+                                                              const ikc_v4 *w3, const ikc_v4 *R, int l,
+                                                              ikc_v4 *q, ikc_m4 *f, ikc_v4 *cs) {
+    double a[3], b[3], c[3], M[9], sq[6], scs[12];
+    int sf[2];
+    for (int i = 0; i < 3; i++) a[i] = w1[i][l], b[i] = w2[i][l], c[i] = w3[i][l];
+    for (int i = 0; i < 9; i++) M[i] = R[i][l];
+    ikc_shared_k_rot_rrr_cs(a, b, c, M, 0.0, sq, sf, scs);
+    for (int i = 0; i < 6; i++) q[i][l] = sq[i];
+    for (int i = 0; i < 12; i++) cs[i][l] = scs[i];
+    for (int i = 0; i < 2; i++) {
+        /* a lock's values are not the split copies of a tangent root: its flag stays as it is */
+        const int64_t tangent = (sf[i] & IKC_FAMILY) ? IKC_TANGENT_ROOT : IKC_LANE_TANGENT;
+        f[i][l] = (sf[i] & IKC_FAMILY) | ((sf[i] & IKC_TANGENT_ROOT) ? tangent : 0) |
+                  ((sf[i] & ~(IKC_FAMILY | IKC_TANGENT_ROOT)) ? IKC_IRREGULAR : 0);
+    }
+}
+
+/* Whether a flagged O-RRR lane takes the scalar kernel (1) or is irregular (0): 0 where the module has an
+ * alternative chain, whose scalar path tries that chain first at a gimbal lock, so the lane's lock values
+ * would be spent for nothing (puma560: +2.5% of its instructions).  Set by ikc_solve_many_block from the
+ * module's ikc_robot (the same value from every thread: relaxed atomics). */
+static int ikc_lane_locks = 1;
+
+/* O-RRR (ikc_rot_rrr_cs): the regular branch in every lane, then the scalar kernel in each lane where
+ * either root is flagged (a tangent root may be a lock) or an angle about w1 or w3 is deferred (a lock):
+ * ikc_v_rot_rrr_lane.  2 slots x 3 */
 static inline void ikc_v_rot_rrr_cs(const ikc_v4 *w1, const ikc_v4 *w2, const ikc_v4 *w3, const ikc_v4 *R,
                                     ikc_v4 *q, ikc_m4 *f, ikc_v4 *cs) {
     ikc_v4 Rw3[3], Rtw1[3], w23[3], w21[3];
@@ -277,8 +325,16 @@ static inline void ikc_v_rot_rrr_cs(const ikc_v4 *w1, const ikc_v4 *w2, const ik
         cs[6 * i + 2] = c2;
         cs[6 * i + 3] = s2;
         q[3 * i + 2] = ikc_v_angle_about_cs(w3, Rtw1, y, IKC_V(0.0), &f3, cs + 6 * i + 4);
-        f[i] = ((rf != 0) | f1 | f3) & IKC_IRREGULAR;
+        f[i] = (rf != 0) | f1 | f3;
     }
+    if (!__atomic_load_n(&ikc_lane_locks, __ATOMIC_RELAXED)) {
+        f[0] &= IKC_IRREGULAR;
+        f[1] &= IKC_IRREGULAR;
+        return;
+    }
+    const ikc_m4 odd = f[0] | f[1];
+    for (int l = 0; l < IKC_LANES; l++)
+        if (odd[l]) ikc_v_rot_rrr_lane(w1, w2, w3, R, l, q, f, cs);
 }
 
 #endif /* IKC_LANE_KERNELS_H */

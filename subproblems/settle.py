@@ -896,6 +896,8 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
     tangent = [not E0[j] <= exact_tol for j in range(n)]
     root = [bool(F0[j] & _fk.TANGENT_ROOT) for j in range(n)]
     for r, rep in _reps():
+        if r > 1 and not any(line):
+            break  # no line left to fit: the polish below runs the chain where a leaf still needs it
         Q2, E2, F2 = kept[r] = rb.leaves(chain, g, free, rep)
         if len(Q2) != n:
             return PYTHON
@@ -913,7 +915,13 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
                 or line_verdict(rb, g, Q0[j], S[j], True)
             if verdict[j][0] == 0:
                 F[j] |= _fk.EMPTY
-    for r, _rep in _reps():
+    for r, rep in _reps():
+        if not any(_polish_pending(rb, Q, E, F, j, limits) for j in range(n)):
+            break  # every family leaf settled: the later representatives change nothing
+        if r not in kept:
+            kept[r] = rb.leaves(chain, g, free, rep)
+            if len(kept[r][0]) != n:
+                return PYTHON
         Q2, E2, F2 = kept[r]
         for j in range(n):
             if not F[j] & _fk.FAMILY or F[j] & (_fk.EMPTY | _fk.LOCK) or not F2[j] & _fk.FAMILY \
@@ -963,6 +971,14 @@ def settle_chain(rb: FinishRobot, chain, g, free, limits: bool, try_alt: bool = 
             Q[j], E[j] = list(B[j]), e
     k = finish(rb, g, Q, E, F, limits)
     return PYTHON if k == FAMILY_MISS else k
+
+
+def _polish_pending(rb: FinishRobot, Q, E, F, j: int, limits: bool) -> bool:
+    """Whether family leaf j still looks for an exact representative inside the limits in
+    :func:`settle_chain`'s polish (ikc_polish_pending): a later representative can change only those."""
+    if not F[j] & _fk.FAMILY or F[j] & (_fk.EMPTY | _fk.LOCK):
+        return False
+    return not (E[j] <= rb.tol * rb.scale and (not limits or row_inside(rb, Q[j])))
 
 
 def _fit_lines(rb: FinishRobot, r, rep, Q2, E2, F2, Q0, line, S):

@@ -130,3 +130,88 @@ def test_chains_without_a_lane_form_have_no_block_source():
     for name, kw in (("jaco", {}), ("panda", {"free": ("panda_joint7",)})):
         module = compile_robot(load_robot(name), **kw)
         assert csource.block_c_source(vars(module)) is None, name
+
+
+def _lane_leaves(nc, goals):
+    """The block chain's leaves of 4 goals (12 entries each): Q (leaves, 4, dof), E, F (leaves, 4)."""
+    import ctypes
+
+    dof, leaves = nc.dof, nc.slots * 4  # more leaf rows than any chain writes
+    G = np.ascontiguousarray(np.array(goals, dtype=float).T)  # entry i of lane l at G[4 i + l]
+    Q, E = np.zeros((leaves, dof, 4)), np.zeros((leaves, 4))
+    F = np.zeros((leaves, 4), dtype=np.int64)
+    fn = nc._block_lib.ikc_block_leaves
+    fn.argtypes, fn.restype = [ctypes.c_void_p] * 4, ctypes.c_int
+    n = fn(G.ctypes.data, Q.ctypes.data, E.ctypes.data, F.ctypes.data)
+    return Q[:n].transpose(0, 2, 1), E[:n], F[:n]
+
+
+@pytest.mark.parametrize("libmvec", [False, True])
+def test_a_wrist_lock_is_settled_in_the_lanes_with_the_scalar_chains_leaves(libmvec, monkeypatch):
+    """ur5 with q5 = 0 (its O-RRR in a gimbal lock, a self-motion of q4 + q6): the lane takes the scalar
+    kernel's lock values (lane_kernels.h ikc_v_rot_rrr_lane), flagged FAMILY, not irregular, so such a
+    pose is settled by the finish from the lanes' leaves (fast_finish.h ikc_block_pose).  With libm's
+    angles every leaf is the scalar chain's bit for bit, flags too; with libmvec's the flags are, and
+    the values agree to a few ulps.  Fails on a lane mixed up, a lock value or flag lost, or a lock lane
+    handed to the scalar chain."""
+    from subproblems import fast
+
+    if libmvec and "-mavx2" not in native.machine_flags():
+        pytest.skip("libmvec's AVX2 variants need an AVX2 build")
+    module, nc = _chains("ur5", monkeypatch, libmvec=libmvec)
+    _, robot = _module("ur5")
+    Q = sample_configurations(robot, 16, seed=3, special=0.0)
+    Q[:, 4] = 0.0
+    locks = 0
+    for block in range(0, len(Q), 4):
+        goals = [fast.goal_entries(module.fk(q), "pose") for q in Q[block:block + 4]]
+        LQ, LE, LF = _lane_leaves(nc, goals)
+        for lane, goal in enumerate(goals):
+            scalar = module._fast_chain(fast.SCALAR, goal, (), 0.0)
+            assert len(scalar) == len(LQ)
+            for k, leaf in enumerate(scalar):
+                flags = int(LF[k, lane])
+                assert not flags & 256, (block, lane, k)  # lane_kernels.h IKC_IRREGULAR
+                assert flags == leaf[-1], (block, lane, k, flags, leaf[-1])
+                locks += bool(flags & fast.FAMILY)
+                if libmvec:
+                    assert np.allclose(LQ[k, lane], leaf[:-2], rtol=0, atol=1e-13)
+                else:
+                    assert np.array_equal(LQ[k, lane], np.array(leaf[:-2])) and LE[k, lane] == leaf[-2]
+    assert locks >= 16, locks  # every pose has its lock leaves
+
+
+def test_tangent_lanes_run_again_with_libm_angles_and_give_the_scalar_rows(monkeypatch):
+    """A lane with a tangent root (or a near miss) under libmvec's angles is flagged IKC_LANE_AGAIN
+    (512) and runs the block chain again with libm's angles, 4 such lanes a call (lane_kernels.h,
+    fast_finish.h ikc_run_block); those leaves are the scalar chain's, so the rows of such poses are
+    the scalar path's bit for bit.  Fails where such a lane goes to the finish from libmvec's leaves
+    (rows moved by Newton at the double root), where the flag is lost, or where a gathered lane is mixed
+    up with another (measured: a gathered pose's index swapped fails this and the libmvec tests above)."""
+    from subproblems import fast
+
+    if "-mavx2" not in native.machine_flags():
+        pytest.skip("libmvec's AVX2 variants need an AVX2 build")
+    module, nc = _chains("ur5", monkeypatch, libmvec=True)
+    _, robot = _module("ur5")
+    Q = sample_configurations(robot, 600, seed=17, special=0.5)
+    Ts, goals = [], []
+    for q in Q:
+        T = module.fk(q)
+        goal = fast.goal_entries(T, "pose")
+        leaves = module._fast_chain(fast.SCALAR, goal, (), 0.0)
+        flags = [leaf[-1] for leaf in leaves]
+        if any(f & fast.TANGENT_ROOT for f in flags) and not any(f & ~fast.TANGENT_ROOT for f in flags):
+            Ts.append(T)
+            goals.append(goal)
+    assert len(Ts) >= 9, len(Ts)  # more than two calls' worth, and a partial one
+    Ts, goals = Ts[:9], goals[:9]
+    again = 0
+    for block in range(0, 8, 4):
+        _, _, LF = _lane_leaves(nc, goals[block:block + 4])
+        again += int(((LF & 512) != 0).any(axis=0).sum())
+    assert again == 8, again
+    ((Q0, v0, ls0, r0, c0), k0), ((Q1, v1, ls1, r1, c1), k1) = _both(nc, np.array(Ts), monkeypatch)
+    assert np.array_equal(k0, k1) and (k0 > 0).all()
+    for a, b in ((Q0, Q1), (v0, v1), (ls0, ls1), (r0, r1), (c0, c1)):
+        assert np.array_equal(a, b)

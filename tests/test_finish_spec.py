@@ -173,3 +173,43 @@ def test_wrist_locked_copies_take_their_newton_steps_once_with_the_same_rows(mon
             assert np.array_equal(cq[k], np.array(sq)) and cres[k] == sres, (q, k)
             assert (bool(cls[k]), bool(ccont[k])) == (sls, scont), (q, k)
     assert settled > 0 and repeated[0] > 0, (settled, repeated)
+
+
+def test_representatives_run_only_while_a_family_leaf_needs_one(monkeypatch):
+    """ur5 with q5 = 0: a family leaf that misses at rep 0 takes the first exact representative inside
+    the limits, so the chain runs at later representatives only while some leaf has none
+    (settle._polish_pending, fast_finish.h ikc_polish_pending).  The rows must be those of running the
+    chain at every representative (the pending test forced true), and fewer chains must run; the C
+    gives the specification's rows (test above and the wrist-locked test)."""
+    module, robot, chain = _compiled("ur5")
+    rb = _spec_robot(module)
+    runs = [0]
+    leaves = settle.FinishRobot.leaves
+
+    def counted(self, *args):
+        runs[0] += 1
+        return leaves(self, *args)
+
+    monkeypatch.setattr(settle.FinishRobot, "leaves", counted)
+    rng = np.random.default_rng(29)
+    Q = rng.uniform(-np.pi, np.pi, size=(60, 6))
+    Q[:, 4] = 0.0
+    lazy_runs = eager_runs = 0
+    for q in Q:
+        goal = fast.goal_entries(module.fk(q), "pose")
+        if goal is None:
+            continue
+        runs[0] = 0
+        lazy = settle.settle(rb, goal, (), True)
+        lazy_runs += runs[0]
+        with monkeypatch.context() as m:
+            m.setattr(settle, "_polish_pending", lambda *a: True)
+            runs[0] = 0
+            eager = settle.settle(rb, goal, (), True)
+            eager_runs += runs[0]
+        assert lazy == eager, q
+        c_rows = chain.one(module.fk(q), (), True)
+        assert (c_rows is None) == (lazy == settle.PYTHON), q
+        if c_rows is not None:
+            assert [tuple(r) for r in c_rows[0]] == [tuple(r[0]) for r in lazy], q
+    assert lazy_runs < eager_runs, (lazy_runs, eager_runs)
