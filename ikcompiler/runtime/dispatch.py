@@ -228,8 +228,13 @@ class Solver:
 
     def _rows(self, T, free, limits, exact_only=False):
         r = self.robot
-        if self.free_ends_native() is not None:
+        fe = self.free_ends_native()
+        if fe is not None:
             goals, Td, init = self._one_target(T, free)
+            given = _plain_free(free, len(r.free))
+            found = None if given is None else fe.one(goals, given, limits)
+            if found is not None:
+                return found[0][~found[2]] if exact_only else found
             parts = self._free_ends_batch(goals, Td, init, np.array([""], dtype=object), limits)
             return _unpack(parts, exact_only)
         native = self.native_chain()

@@ -9,10 +9,12 @@ joints on the moved targets and takes the Python path wherever a row does not ho
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from subproblems import fast as _fk
-from subproblems import plan_runtime as _rt
+from subproblems.screw import FixedTwistsFK
 
 
 class FreeEnds:
@@ -24,14 +26,16 @@ class FreeEnds:
         self.solved = [j for j in range(len(robot.kinds)) if j not in free]
         self.before = [j for j in free if j < self.solved[0]]
         self.after = [j for j in free if j > self.solved[-1]]
+        # P^-1 and S^-1 as products of the free joints' exponentials at minus their values, last first
+        self._inverse_before = FixedTwistsFK(robot.twists[self.before[::-1]])
+        self._inverse_after = FixedTwistsFK(robot.twists[self.after[::-1]])
 
     def targets(self, goals, init) -> np.ndarray:
         """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init."""
-        r, N = self.robot, len(goals)
-        eye = np.broadcast_to(np.eye(4), (N, 4, 4))
-        P = _rt.fk_batch(r.twists[self.before], init[:, self.before]) if self.before else eye
-        S = _rt.fk_batch(r.twists[self.after], init[:, self.after]) if self.after else eye
-        return _rt.inverse_transform(P) @ goals @ r.home_inv @ _rt.inverse_transform(S) @ r.home
+        r = self.robot
+        P_inv = self._inverse_before(-init[:, self.before[::-1]])
+        S_inv = self._inverse_after(-init[:, self.after[::-1]])
+        return P_inv @ goals @ r.home_inv @ S_inv @ r.home
 
     def rows(self, Q, init_rows) -> np.ndarray:
         """Rows of every chain joint: the solved joints' values Q (M, 6), the free ones from init_rows."""
@@ -52,6 +56,10 @@ class NativeFreeEnds:
         self.robot = robot
         self.native = native
         self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
+        self.fk = FixedTwistsFK(robot.twists, robot.home)  # the whole robot's check of the C's rows
+        # (JOINT_NAMES position, chain column, revolute, lower, upper) of each free joint, as Python numbers
+        self.free = [(int(pos), robot.independent[pos], robot.joint_types[pos] == "R", float(robot.lower[pos]),
+                      float(robot.upper[pos])) for pos in robot.free]
 
     @classmethod
     def bind(cls, robot):
@@ -99,10 +107,47 @@ class NativeFreeEnds:
             Q[:, :, pos] = init[:, r.independent[pos], None]
         n, k = np.nonzero(valid & ~ls)
         full = Q[n, k] @ r.A.T + r.B
-        err = r.error(_rt.fk_batch(r.twists, full, r.home), goals[n])
+        err = r.error(self.fk(full), goals[n])
         redo = (code == PYTHON) | ~self._as_given(init, limits)
         redo[n[~(err <= r.tol * r.scale)]] = True
         res = res.copy()
         res[n, k] = err  # the whole robot's error (the C measured the moved target's)
         Q[~valid] = 0.0
         return (Q, valid, ls, res, cont), redo
+
+    def _as_given_one(self, given, limits: bool) -> bool:
+        """:meth:`_as_given` of one target's free values (floats) on scalars: fast.represent leaves a
+        revolute value alone exactly when it lies in (-pi + PI_SNAP, pi], and with limits any value
+        exactly when it lies inside them (else it takes an alias, a clamp or none)."""
+        for (_, _, revolute, lo, hi), x in zip(self.free, given):
+            if revolute and not -math.pi + _fk.PI_SNAP < x <= math.pi:
+                return False
+            if limits and not lo <= x <= hi:
+                return False
+        return True
+
+    def one(self, goals, given, limits: bool):
+        """``(q, residual, ls, continuum)`` of one checked goal (1, 4, 4) with free values ``given``
+        (floats), the rows :meth:`many` gives it; None where :meth:`many` must decide (the C hands the
+        target back, a free value is not returned as given, an exact row misses on the whole robot).
+        One pose on :meth:`many`'s (N, K, n) arrays cost ~5x the C call (docs/design.md section 14)."""
+        if not self._as_given_one(given, limits):
+            return None
+        r = self.robot
+        init = np.full((1, len(r.kinds)), np.nan)
+        for (_, col, _, _, _), x in zip(self.free, given):
+            init[0, col] = x
+        found = self.native.one(self.split.targets(goals, init)[0], (), limits)
+        if found is None:
+            return None
+        q6, res, ls, cont = found
+        Q = np.zeros((len(q6), len(r.joint_names)))
+        Q[:, self.positions] = q6
+        for (pos, _, _, _, _), x in zip(self.free, given):
+            Q[:, pos] = x
+        exact = ~ls
+        err = r.error(self.fk(Q[exact] @ r.A.T + r.B), goals)
+        if not (err <= r.tol * r.scale).all():
+            return None
+        res[exact] = err  # the whole robot's error (the C measured the moved target's)
+        return Q, res, ls, cont
