@@ -230,11 +230,12 @@ class Solver:
         r = self.robot
         fe = self.free_ends_native()
         if fe is not None:
-            goals, Td, init = self._one_target(T, free)
             given = _plain_free(free, len(r.free))
-            found = None if given is None else fe.one(goals, given, limits)
-            if found is not None:
-                return found[0][~found[2]] if exact_only else found
+            if given is not None:  # the scalar route (NativeFreeEnds.one), else the batch form's
+                found = fe.one(targets.valid_targets(r, np.asarray(T, dtype=float)[None])[0], given, limits)
+                if found is not None:
+                    return found[0][~found[2]] if exact_only else found
+            goals, Td, init = self._one_target(T, free)
             parts = self._free_ends_batch(goals, Td, init, np.array([""], dtype=object), limits)
             return _unpack(parts, exact_only)
         native = self.native_chain()

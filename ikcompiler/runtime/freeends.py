@@ -33,9 +33,12 @@ class FreeEnds:
     def targets(self, goals, init) -> np.ndarray:
         """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init."""
         r = self.robot
-        P_inv = self._inverse_before(-init[:, self.before[::-1]])
-        S_inv = self._inverse_after(-init[:, self.after[::-1]])
-        return P_inv @ goals @ r.home_inv @ S_inv @ r.home
+        moved = goals
+        if self.before:
+            moved = self._inverse_before(-init[:, self.before[::-1]]) @ moved
+        if self.after:  # M^-1 S^-1 M: none at all without free joints after the solved ones
+            moved = moved @ r.home_inv @ self._inverse_after(-init[:, self.after[::-1]]) @ r.home
+        return moved
 
     def rows(self, Q, init_rows) -> np.ndarray:
         """Rows of every chain joint: the solved joints' values Q (M, 6), the free ones from init_rows."""
