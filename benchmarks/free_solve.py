@@ -1,9 +1,9 @@
 """Single-pose ``solve`` of chains with a free joint: its time against the C call under it, and, with
-``--against DIR``, the same poses on another checkout: the time before/after and the rows bit for bit.
+``--against DIR``, the same poses on another checkout: the time before/after and the rows compared.
 
 One command::
 
-    python benchmarks/free_solve.py [--against DIR] [--cases NAME ...] [--poses N]
+    python benchmarks/free_solve.py [--against DIR] [--atol TOL] [--cases NAME ...] [--poses N]
 
 Why: a free joint's value comes back as given (dispatch ``_free_as_given``); done on the batch arrays
 for one pose, that bookkeeping cost five times panda's C solve (docs/design.md section 14 item 6).
@@ -14,11 +14,17 @@ time, fastest of 3 a pose, so the ratio of the two stays readable under load.
 Cases ``ROBOT[_eps]_jK``: a zoo robot with its K-th joint free, ``_eps`` perturbed by 1e-6 of its size
 (``configs.perturbed``, seed 7): panda with its last joint free (as special_poses.py compiles it), the
 same perturbed, and two 6R arms with one joint free (kr6_r700's last, ur5's first).  (panda with its
-third or first joint free is a general 6R on the Python path: 1-7 ms a solve, the same rows.)  Poses: ``--poses`` random joint vectors inside the
-limits (seed 7, as special_poses.py), as many at special angles ({0, +-pi/2, pi}), and a tenth as many
-with the free value outside its limits.  Compared, bit for bit (``np.array_equal``): ``solve`` with and
-without limits, and ``solve_info``'s rows, residuals and flags.  Exits 1 when a row differs.  Writes
-``benchmarks/results/free_solve.md``; progress to stderr.
+third or first joint free is a general 6R on the Python path: 1-7 ms a solve, the same rows.)  Cases
+of :data:`ARMS`: 7-joint arms of the robot-description packages (the robots extra) compiled by
+``configs.compile_chain``, which gives them a free end joint and the general 6R elimination (baxter's
+left arm, rtb-data's iiwa14, tiago perturbed by 1e-3, xarm7); their *C call* is the elimination of the
+six solved joints on the moved target (``NativeFreeEnds.native.exact``).  Poses: ``--poses`` random
+joint vectors inside the limits (seed 7, as special_poses.py), as many at special angles ({0, +-pi/2,
+pi}), and a tenth as many with the free value outside its limits.  Compared: ``solve`` with and
+without limits, and ``solve_info``'s rows, residuals and flags, bit for bit (``np.array_equal``), or
+with ``--atol`` as solution sets (a change of the moved target by an ulp may reorder rows of equal
+residual or turn pi into -pi).  Exits 1 when a row differs.  Writes ``benchmarks/results/free_solve.md``;
+progress to stderr.
 """
 
 from __future__ import annotations
@@ -121,7 +127,8 @@ def log(msg: str) -> None:
 
 def run(root: Path, case: str, poses: int, out: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(root)}
-    subprocess.run(["nice", sys.executable, "-c", SOLVE.replace("__ARMS__", repr(ARMS)), str(root), case, str(poses), str(out)], env=env,
+    source = SOLVE.replace("__ARMS__", repr(ARMS))
+    subprocess.run(["nice", sys.executable, "-c", source, str(root), case, str(poses), str(out)], env=env,
                    check=True, capture_output=True, text=True)
     with np.load(out) as data:
         return {k: data[k] for k in data.files}

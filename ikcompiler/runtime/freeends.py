@@ -4,7 +4,11 @@ With ``P`` the motion of the free joints before the six solved ones and ``S`` of
 equation ``P X(q) S M = T`` is the 6R problem ``X(q) M = P^-1 T M^-1 S^-1 M`` of fixed twists: the free
 values move the target, not the robot.  :class:`FreeEnds` maps targets to that problem and its rows
 back (the free values inserted); :class:`NativeFreeEnds` runs the C elimination of the six solved
-joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot.
+joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot;
+one pose (``solve``, ``solve_info``) takes :meth:`NativeFreeEnds.one`, the same rows without the batch
+arrays.  The whole-robot check and the moved targets multiply per-joint constants computed once
+(``screw.FixedTwistsFK``): fk_batch's ~40 us a joint was most of a single solve (docs/design.md
+section 14, "Single pose with free end joints").
 """
 
 from __future__ import annotations
@@ -61,8 +65,8 @@ class NativeFreeEnds:
         self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
         self.fk = FixedTwistsFK(robot.twists, robot.home)  # the whole robot's check of the C's rows
         # (JOINT_NAMES position, chain column, revolute, lower, upper) of each free joint, as Python numbers
-        self.free = [(int(pos), robot.independent[pos], robot.joint_types[pos] == "R", float(robot.lower[pos]),
-                      float(robot.upper[pos])) for pos in robot.free]
+        self.free = [(int(pos), robot.independent[pos], robot.joint_types[pos] == "R",
+                      float(robot.lower[pos]), float(robot.upper[pos])) for pos in robot.free]
 
     @classmethod
     def bind(cls, robot):
