@@ -57,7 +57,7 @@ REPEATS = 3
 SOLVE = r"""
 import sys, time
 import numpy as np
-root, case, poses, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+root, case, poses, out, reps = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
 sys.path.insert(0, root)
 from ikcompiler import configs, load_robot
 from ikcompiler.compiler import compile_robot
@@ -92,7 +92,7 @@ F = Q[:, col].copy()
 outside = rng.choice(len(F), max(1, poses // 10), replace=False)
 F[outside] = np.where(outside % 2, module.UPPER[col] + 0.25, module.LOWER[col] - 0.25)
 
-def many(fn, *args, reps=20):  # process_time ticks are coarse: a block of calls, per call
+def many(fn, *args):  # process_time ticks are coarse: a block of calls, per call
     t0 = time.process_time()
     for _ in range(reps):
         fn(*args)
@@ -125,10 +125,11 @@ def log(msg: str) -> None:
     print(f"[free_solve {time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
 
 
-def run(root: Path, case: str, poses: int, out: Path) -> dict:
+def run(root: Path, case: str, poses: int, out: Path, reps: int = 20) -> dict:
     env = {**os.environ, "PYTHONPATH": str(root)}
     source = SOLVE.replace("__ARMS__", repr(ARMS))
-    subprocess.run(["nice", sys.executable, "-c", source, str(root), case, str(poses), str(out)], env=env,
+    subprocess.run(["nice", sys.executable, "-c", source, str(root), case, str(poses), str(out), str(reps)],
+                   env=env,
                    check=True, capture_output=True, text=True)
     with np.load(out) as data:
         return {k: data[k] for k in data.files}
@@ -181,6 +182,8 @@ def main(argv=None) -> int:
     ap.add_argument("--against", help="another checkout: its times and rows beside this one's")
     ap.add_argument("--cases", nargs="*", default=list(CASES))
     ap.add_argument("--poses", type=int, default=150, help="random poses (as many special ones)")
+    ap.add_argument("--reps", type=int, default=20,
+                    help="calls a timed block (fewer: faster on arms whose special poses take ms)")
     ap.add_argument("--atol", type=float, default=0.0,
                     help="compare solution sets to this (radians, lengths), not bit for bit (0)")
     ap.add_argument("--out", default=str(RESULTS / "free_solve.md"))
@@ -192,10 +195,11 @@ def main(argv=None) -> int:
     lines = ["# Single-pose solve with a free joint", "",
              f"Written by `python benchmarks/free_solve.py --poses {opts.poses}"
              + (f" --against {opts.against}" if opts.against else "")
-             + (f" --atol {opts.atol:g}" if opts.atol else "") + "`: "
+             + (f" --atol {opts.atol:g}" if opts.atol else "")
+             + (f" --reps {opts.reps}" if opts.reps != 20 else "") + "`: "
              f"{2 * opts.poses} poses a case ({opts.poses} random, {opts.poses} special, "
              f"{max(1, opts.poses // 10)} of them with the free value outside its limits); CPU time a "
-             "call, fastest of 3 blocks of 20 calls, medians over the poses; *C call*: "
+             f"call, fastest of 3 blocks of {opts.reps} calls, medians over the poses; *C call*: "
              "`NativeChain.exact` alone; *ratio*: solve over the C call.", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * 3 + "---:|" * (len(head) - 3)]
     failed = False
@@ -203,13 +207,14 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="ikc_free_") as tmp:
         for case in opts.cases:
             log(f"{case}: this checkout")
-            now = run(ROOT, case, opts.poses, Path(tmp) / "now.npz")
+            now = run(ROOT, case, opts.poses, Path(tmp) / "now.npz", opts.reps)
             s, c = 1e6 * np.median(now["t_solve"]), 1e6 * np.median(now["t_c"]) if len(now["t_c"]) else np.nan
             cells = [case + (f" ({now['free']} free)" if case in ARMS else ""), str(now["method"]),
                      str(now["path"]), f"{s:.1f}", f"{c:.1f}", f"{s / c:.2f}"]
             if opts.against:
                 log(f"{case}: {opts.against}")
-                before = run(Path(opts.against).resolve(), case, opts.poses, Path(tmp) / "before.npz")
+                before = run(Path(opts.against).resolve(), case, opts.poses, Path(tmp) / "before.npz",
+                             opts.reps)
                 if not np.array_equal(now["T"], before["T"]) or not np.array_equal(now["F"], before["F"]):
                     raise SystemExit(f"{case}: the two checkouts sampled different poses")
                 bs = 1e6 * np.median(before["t_solve"])
