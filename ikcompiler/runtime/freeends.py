@@ -6,9 +6,9 @@ values move the target, not the robot.  :class:`FreeEnds` maps targets to that p
 back (the free values inserted); :class:`NativeFreeEnds` runs the C elimination of the six solved
 joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot;
 one pose (``solve``, ``solve_info``) takes :meth:`NativeFreeEnds.one`, the same rows without the batch
-arrays.  The whole-robot check and the moved targets multiply per-joint constants computed once
-(``screw.FixedTwistsFK``): fk_batch's ~40 us a joint was most of a single solve (docs/design.md
-section 14, "Single pose with free end joints").
+arrays.  The whole-robot check multiplies per-joint constants computed once (``screw.FixedTwistsFK``):
+fk_batch's ~40 us a joint was most of a single solve (docs/design.md section 14, "Single pose with
+free end joints").
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from subproblems import fast as _fk
+from subproblems import plan_runtime as _rt
 from subproblems.screw import FixedTwistsFK
 
 
@@ -30,19 +31,17 @@ class FreeEnds:
         self.solved = [j for j in range(len(robot.kinds)) if j not in free]
         self.before = [j for j in free if j < self.solved[0]]
         self.after = [j for j in free if j > self.solved[-1]]
-        # P^-1 and S^-1 as products of the free joints' exponentials at minus their values, last first
-        self._inverse_before = FixedTwistsFK(robot.twists[self.before[::-1]])
-        self._inverse_after = FixedTwistsFK(robot.twists[self.after[::-1]])
 
     def targets(self, goals, init) -> np.ndarray:
-        """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init."""
-        r = self.robot
-        moved = goals
-        if self.before:
-            moved = self._inverse_before(-init[:, self.before[::-1]]) @ moved
-        if self.after:  # M^-1 S^-1 M: none at all without free joints after the solved ones
-            moved = moved @ r.home_inv @ self._inverse_after(-init[:, self.after[::-1]]) @ r.home
-        return moved
+        """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init.
+        Kept bit for bit as first written (fk_batch, inverse_transform, the identity factors): at special
+        poses the elimination's rows move with the last bits of its target (xarm7: a change of 1e-16
+        moved a row by 7e-10, and another pose had 10 rows instead of 11; docs/design.md section 14)."""
+        r, N = self.robot, len(goals)
+        eye = np.broadcast_to(np.eye(4), (N, 4, 4))
+        P = _rt.fk_batch(r.twists[self.before], init[:, self.before]) if self.before else eye
+        S = _rt.fk_batch(r.twists[self.after], init[:, self.after]) if self.after else eye
+        return _rt.inverse_transform(P) @ goals @ r.home_inv @ _rt.inverse_transform(S) @ r.home
 
     def rows(self, Q, init_rows) -> np.ndarray:
         """Rows of every chain joint: the solved joints' values Q (M, 6), the free ones from init_rows."""
