@@ -299,6 +299,48 @@ def test_a_free_joint_at_either_end_leaves_a_general_6r_problem(free):
         assert gap.min(axis=1).max() < 1e-9, n
 
 
+@pytest.mark.parametrize("free", ["j1", "j7"])
+def test_one_pose_with_a_free_end_joint_gives_the_batch_forms_rows(free):
+    # solve / solve_info of one pose take NativeFreeEnds.one (scalars, no (N, K, n) arrays); the batch
+    # form takes NativeFreeEnds.many: the same rows, residuals and flags bit for bit, at random and
+    # special poses, free values outside the limits and at -pi (not its own representative)
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=(free,))
+    k = chain.independent_names.index(free)
+    Q = np.concatenate([np.random.default_rng(8).uniform(-math.pi, math.pi, size=(20, 7)),
+                        verify_mod.sample_configurations(chain, 20, seed=9, special=1.0)])
+    T = chain.fk_batch(Q)
+    F = Q[:, k].copy()
+    F[:3] = (3.5, -3.5, -math.pi)
+    for limits in (True, False):
+        S, V, LS, R, C = module.solve_batch_info(T, F, limits=limits)
+        for n in range(len(Q)):
+            info = module.solve_info(T[n], float(F[n]), limits=limits)
+            v = V[n]
+            for got, want in ((info.q, S[n][v]), (info.residual, R[n][v]), (info.ls, LS[n][v]),
+                              (info.continuum, C[n][v])):
+                np.testing.assert_array_equal(got, want, err_msg=f"pose {n}, limits {limits}")
+            np.testing.assert_array_equal(module.solve(T[n], float(F[n]), limits=limits), S[n][v & ~LS[n]])
+        assert not (limits and V[:2].any())  # free values outside the limits: no row with them
+
+
+def test_a_free_end_value_as_given_on_scalars_agrees_with_the_batch_form():
+    # NativeFreeEnds._as_given_one (one pose, Python floats) against _as_given (fast.represent on arrays)
+    from subproblems import fast
+
+    module = compile_robot(_random_7r(3), free=("j7",))
+    fe = module._SOLVER.free_ends_native()
+    pi, snap = math.pi, fast.PI_SNAP
+    values = [0.0, 1.0, -1.0, pi, -pi, np.nextafter(pi, 4), np.nextafter(-pi, 0), -pi + snap,
+              np.nextafter(-pi + snap, 0), np.nextafter(-pi + snap, 4), 3.5, -3.5, 7.0, 2 * pi, -2 * pi]
+    column = module._SOLVER.robot.independent[module._SOLVER.robot.free[0]]
+    for limits in (True, False):
+        for x in values:
+            init = np.full((1, 7), np.nan)
+            init[0, column] = x
+            assert fe._as_given_one([float(x)], limits) == bool(fe._as_given(init, limits)[0]), (x, limits)
+
+
 @pytest.mark.parametrize("free", ["j3", "j4"])
 def test_a_free_joint_between_solved_ones_folds_the_six_twists(free):
     # E = exp(xi_f q_f): the twists after the free joint become Ad_E xi_k, one 6R chain per free value

@@ -228,7 +228,13 @@ class Solver:
 
     def _rows(self, T, free, limits, exact_only=False):
         r = self.robot
-        if self.free_ends_native() is not None:
+        fe = self.free_ends_native()
+        if fe is not None:
+            given = _plain_free(free, len(r.free))
+            if given is not None:  # the scalar route (NativeFreeEnds.one), else the batch form's
+                found = fe.one(targets.valid_targets(r, np.asarray(T, dtype=float)[None])[0], given, limits)
+                if found is not None:
+                    return found[0][~found[2]] if exact_only else found
             goals, Td, init = self._one_target(T, free)
             parts = self._free_ends_batch(goals, Td, init, np.array([""], dtype=object), limits)
             return _unpack(parts, exact_only)

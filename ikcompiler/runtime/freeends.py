@@ -4,15 +4,22 @@ With ``P`` the motion of the free joints before the six solved ones and ``S`` of
 equation ``P X(q) S M = T`` is the 6R problem ``X(q) M = P^-1 T M^-1 S^-1 M`` of fixed twists: the free
 values move the target, not the robot.  :class:`FreeEnds` maps targets to that problem and its rows
 back (the free values inserted); :class:`NativeFreeEnds` runs the C elimination of the six solved
-joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot.
+joints on the moved targets and takes the Python path wherever a row does not hold on the whole robot;
+one pose (``solve``, ``solve_info``) takes :meth:`NativeFreeEnds.one`, the same rows without the batch
+arrays.  The whole-robot check multiplies per-joint constants computed once (``screw.FixedTwistsFK``):
+fk_batch's ~40 us a joint was most of a single solve (docs/design.md section 14, "Single pose with
+free end joints").
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
+from subproblems.screw import FixedTwistsFK
 
 
 class FreeEnds:
@@ -26,7 +33,10 @@ class FreeEnds:
         self.after = [j for j in free if j > self.solved[-1]]
 
     def targets(self, goals, init) -> np.ndarray:
-        """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init."""
+        """The 6R problem's targets ``P^-1 T M^-1 S^-1 M`` (N, 4, 4) of goals T with free values in init.
+        Kept bit for bit as first written (fk_batch, inverse_transform, the identity factors): at special
+        poses the elimination's rows move with the last bits of its target (xarm7: a change of 1e-16
+        moved a row by 7e-10, and another pose had 10 rows instead of 11; docs/design.md section 14)."""
         r, N = self.robot, len(goals)
         eye = np.broadcast_to(np.eye(4), (N, 4, 4))
         P = _rt.fk_batch(r.twists[self.before], init[:, self.before]) if self.before else eye
@@ -52,6 +62,10 @@ class NativeFreeEnds:
         self.robot = robot
         self.native = native
         self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
+        self.fk = FixedTwistsFK(robot.twists, robot.home)  # the whole robot's check of the C's rows
+        # (JOINT_NAMES position, chain column, revolute, lower, upper) of each free joint, as Python numbers
+        self.free = [(int(pos), robot.independent[pos], robot.joint_types[pos] == "R",
+                      float(robot.lower[pos]), float(robot.upper[pos])) for pos in robot.free]
 
     @classmethod
     def bind(cls, robot):
@@ -99,10 +113,47 @@ class NativeFreeEnds:
             Q[:, :, pos] = init[:, r.independent[pos], None]
         n, k = np.nonzero(valid & ~ls)
         full = Q[n, k] @ r.A.T + r.B
-        err = r.error(_rt.fk_batch(r.twists, full, r.home), goals[n])
+        err = r.error(self.fk(full), goals[n])
         redo = (code == PYTHON) | ~self._as_given(init, limits)
         redo[n[~(err <= r.tol * r.scale)]] = True
         res = res.copy()
         res[n, k] = err  # the whole robot's error (the C measured the moved target's)
         Q[~valid] = 0.0
         return (Q, valid, ls, res, cont), redo
+
+    def _as_given_one(self, given, limits: bool) -> bool:
+        """:meth:`_as_given` of one target's free values (floats) on scalars: fast.represent leaves a
+        revolute value alone exactly when it lies in (-pi + PI_SNAP, pi], and with limits any value
+        exactly when it lies inside them (else it takes an alias, a clamp or none)."""
+        for (_, _, revolute, lo, hi), x in zip(self.free, given):
+            if revolute and not -math.pi + _fk.PI_SNAP < x <= math.pi:
+                return False
+            if limits and not lo <= x <= hi:
+                return False
+        return True
+
+    def one(self, goals, given, limits: bool):
+        """``(q, residual, ls, continuum)`` of one checked goal (1, 4, 4) with free values ``given``
+        (floats), the rows :meth:`many` gives it; None where :meth:`many` must decide (the C hands the
+        target back, a free value is not returned as given, an exact row misses on the whole robot).
+        One pose on :meth:`many`'s (N, K, n) arrays cost ~5x the C call (docs/design.md section 14)."""
+        if not self._as_given_one(given, limits):
+            return None
+        r = self.robot
+        init = np.full((1, len(r.kinds)), np.nan)
+        for (_, col, _, _, _), x in zip(self.free, given):
+            init[0, col] = x
+        found = self.native.one(self.split.targets(goals, init)[0], (), limits)
+        if found is None:
+            return None
+        q6, res, ls, cont = found
+        Q = np.zeros((len(q6), len(r.joint_names)))
+        Q[:, self.positions] = q6
+        for (pos, _, _, _, _), x in zip(self.free, given):
+            Q[:, pos] = x
+        exact = ~ls
+        err = r.error(self.fk(Q[exact] @ r.A.T + r.B), goals)
+        if not (err <= r.tol * r.scale).all():
+            return None
+        res[exact] = err  # the whole robot's error (the C measured the moved target's)
+        return Q, res, ls, cont
