@@ -163,11 +163,15 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
         load_module,
         plan_source,
     )
+    from ikcompiler.errors import RedundantChainError
 
     t0 = time.perf_counter()
 
     def compiled(free, fold: bool):
-        plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
+        try:
+            plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
+        except RedundantChainError as exc:  # as the refusal says: its dependent joints declared free
+            plan = compile_plan(chain, target="pose", free=tuple(free) + exc.dependent, fold=fold, **options)
         return load_module(plan_source(plan, chain, **options), _module_name(chain.name))
 
     first = general = folded = snapped_far = None
@@ -178,7 +182,7 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
         if first is None:
             first = (module, free)
         if module.METHOD == "closed-form" and not far:
-            return Compiled(module, "pose", free, time.perf_counter() - t0)
+            return Compiled(module, "pose", tuple(module.FREE_JOINTS), time.perf_counter() - t0)
         if module.METHOD == "closed-form" and snapped_far is None:
             # beyond tolerances.SNAP_GENERAL the policy wants the elimination, which this free joint
             # (between solved ones, not folded here) keeps from it: another choice may allow it
@@ -193,7 +197,7 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
             folded = (module, free)
             break
     module, free = general or snapped_far or folded or first
-    return Compiled(module, "pose", free, time.perf_counter() - t0)
+    return Compiled(module, "pose", tuple(module.FREE_JOINTS), time.perf_counter() - t0)
 
 
 def _snapped_far(chain: Chain) -> bool:
