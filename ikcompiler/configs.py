@@ -154,7 +154,10 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
     elimination), else the first with a free joint folded into it (Python only: runtime/freefold.py;
     baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms with the elbow), else the
     first.  ``first_only``: the first choice alone (the third joint, as a user
-    naming it free; ``benchmarks/real_robots.py --first-free``)."""
+    naming it free; ``benchmarks/real_robots.py --first-free``).  A rank-deficient chain the compiler
+    refuses (errors.RedundantChainError) is compiled with the dependent joints it names free as well,
+    as the refusal tells a user to (docs/design.md section 5, "Rank-deficient chains"); ``free`` of the
+    result is the module's FREE_JOINTS."""
     from ikcompiler.compiler import (
         GENERAL6,
         _module_name,
