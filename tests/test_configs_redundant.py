@@ -75,3 +75,10 @@ def test_a_full_rank_chain_has_no_dependent_joint(kinds, seed):
     chain = configs.modular_chain(kinds, seed=seed)
     assert configs.generic_rank(chain) == chain.dof
     assert dependent_joints(chain, "pose") == ()
+
+
+def test_joints_past_the_targets_rows_are_dependent():
+    """A position target has three rows: of a full-rank 6R arm the last three joints add no rank."""
+    chain = configs.random_6r_chain(4)
+    assert dependent_joints(chain, "pose") == ()
+    assert dependent_joints(chain, "position") == ("j4", "j5", "j6")

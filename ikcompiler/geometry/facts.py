@@ -118,7 +118,7 @@ def dependent_joints(chain, target: str, free=(), tol: float = tol.DEPENDENT_JOI
         kept: list[int] = []
         for k in solved:
             s = np.linalg.svd(Jq[:, kept + [k]], compute_uv=False)
-            if s[-1] > tol * max(s[0], 1.0):
+            if (s > tol * max(s[0], 1.0)).sum() > len(kept):  # a rank more (none past the rows)
                 kept.append(k)
         if len(kept) > len(best):
             best = kept
