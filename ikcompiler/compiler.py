@@ -151,7 +151,7 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol, fold and FOLD_FREE)
         if general is not None:
             return general
-        dependent = dependent_joints(chain, target, free)
+        dependent = dependent_joints(chain, target, free, keep_first=(VIRTUAL_ROLL,))
         if dependent:  # a search on a continuum of solutions does not end: refuse, naming the joints
             raise redundant_chain_error(chain, target, free, dependent)
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
@@ -313,7 +313,7 @@ def redundant_chain_error(chain: Chain, target: str, free, dependent) -> Redunda
     """The compile-time refusal of a rank-deficient chain no closed form or general 6R covers
     (docs/design.md section 5, "Rank-deficient chains"): which joints are dependent and what to do."""
     unknown = chain.dof - len(free)
-    names = " ".join(dependent)
+    names = " ".join((*free, *dependent))  # with those already free
     return RedundantChainError(
         f"{chain.name} is redundant for a {target} target: its {unknown} solved joints have generic "
         f"Jacobian rank {unknown - len(dependent)}, joint(s) {', '.join(dependent)} dependent on the "

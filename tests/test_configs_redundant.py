@@ -82,3 +82,11 @@ def test_joints_past_the_targets_rows_are_dependent():
     chain = configs.random_6r_chain(4)
     assert dependent_joints(chain, "pose") == ()
     assert dependent_joints(chain, "position") == ("j4", "j5", "j6")
+
+
+def test_joints_kept_first_are_not_named_dependent():
+    """The compiler keeps position+direction's virtual roll first (the user cannot name it free): of
+    two dependent joints the other one is named."""
+    chain = configs.modular_chain("RRRRRR", seed=0)
+    assert dependent_joints(chain, "pose") == ("q3", "q5")
+    assert dependent_joints(chain, "pose", keep_first=("q5",)) == ("q3", "q4")
