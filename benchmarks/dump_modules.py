@@ -9,8 +9,8 @@ shadow_index position, shadow_thumb position + direction, puma560 orientation); 
 6R solver turned off (the 1-D search fallback); and two drawn general chains, TRRRRR (the 2-D search
 fallback) and TTTTR (rank 4 of 5: refused with RedundantChainError, its text written as the case's
 ``.error.txt``; tests/test_steps.py turns the refusal off to keep the numerical fallback covered);
-four zoo arms perturbed by 1e-6 of their size (snapped plans); with ``--configurations`` also the configuration zoo's 126 joint
-strings in both geometries, seed 0 (``ikcompiler.configs``; a few minutes).  Run it with the checkout to
+four zoo arms perturbed by 1e-6 of their size (snapped plans); with ``--configurations`` also the
+configuration zoo's 126 joint strings in both geometries, seed 0 (``ikcompiler.configs``; a few minutes).  Run it with the checkout to
 compare installed or on PYTHONPATH: it imports the `ikcompiler` found first (and prints where).
 """
 
