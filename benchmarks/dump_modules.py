@@ -10,8 +10,9 @@ shadow_index position, shadow_thumb position + direction, puma560 orientation); 
 fallback) and TTTTR (rank 4 of 5: refused with RedundantChainError, its text written as the case's
 ``.error.txt``; tests/test_steps.py turns the refusal off to keep the numerical fallback covered);
 four zoo arms perturbed by 1e-6 of their size (snapped plans); with ``--configurations`` also the
-configuration zoo's 126 joint strings in both geometries, seed 0 (``ikcompiler.configs``; a few minutes).  Run it with the checkout to
-compare installed or on PYTHONPATH: it imports the `ikcompiler` found first (and prints where).
+configuration zoo's 126 joint strings in both geometries, seed 0 (``ikcompiler.configs``; a few
+minutes).  Run it with the checkout to compare installed or on PYTHONPATH: it imports the
+`ikcompiler` found first (and prints where).
 """
 
 from __future__ import annotations
