@@ -7,10 +7,12 @@ compiler's behaviour (docs/design.md section 12) shows up as an empty `diff -r`.
 Cases: every zoo robot with its default target; the README's variants (panda with a free joint,
 shadow_index position, shadow_thumb position + direction, puma560 orientation); jaco with the general
 6R solver turned off (the 1-D search fallback); and two drawn general chains, TRRRRR (the 2-D search
-fallback) and TTTTR (no closed form, no search: the numerical fallback); four zoo arms perturbed by
-1e-6 of their size (snapped plans); with ``--configurations`` also the configuration zoo's 126 joint
-strings in both geometries, seed 0 (``ikcompiler.configs``; a few minutes).  Run it with the checkout to
-compare installed or on PYTHONPATH: it imports the `ikcompiler` found first (and prints where).
+fallback) and TTTTR (rank 4 of 5: refused with RedundantChainError, its text written as the case's
+``.error.txt``; tests/test_steps.py turns the refusal off to keep the numerical fallback covered);
+four zoo arms perturbed by 1e-6 of their size (snapped plans); with ``--configurations`` also the
+configuration zoo's 126 joint strings in both geometries, seed 0 (``ikcompiler.configs``; a few
+minutes).  Run it with the checkout to compare installed or on PYTHONPATH: it imports the
+`ikcompiler` found first (and prints where).
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ def cases(configurations: bool = False):
     for name, target, free in VARIANTS:
         yield f"{name}_{target.replace('+', '_')}", (lambda n=name: load_robot(n)), target, free, True
     yield "jaco_search", (lambda: load_robot("jaco")), "pose", (), False
-    for kinds in ("TRRRRR", "TTTTR"):  # the 2-D search fallback; the numerical fallback
+    for kinds in ("TRRRRR", "TTTTR"):  # the 2-D search fallback; a rank-deficient chain refused
         yield f"general_{kinds.lower()}", (lambda k=kinds: random_chain(k)), "pose", (), True
     for name in ("puma560", "ur5", "kr6_r700", "stanford"):  # calibrated: snapped plans (_PLAN_TWISTS)
         yield f"{name}_perturbed", (lambda n=name: perturbed(load_robot(n), 1e-6)), "pose", (), True

@@ -36,10 +36,13 @@ GOAL_MB = 2048.0
 ROBOTS = {
     "modular RRRRT (seed 0)": "modular",
     "general 6R (random_6r_chain(4)), general6 off": "random6r",
-    "pybullet pendulum5 (C search)": "pendulum",
-    "pybullet pendulum5, NATIVE off (Python search)": "pendulum-python",
+    "pybullet pendulum5 perturbed 1e-6 (C search)": "pendulum",
+    "pybullet pendulum5 perturbed 1e-6, NATIVE off (Python search)": "pendulum-python",
 }
-PENDULUM = "pybullet_data/pendulum5.urdf:link4"  # a real 2-D search robot (redundant: rows flagged)
+# a real 2-D search robot: pendulum5 perturbed by 1e-6 (seed 7), near-redundant, rows flagged; the exact
+# file (rank 3 of 5) is refused by the compiler and, its dependent joints free, closed form
+# (docs/design.md section 5, "Rank-deficient chains")
+PENDULUM = "pybullet_data/pendulum5.urdf:link4"
 MARK_BEGIN = "<!-- search_memory.py: begin -->"
 MARK_END = "<!-- search_memory.py: end -->"
 
@@ -53,7 +56,7 @@ def _chain(kind: str):
         from ikcompiler import robotdb
 
         entry = next(e for e in robotdb.discover().chains if e.ident.endswith(PENDULUM))
-        return entry.load(), {"NATIVE": kind == "pendulum"}
+        return configs.perturbed(entry.load(), 1e-6, seed=7), {"NATIVE": kind == "pendulum"}
     compiler.USE_GENERAL6 = False
     return configs.random_6r_chain(4), {}
 

@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ikcompiler.codegen import generate
-from ikcompiler.errors import CompileError, FreeJointError
+from ikcompiler.errors import CompileError, FreeJointError, RedundantChainError
 from ikcompiler.geometry import Tolerance, analyse
-from ikcompiler.geometry.facts import conditioned_rank, configurations, record_step_facts
+from ikcompiler.geometry.facts import conditioned_rank, configurations, dependent_joints, record_step_facts
 from ikcompiler.geometry.snap import REDUCED_RUN_FACTOR, snap_chain, snap_move
 from ikcompiler.model import Chain, Joint
 from ikcompiler.model.fold import fold_slides
@@ -151,6 +151,9 @@ def compile_plan(chain: Chain, *, target: str = "pose", free=(), tol: Tolerance 
         general = _general6_plan(chain, target, free, geometry, notes, search_1d, tol, fold and FOLD_FREE)
         if general is not None:
             return general
+        dependent = dependent_joints(chain, target, free, keep_first=(VIRTUAL_ROLL,))
+        if dependent:  # a search on a continuum of solutions does not end: refuse, naming the joints
+            raise redundant_chain_error(chain, target, free, dependent)
         found = _search_fallback(chain, ctx, couplings, full_lower, full_upper, start)
         if found is not None:
             return _search_plan(chain, target, free, geometry, notes, found)
@@ -304,6 +307,21 @@ def _general6_plan(chain: Chain, target: str, free, geometry, notes, search_1d, 
     if verdict.keep_search:
         return dataclasses.replace(searched, notes=(*notes, verdict.note))
     return general_plan((verdict.note,))
+
+
+def redundant_chain_error(chain: Chain, target: str, free, dependent) -> RedundantChainError:
+    """The compile-time refusal of a rank-deficient chain no closed form or general 6R covers
+    (docs/design.md section 5, "Rank-deficient chains"): which joints are dependent and what to do."""
+    unknown = chain.dof - len(free)
+    names = " ".join((*free, *dependent))  # with those already free
+    return RedundantChainError(
+        f"{chain.name} is redundant for a {target} target: its {unknown} solved joints have generic "
+        f"Jacobian rank {unknown - len(dependent)}, joint(s) {', '.join(dependent)} dependent on the "
+        "others (coaxial or parallel axes: a continuum of solutions at every pose), and no closed-form "
+        f"or general 6R plan covers it; declare them free (--free {names}; compile_plan(free=...)), "
+        "whose values are then given at solve time, or choose a target of fewer DOF",
+        dependent=tuple(dependent),
+    )
 
 
 def near_redundant_notes(chain: Chain, target: str, free) -> tuple[str, ...]:

@@ -154,7 +154,10 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
     elimination), else the first with a free joint folded into it (Python only: runtime/freefold.py;
     baxter's arms: 0.7 ms median a pose with the last joint free, 5-10 ms with the elbow), else the
     first.  ``first_only``: the first choice alone (the third joint, as a user
-    naming it free; ``benchmarks/real_robots.py --first-free``)."""
+    naming it free; ``benchmarks/real_robots.py --first-free``).  A rank-deficient chain the compiler
+    refuses (errors.RedundantChainError) is compiled with the dependent joints it names free as well,
+    as the refusal tells a user to (docs/design.md section 5, "Rank-deficient chains"); ``free`` of the
+    result is the module's FREE_JOINTS."""
     from ikcompiler.compiler import (
         GENERAL6,
         _module_name,
@@ -163,11 +166,15 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
         load_module,
         plan_source,
     )
+    from ikcompiler.errors import RedundantChainError
 
     t0 = time.perf_counter()
 
     def compiled(free, fold: bool):
-        plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
+        try:
+            plan = compile_plan(chain, target="pose", free=free, fold=fold, **options)
+        except RedundantChainError as exc:  # as the refusal says: its dependent joints declared free
+            plan = compile_plan(chain, target="pose", free=tuple(free) + exc.dependent, fold=fold, **options)
         return load_module(plan_source(plan, chain, **options), _module_name(chain.name))
 
     first = general = folded = snapped_far = None
@@ -178,7 +185,7 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
         if first is None:
             first = (module, free)
         if module.METHOD == "closed-form" and not far:
-            return Compiled(module, "pose", free, time.perf_counter() - t0)
+            return Compiled(module, "pose", tuple(module.FREE_JOINTS), time.perf_counter() - t0)
         if module.METHOD == "closed-form" and snapped_far is None:
             # beyond tolerances.SNAP_GENERAL the policy wants the elimination, which this free joint
             # (between solved ones, not folded here) keeps from it: another choice may allow it
@@ -193,7 +200,7 @@ def compile_chain(chain: Chain, first_only: bool = False, **options) -> Compiled
             folded = (module, free)
             break
     module, free = general or snapped_far or folded or first
-    return Compiled(module, "pose", free, time.perf_counter() - t0)
+    return Compiled(module, "pose", tuple(module.FREE_JOINTS), time.perf_counter() - t0)
 
 
 def _snapped_far(chain: Chain) -> bool:

@@ -41,6 +41,17 @@ class FreeJointError(IkcError, ValueError):
     """Free joints named wrongly, or the wrong number of free values passed at solve time."""
 
 
+class RedundantChainError(FreeJointError):
+    """A chain whose solved joints are dependent (generic Jacobian rank below their number: a continuum of
+    solutions at every pose) and that no closed form or general 6R elimination covers: a search on it
+    would not end.  ``dependent`` names the joints to declare free (docs/design.md section 5,
+    "Rank-deficient chains")."""
+
+    def __init__(self, message: str, dependent: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.dependent = tuple(dependent)
+
+
 class CompileError(IkcError):
     """No plan could be built; the message says what was tried and why it failed."""
 

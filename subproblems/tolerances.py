@@ -298,6 +298,13 @@ VERIFY_SINGULAR = 1e-7
 #: Its rows whose own smallest singular value is below it are flagged representatives of the snapped
 #: chain's self-motion.  The snap tolerance itself: the same closeness, judged on the Jacobian.
 NEAR_REDUNDANT = SNAP
+#: A solved joint whose size-free Jacobian column adds no singular value above this to the columns
+#: before it, at every sampled configuration, is *dependent* on them: the chain is redundant exactly (a
+#: continuum of solutions at every pose; configs.generic_rank's tolerance).  A chain with dependent
+#: joints that no closed form or general 6R elimination covers is refused with the joints to declare
+#: free (errors.RedundantChainError; docs/design.md section 5, "Rank-deficient chains").  Far below
+#: NEAR_REDUNDANT: a near-redundant chain keeps its plan, its rows flagged.
+DEPENDENT_JOINT = 1e-8
 #: verify: an exact row whose relative error exceeds this is wrong (the structural tolerance).
 VERIFY_WRONG = EXACT
 #: The S2-RR step's two axes are parallel when ``|w1 x w2|`` is at most this in every sampled

@@ -455,25 +455,33 @@ def test_redundant_chains_are_told_apart(catalogue):
 
 def test_near_redundant_rows_are_flagged_where_they_are(catalogue):
     """pendulum5 perturbed by 1e-6 has rank 5, but two singular values of order 1e-6: within the snap
-    tolerance of the redundant chain (docs/design.md section 5, "Near-redundant chains").  Its rows, and
-    the exact file's, are flagged continuum; a perturbed industrial arm is not near-redundant."""
+    tolerance of the redundant chain (docs/design.md section 5, "Near-redundant chains").  Its rows are
+    flagged continuum; a perturbed industrial arm is not near-redundant.  The exact file (rank 3) is
+    refused at compile time with its two dependent joints named (section 5, "Rank-deficient chains"),
+    and declared free as the refusal says it is a full-rank chain whose every sample comes back."""
+    from ikcompiler.compiler import compile_plan
+    from ikcompiler.errors import RedundantChainError
     from ikcompiler.geometry.facts import conditioned_rank
     from ikcompiler.verify import sample_configurations
 
     exact = _entry(catalogue, "pybullet", "pendulum5.urdf", "link4").load()
     near = configs.perturbed(exact, 1e-6, seed=7)
     assert configs.generic_rank(near) == 5 and conditioned_rank(near, "pose") == 3
-    for chain in (exact, near):
-        module = configs.compile_chain(chain).module
-        assert module._NEAR_REDUNDANT and "near-redundant" in module.PLAN
-        Q = sample_configurations(chain, 3, seed=3, special=0.0)
-        _, valid, _, _, cont = module.solve_batch_info(chain.fk_batch(Q))
-        assert valid.any(axis=1).all() and (cont == valid).all()
-        info = module.solve_info(chain.fk(Q[0]))
-        assert len(info.q) and info.continuum.all() and (info.sigma_min < 1e-3).all()
-        if chain is exact:  # its poses are self-motions of the exact chain: verify counts them so
-            rep = verify(exact, module, samples=30, seed=2, special=0.0)
-            assert rep.wrong == 0 and rep.recovered + rep.self_motion == rep.poses, rep.text()
+    module = configs.compile_chain(near).module
+    assert module._NEAR_REDUNDANT and "near-redundant" in module.PLAN
+    Q = sample_configurations(near, 3, seed=3, special=0.0)
+    _, valid, _, _, cont = module.solve_batch_info(near.fk_batch(Q))
+    assert valid.any(axis=1).all() and (cont == valid).all()
+    info = module.solve_info(near.fk(Q[0]))
+    assert len(info.q) and info.continuum.all() and (info.sigma_min < 1e-3).all()
+    with pytest.raises(RedundantChainError) as refused:
+        compile_plan(exact, target="pose")
+    assert len(refused.value.dependent) == 2
+    assert all(name in str(refused.value) for name in refused.value.dependent)
+    module = configs.compile_chain(exact).module
+    assert module.FREE_JOINTS == refused.value.dependent and not module._NEAR_REDUNDANT
+    rep = verify(exact, module, samples=30, seed=2, special=0.0)
+    assert rep.wrong == 0 and rep.recovered == rep.poses, rep.text()
     arm = configs.perturbed(_entry(catalogue, "rtb-data", "irb140.urdf", "tool0").load(), 1e-6, seed=7)
     assert conditioned_rank(arm, "pose") == 6
     assert not configs.compile_chain(arm).module._NEAR_REDUNDANT

@@ -90,3 +90,39 @@ def conditioned_rank(chain, target: str, free=(), tol: float = tol.NEAR_REDUNDAN
     keep = [k for k, name in enumerate(chain.independent_names) if name not in set(free)]
     s = np.linalg.svd(J[:, :, keep], compute_uv=False)
     return int((s > tol).sum(axis=1).max()) if len(keep) else 0
+
+
+def dependent_joints(chain, target: str, free=(), tol: float = tol.DEPENDENT_JOINT,
+                     keep_first=()) -> tuple[str, ...]:
+    """The solved joints (independent joints but ``free``) whose size-free Jacobian column (rows the
+    ``target`` constrains) adds no singular value above ``tol`` to the columns kept before it, in chain
+    order (the joints ``keep_first`` first: a virtual joint the user cannot name free), at the sampled
+    :func:`configurations` that keeps the most: () for a chain of full generic rank.  Declared free,
+    they leave a full-rank chain (docs/design.md section 5, "Rank-deficient chains"): two coaxial
+    revolute joints give the later one, four parallel revolute axes the fourth.
+
+    >>> from ikcompiler import configs
+    >>> dependent_joints(configs.modular_chain("RTRR", seed=0), "pose")
+    ('q4',)
+    >>> dependent_joints(configs.modular_chain("RRR", seed=2), "pose")
+    ()
+    """
+    from subproblems import select
+
+    A, b = chain.coupling_matrix()
+    kinds = "".join(chain.joints[i].kind for i in chain.independent)
+    Q = configurations(kinds, chain.scale)
+    J = select.jacobian(Q, twists=chain.twists, A=A, b=b, home=chain.home, scale=chain.scale,
+                        target="pose" if target == "position+direction" else target)
+    solved = [k for k, name in enumerate(chain.independent_names) if name not in set(free)]
+    solved.sort(key=lambda k: chain.independent_names[k] not in set(keep_first))  # stable: chain order
+    best: list[int] = []
+    for Jq in J:
+        kept: list[int] = []
+        for k in solved:
+            s = np.linalg.svd(Jq[:, kept + [k]], compute_uv=False)
+            if (s > tol * max(s[0], 1.0)).sum() > len(kept):  # a rank more (none past the rows)
+                kept.append(k)
+        if len(kept) > len(best):
+            best = kept
+    return tuple(chain.independent_names[k] for k in solved if k not in best)
