@@ -70,6 +70,18 @@ def record_step_facts(steps, twists, kinds, scale: float) -> list:
     return out
 
 
+def _sampled_jacobians(chain, target: str) -> np.ndarray:
+    """The size-free Jacobians (rows the ``target`` constrains, every independent joint) at the sampled
+    :func:`configurations` of the chain."""
+    from subproblems import select
+
+    A, b = chain.coupling_matrix()
+    kinds = "".join(chain.joints[i].kind for i in chain.independent)
+    Q = configurations(kinds, chain.scale)
+    return select.jacobian(Q, twists=chain.twists, A=A, b=b, home=chain.home, scale=chain.scale,
+                           target="pose" if target == "position+direction" else target)
+
+
 def conditioned_rank(chain, target: str, free=(), tol: float = tol.NEAR_REDUNDANT) -> int:
     """The largest number of singular values above ``tol`` of the size-free Jacobian of the chain's
     solved joints (its independent joints but ``free``; rows the ``target`` constrains) over the
@@ -80,13 +92,7 @@ def conditioned_rank(chain, target: str, free=(), tol: float = tol.NEAR_REDUNDAN
     >>> conditioned_rank(configs.modular_chain("RRR", seed=2), "position")
     3
     """
-    from subproblems import select
-
-    A, b = chain.coupling_matrix()
-    kinds = "".join(chain.joints[i].kind for i in chain.independent)
-    Q = configurations(kinds, chain.scale)
-    J = select.jacobian(Q, twists=chain.twists, A=A, b=b, home=chain.home, scale=chain.scale,
-                        target="pose" if target == "position+direction" else target)
+    J = _sampled_jacobians(chain, target)
     keep = [k for k, name in enumerate(chain.independent_names) if name not in set(free)]
     s = np.linalg.svd(J[:, :, keep], compute_uv=False)
     return int((s > tol).sum(axis=1).max()) if len(keep) else 0
@@ -107,13 +113,7 @@ def dependent_joints(chain, target: str, free=(), tol: float = tol.DEPENDENT_JOI
     >>> dependent_joints(configs.modular_chain("RRR", seed=2), "pose")
     ()
     """
-    from subproblems import select
-
-    A, b = chain.coupling_matrix()
-    kinds = "".join(chain.joints[i].kind for i in chain.independent)
-    Q = configurations(kinds, chain.scale)
-    J = select.jacobian(Q, twists=chain.twists, A=A, b=b, home=chain.home, scale=chain.scale,
-                        target="pose" if target == "position+direction" else target)
+    J = _sampled_jacobians(chain, target)
     solved = [k for k, name in enumerate(chain.independent_names) if name not in set(free)]
     solved.sort(key=lambda k: chain.independent_names[k] not in set(keep_first))  # stable: chain order
     best: list[int] = []
