@@ -324,21 +324,36 @@ def test_one_pose_with_a_free_end_joint_gives_the_batch_forms_rows(free):
         assert not (limits and V[:2].any())  # free values outside the limits: no row with them
 
 
-def test_a_free_end_value_as_given_on_scalars_agrees_with_the_batch_form():
-    # NativeFreeEnds._as_given_one (one pose, Python floats) against _as_given (fast.represent on arrays)
-    from subproblems import fast
-
-    module = compile_robot(_random_7r(3), free=("j7",))
+def test_a_free_end_value_and_its_2pi_alias_take_the_same_path_and_give_the_reference_rows():
+    # a free value outside (-pi, pi] (or -pi) moves the target as its alias does: the C decides alike
+    # (no hand-back for being an alias: xarm7's joint7, limits +-2 pi, sent half its poses to Python),
+    # and the rows are the Python reference's with the value as given
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=("j7",), tol=None)
     fe = module._SOLVER.free_ends_native()
-    pi, snap = math.pi, fast.PI_SNAP
-    values = [0.0, 1.0, -1.0, pi, -pi, np.nextafter(pi, 4), np.nextafter(-pi, 0), -pi + snap,
-              np.nextafter(-pi + snap, 0), np.nextafter(-pi + snap, 4), 3.5, -3.5, 7.0, 2 * pi, -2 * pi]
-    column = module._SOLVER.robot.independent[module._SOLVER.robot.free[0]]
-    for limits in (True, False):
-        for x in values:
-            init = np.full((1, 7), np.nan)
-            init[0, column] = x
-            assert fe._as_given_one([float(x)], limits) == bool(fe._as_given(init, limits)[0]), (x, limits)
+    robot = module._SOLVER.robot
+    column = robot.independent[robot.free[0]]
+    Q = np.random.default_rng(12).uniform(-math.pi, math.pi, size=(20, 7))
+    T = chain.fk_batch(Q)
+    goals = np.asarray(T, dtype=float)
+    for shift in (2 * math.pi, -2 * math.pi):
+        init, alias = np.full((20, 7), np.nan), np.full((20, 7), np.nan)
+        init[:, column], alias[:, column] = Q[:, 6], Q[:, 6] + shift
+        _, redo = fe.many(goals, init, limits=False)
+        _, redo_alias = fe.many(goals, alias, limits=False)
+        np.testing.assert_array_equal(redo, redo_alias)
+        S, V = module.solve_batch(T, alias[:, column], limits=False)
+        module.NATIVE = False
+        try:
+            S2, V2 = module.solve_batch(T, alias[:, column], limits=False)
+        finally:
+            module.NATIVE = True
+        np.testing.assert_array_equal(V.sum(axis=1), V2.sum(axis=1))
+        for n in range(len(Q)):
+            a, b = S[n][V[n]], S2[n][V2[n]]
+            assert np.all(a[:, 6] == alias[n, column])  # as given
+            gap = np.abs(np.angle(np.exp(1j * (a[:, None, :] - b[None, :, :])))).max(axis=2)
+            assert gap.min(axis=1).max() < 1e-9, n
 
 
 @pytest.mark.parametrize("free", ["j3", "j4"])

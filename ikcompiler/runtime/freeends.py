@@ -13,11 +13,8 @@ free end joints").
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from subproblems import fast as _fk
 from subproblems import plan_runtime as _rt
 from subproblems.screw import FixedTwistsFK
 
@@ -52,10 +49,12 @@ class FreeEnds:
 
 class NativeFreeEnds:
     """The C elimination of the six solved joints (``csource.general6_c_source`` on them) behind
-    :class:`FreeEnds`.  A target goes to the Python path when the C hands it back, when a free value is
-    not returned as given (outside its limits, or not its representative in (-pi, pi]), or when a row
-    the C calls exact misses the precision on the whole robot (the moved target's error is the whole
-    robot's up to the right factor ``M^-1 S M``)."""
+    :class:`FreeEnds`.  A target goes to the Python path when the C hands it back, or when a row the C
+    calls exact misses the precision on the whole robot (the moved target's error is the whole robot's
+    up to the right factor ``M^-1 S M``).  A free value is used as given (its motion is 2 pi periodic):
+    the caller (dispatch ``_free_as_given``) puts it in its column as given and drops the rows of a value
+    outside its limits, as on the Python path.  Sending a value outside (-pi, pi] to Python as well sent
+    half of xarm7.urdf's random poses there (joint7 limits +-2 pi; 35-50 ms each)."""
 
     def __init__(self, robot, native):
         self.split = split = robot.free_ends
@@ -63,9 +62,8 @@ class NativeFreeEnds:
         self.native = native
         self.positions = [robot.independent.index(j) for j in split.solved]  # JOINT_NAMES positions
         self.fk = FixedTwistsFK(robot.twists, robot.home)  # the whole robot's check of the C's rows
-        # (JOINT_NAMES position, chain column, revolute, lower, upper) of each free joint, as Python numbers
-        self.free = [(int(pos), robot.independent[pos], robot.joint_types[pos] == "R",
-                      float(robot.lower[pos]), float(robot.upper[pos])) for pos in robot.free]
+        # (JOINT_NAMES position, chain column) of each free joint
+        self.free = [(int(pos), robot.independent[pos]) for pos in robot.free]
 
     @classmethod
     def bind(cls, robot):
@@ -88,16 +86,6 @@ class NativeFreeEnds:
         chain = source and native.bind(source, dof=6, slots=robot.slots, nfree=0, target="pose")
         return cls(robot, chain) if chain is not None else None
 
-    def _as_given(self, init, limits) -> np.ndarray:
-        """(N,) whether every free value comes back as given: its own representative, inside its limits."""
-        r = self.robot
-        cols = [r.independent[pos] for pos in r.free]
-        kinds = "".join(r.joint_types[pos] for pos in r.free)
-        lower, upper = r.lower[list(r.free)], r.upper[list(r.free)]
-        F = init[:, cols]
-        rep, _, outside = _fk.represent(F, kinds, lower, upper, limits)
-        return (rep == F).all(axis=1) & ~outside
-
     def many(self, goals, init, limits: bool):
         """(Q, valid, ls, residual, continuum) of N checked goals in JOINT_NAMES order, and (N,) True for
         the targets the Python path must take over."""
@@ -114,34 +102,21 @@ class NativeFreeEnds:
         n, k = np.nonzero(valid & ~ls)
         full = Q[n, k] @ r.A.T + r.B
         err = r.error(self.fk(full), goals[n])
-        redo = (code == PYTHON) | ~self._as_given(init, limits)
+        redo = code == PYTHON
         redo[n[~(err <= r.tol * r.scale)]] = True
         res = res.copy()
         res[n, k] = err  # the whole robot's error (the C measured the moved target's)
         Q[~valid] = 0.0
         return (Q, valid, ls, res, cont), redo
 
-    def _as_given_one(self, given, limits: bool) -> bool:
-        """:meth:`_as_given` of one target's free values (floats) on scalars: fast.represent leaves a
-        revolute value alone exactly when it lies in (-pi + PI_SNAP, pi], and with limits any value
-        exactly when it lies inside them (else it takes an alias, a clamp or none)."""
-        for (_, _, revolute, lo, hi), x in zip(self.free, given):
-            if revolute and not -math.pi + _fk.PI_SNAP < x <= math.pi:
-                return False
-            if limits and not lo <= x <= hi:
-                return False
-        return True
-
     def one(self, goals, given, limits: bool):
         """``(q, residual, ls, continuum)`` of one checked goal (1, 4, 4) with free values ``given``
         (floats), the rows :meth:`many` gives it; None where :meth:`many` must decide (the C hands the
-        target back, a free value is not returned as given, an exact row misses on the whole robot).
-        One pose on :meth:`many`'s (N, K, n) arrays cost ~5x the C call (docs/design.md section 14)."""
-        if not self._as_given_one(given, limits):
-            return None
+        target back, an exact row misses on the whole robot).  One pose on :meth:`many`'s (N, K, n)
+        arrays cost ~5x the C call (docs/design.md section 14)."""
         r = self.robot
         init = np.full((1, len(r.kinds)), np.nan)
-        for (_, col, _, _, _), x in zip(self.free, given):
+        for (_, col), x in zip(self.free, given):
             init[0, col] = x
         found = self.native.one(self.split.targets(goals, init)[0], (), limits)
         if found is None:
@@ -149,7 +124,7 @@ class NativeFreeEnds:
         q6, res, ls, cont = found
         Q = np.zeros((len(q6), len(r.joint_names)))
         Q[:, self.positions] = q6
-        for (pos, _, _, _, _), x in zip(self.free, given):
+        for (pos, _), x in zip(self.free, given):
             Q[:, pos] = x
         exact = ~ls
         err = r.error(self.fk(Q[exact] @ r.A.T + r.B), goals)
