@@ -15,6 +15,17 @@
 #include <stdint.h>
 #include <stdlib.h>
 
+/* The Newton kernels (FK + Jacobian, the linear solve, the steps) are written once for any dof and
+ * inlined into a copy for 6 joints without mimic joints, the common arm: with the sizes constant the
+ * compiler unrolls the loops (kinova, whose every leaf takes Newton steps: 139k -> 112k instructions a
+ * batch pose), and with -ffp-contract=off and no reassociation the copy rounds as the generic code
+ * does (benchmarks/batch_sets.py: bit for bit). */
+#if defined(__GNUC__)
+#define IKC_INLINE static inline __attribute__((always_inline))
+#else
+#define IKC_INLINE static inline
+#endif
+
 #define IKC_NEAR_MISS 1e-4  /* relative miss below which a candidate gets Newton steps */
 #define IKC_SPLIT_ROOT 1e-6 /* copies of a tangent root closer than this are one solution */
 #define IKC_TWO_PI 6.283185307179586
@@ -95,13 +106,16 @@ typedef struct {
 /* Tool pose G (12 entries) and space Jacobian J (6 x dof, row-major: tool-point velocity, then
  * angular) of the true robot at returned joint values q: the C port of subproblems/newton.py tool_jacobian.
  * J NULL: the pose alone (the same arithmetic for G, the Jacobian's columns skipped: a measure). */
-static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, double *J) {
-    const int dof = rb->dof;
+IKC_INLINE void ikc_fk_jacobian_n(const ikc_robot *rb, const double *q, double *G, double *J, const int dof,
+                                  const int nall, const int plain) {
     double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};
-    double cols[rb->nall > 0 ? rb->nall : 1][6];
-    for (int i = 0; i < rb->nall; i++) {
+    double cols[nall > 0 ? nall : 1][6];
+    for (int i = 0; i < nall; i++) {
         double th = rb->b[i];
-        for (int j = 0; j < dof; j++) th += rb->A[i * dof + j] * q[j];
+        if (plain)  /* A the identity: the same sum for finite q, its zero products left out */
+            th += q[i];
+        else
+            for (int j = 0; j < dof; j++) th += rb->A[i * dof + j] * q[j];
         const double *v = rb->twists + 6 * i, *w = v + 3;
         if (J) {  /* this joint's space twist at q: its Jacobian column before the tool-point shift */
             double Rw[3], Rv[3];
@@ -151,8 +165,8 @@ static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, dou
     const double *tp = G + 9;
     for (int j = 0; j < dof; j++) {
         double col[6] = {0, 0, 0, 0, 0, 0};
-        for (int i = 0; i < rb->nall; i++) {
-            double a = rb->A[i * dof + j];
+        for (int i = 0; i < nall; i++) {
+            double a = plain ? (i == j ? 1.0 : 0.0) : rb->A[i * dof + j];
             if (a == 0.0) continue;
             const double *c = cols[i];
             double wxp[3] = {c[4] * tp[2] - c[5] * tp[1], c[5] * tp[0] - c[3] * tp[2], c[3] * tp[1] - c[4] * tp[0]};
@@ -163,6 +177,24 @@ static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, dou
         }
         for (int r = 0; r < 6; r++) J[r * dof + j] = col[r];
     }
+}
+
+/* Whether the true robot's joints are the returned ones (A the identity, b any): no mimic joint. */
+static int ikc_plain_joints(const ikc_robot *rb) {
+    if (rb->nall != rb->dof) return 0;
+    for (int i = 0; i < rb->nall; i++)
+        for (int j = 0; j < rb->dof; j++)
+            if (rb->A[i * rb->dof + j] != (i == j ? 1.0 : 0.0)) return 0;
+    return 1;
+}
+
+#define IKC_PLAIN6(rb) ((rb)->dof == 6 && ikc_plain_joints(rb))
+
+static void ikc_fk_jacobian(const ikc_robot *rb, const double *q, double *G, double *J) {
+    if (IKC_PLAIN6(rb))
+        ikc_fk_jacobian_n(rb, q, G, J, 6, 6, 1);
+    else
+        ikc_fk_jacobian_n(rb, q, G, J, rb->dof, rb->nall, 0);
 }
 
 /* The chain's pose error of tool pose G against goal g: max(|dp|, scale |dR|_F) for a pose (the
@@ -183,7 +215,7 @@ static double ikc_pose_error(const ikc_robot *rb, const double *G, const double 
 }
 
 /* Solve the n x n system M x = M[:, n] by Gaussian elimination with partial pivoting; 0 if singular. */
-static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
+IKC_INLINE int ikc_solve_linear_n(const int n, double M[n][n + 1], double *x) {
     for (int k = 0; k < n; k++) {
         int piv = k;
         for (int r = k + 1; r < n; r++)
@@ -208,6 +240,8 @@ static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
     return 1;
 }
 
+static int ikc_solve_linear(int n, double M[n][n + 1], double *x) { return ikc_solve_linear_n(n, M, x); }
+
 /* Damped Gauss-Newton steps on the returned joints (free joints held) toward goal g, as
  * plan_runtime.polish (columns scaled to unit norm, 1e-12 damping), except that a step which does
  * not lower the error is retried with 100x the damping (Levenberg-Marquardt; up to 8 tries) when
@@ -216,21 +250,23 @@ static int ikc_solve_linear(int n, double M[n][n + 1], double *x) {
  * steps, fewer once the error is far inside the exact tolerance, or once a guarded step ends inside
  * IKC_SETTLED of it without halving the error (Newton's linear regime at a singular configuration: a
  * stretched arm's double root, kinova's q3 = pi leaves, took all 15 steps at ~0.92 each).  Returns the new
- * pose error. */
+ * pose error.  A trial is measured by its pose alone; the Jacobian is computed where a next step needs it. */
 #define IKC_SETTLED 0.5
-static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
-                               const int *held) {
-    const int dof = rb->dof;
+IKC_INLINE double ikc_newton_steps_n(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
+                                    const int *held, const int dof, const int nall, const int plain) {
     const double done = 1e-3 * rb->tol * rb->scale;  /* converged to well inside the exact tolerance */
     const double exact = rb->tol * rb->scale;
     int slow = 0;  /* the last step, inside IKC_SETTLED of the tolerance, did not halve the error */
-    double G[12], J[6 * dof], trial[dof], G2[12], J2[6 * dof];
+    double G[12], J[6 * dof], trial[dof], G2[12];
     double lambda = 1e-12;  /* damping: raised when a step makes things worse (Levenberg-Marquardt) */
-    ikc_fk_jacobian(rb, q, G, J);
+    ikc_fk_jacobian_n(rb, q, G, J, dof, nall, plain);
     double now = ikc_pose_error(rb, G, g);
+    int stale = 0;  /* J is of an earlier point: a trial is measured by its pose alone (most end the loop) */
     for (int it = 0; it < iters; it++) {
         if (now != now) return NAN;
         if (now <= done) return now;
+        if (stale) ikc_fk_jacobian_n(rb, q, G, J, dof, nall, plain);  /* the same G, and J at the accepted point */
+        stale = 0;
         double e[6];
         for (int k = 0; k < 3; k++) e[k] = g[9 + k] - G[9 + k];
         for (int k = 0; k < 3; k++) e[3 + k] = 0.0;
@@ -266,15 +302,15 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
                 for (int c = 0; c < dof; c++) M[a][c] = JtJ[a][c] + (a == c ? lambda : 0.0);
                 M[a][dof] = Jte[a];
             }
-            if (!ikc_solve_linear(dof, M, dq)) return now;
+            if (!ikc_solve_linear_n(dof, M, dq)) return now;
             for (int j = 0; j < dof; j++)
                 trial[j] = q[j] + ((rb->is_free[j] || (held && held[j])) ? 0.0 : dq[j] / col[j]);
-            ikc_fk_jacobian(rb, trial, G2, J2);
+            ikc_fk_jacobian_n(rb, trial, G2, NULL, dof, nall, plain);
             double next = ikc_pose_error(rb, G2, g);
             if (next < now || !guarded) {  /* accept; trust the linear model more next time */
                 for (int j = 0; j < dof; j++) q[j] = trial[j];
                 for (int k = 0; k < 12; k++) G[k] = G2[k];
-                for (int k = 0; k < 6 * dof; k++) J[k] = J2[k];
+                stale = 1;
                 slow = guarded && next <= IKC_SETTLED * exact && next > 0.5 * now;
                 now = next;
                 lambda = lambda > 1e-11 ? lambda * 0.1 : 1e-12;
@@ -286,6 +322,12 @@ static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, 
         if (!accepted || slow) break;
     }
     return now;
+}
+
+static double ikc_newton_steps(const ikc_robot *rb, const double *g, double *q, int iters, int guarded,
+                               const int *held) {
+    if (IKC_PLAIN6(rb)) return ikc_newton_steps_n(rb, g, q, iters, guarded, held, 6, 6, 1);
+    return ikc_newton_steps_n(rb, g, q, iters, guarded, held, rb->dof, rb->nall, 0);
 }
 
 /* Newton steps that never raise the error (near misses, self-motion representatives). */
