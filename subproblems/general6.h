@@ -33,7 +33,7 @@
                              * (a double root split by rounding can reach ~1e-5 on a flat tangency) */
 #define G6_TOUCH 1e-10     /* |D| at a minimum of |D| below this times max |coefficient|: doubtful */
 #define G6_NOISE 32.0      /* D's error bound: this times max |coefficient 9, 10| (which must vanish) */
-#define G6_CLOSE 1e-5      /* two real roots (rad) closer than this: doubtful (a near-double root) */
+#define G6_CLOSE 1e-7      /* two real roots (rad) closer than this: doubtful (a near-double root; tolerances.py) */
 #define G6_COLLIDE 1e-4    /* two candidates closer than this after Newton (rad; prismatic / size): doubtful */
 #define G6_HMIN 1e-9       /* isolation cells narrower than this that settle nothing: doubtful */
 #define G6_STACK 256       /* isolation cells pending at once */

@@ -359,14 +359,19 @@ G6_UNDAMPED_STEPS = 30
 # largest, which must vanish), G6_NEAR_DOUBLE (1e-3 rad: estimated imaginary part of a near-real root
 # pair), G6_TOUCH (1e-10: |det| at a minimum over the largest coefficient), G6_NOISE (32: det's error
 # bound over the largest of its coefficients 9, 10, which must vanish; |det| within it at an isolation
-# cell's middle), G6_CLOSE (1e-5 rad: two real roots), G6_COLLIDE (1e-4: two candidates after Newton,
+# cell's middle), G6_CLOSE (1e-7 rad: two real roots), G6_COLLIDE (1e-4: two candidates after Newton,
 # joint distance), G6_CLEAN (1e-6 of the size: a candidate this close before Newton is a clean root),
 # G6_HMIN (1e-9 rad: the narrowest isolation cell): each makes a target doubtful (handed to general6.py).
+# G6_CLOSE was 1e-5 until session 18: a nearly structured arm (xarm7.urdf, axes 4e-6..1e-5 rad off
+# intersecting) has pairs of solutions that nearly share the eliminated joint (4e-7..1e-5 rad apart),
+# each certified by its own sign change and read from its own null vector; at 1e-5 nearly every target
+# was doubtful under every arrangement and took the eigenvalue path (C call median 4.7 ms -> 0.11 ms).
+# Two roots that are one solution still meet after Newton (G6_COLLIDE) and make the target doubtful.
 G6_COEF_CHECK = 1e-7
 G6_NEAR_DOUBLE = 1e-3
 G6_TOUCH = 1e-10
 G6_NOISE = 32.0
-G6_CLOSE = 1e-5
+G6_CLOSE = 1e-7
 G6_COLLIDE = 1e-4
 G6_CLEAN = 1e-6
 G6_HMIN = 1e-9
