@@ -279,3 +279,32 @@ def test_jaco_all_special_poses_settle_in_c():
     back, c_hit, r_hit = _covers(module, nc, Q, T)
     assert back <= 4, back
     assert c_hit >= r_hit, (c_hit, r_hit)
+
+
+def test_a_later_arrangements_clean_zero_after_a_doubtful_one_is_not_taken():
+    """example-robot-data's xarm7.urdf perturbed by 1e-6 (seed 7), joint7 free (configs.compile_chain's
+    choice), at a nearly singular special pose: the first two C arrangements find the target doubtful and
+    the third answered cleanly with no root (its noisy D stayed above zero at the solutions' pair), so
+    the batch path returned no row for a pose with three.  docs/general6.md, "Native path" item 5."""
+    from ikcompiler import configs, robotdb
+    from ikcompiler.verify import joint_distance
+
+    try:
+        robotdb.require(robotdb.EXTRA)
+    except robotdb.RobotPackageError as exc:
+        pytest.fail(f"{exc} (this test needs the robots extra)", pytrace=False)
+    entry = next(e for e in robotdb.discover(packages=("example-robot-data",)).chains
+                 if e.rel.endswith("/xarm7.urdf") and e.tip == "link_eef")
+    chain = configs.perturbed(entry.load(), 1e-6, seed=7)
+    compiled = configs.compile_chain(chain)
+    module = compiled.module
+    assert module.METHOD == "general-6r" and compiled.free == ("joint7",)
+    q = np.array([-math.pi / 2, -0.04497680711458196, 0.0, math.pi / 2, -math.pi / 2, -math.pi / 2, math.pi])
+    G = chain.fk_batch(q[None])  # the target verify builds (bits matter here)
+    S, filled, ls, _, _ = module.solve_batch_info(G, np.array([math.pi]))
+    rows = S[0][filled[0] & ~ls[0]]
+    assert len(rows), "no row for a reachable pose"
+    err = [max(np.linalg.norm(chain.fk(r)[:3, 3] - G[0, :3, 3]),
+               chain.scale * np.linalg.norm(chain.fk(r)[:3, :3] - G[0, :3, :3])) for r in rows]
+    assert max(err) <= PRECISION * chain.scale
+    assert joint_distance(rows, q[None], chain.joint_types, chain.scale).min() <= SAME
