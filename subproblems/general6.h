@@ -53,6 +53,7 @@
 #define G6_PLAIN_MARGIN 4.0  /* the eigenvalue path's Newton: an LU step where sigma_min / sigma_max is
                               * provably above this times its rcond ... */
 #define G6_PLAIN_COND 1e-9    /* ... and above this (the undamped pass's rcond 1e-13 is too near rounding) */
+#define G6_DEEP 1e-3           /* the eigenvalue path's Newton stops at this times the precision */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
 #define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
 
@@ -673,7 +674,7 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
     double G[12], J[36], best[6], x[6];
     for (int i = 0; i < 6; i++) x[i] = best[i] = q[i];
     double best_err = INFINITY;
-    const double done = 1e-3 * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
+    const double done = G6_DEEP * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
     for (int it = 0; it <= iters; it++) {
         ikc_fk_jacobian(rb, x, G, J);
         const double err = ikc_pose_error(rb, G, g);
@@ -1227,6 +1228,19 @@ static int g6_eigen_source(const ikc_robot *rb, const ikc_g6 *G, const double *g
         for (int i = 0; i < 6; i++) P[6 * *np + i] = q[i];
         PE[*np] = e;
         (*np)++;
+        /* exact but shallow: the truncated steps stopped along a double root's weak direction, up to
+         * ~1e-6 rad from the root.  Plain steps (linear there, the distance halved a step) bring a copy
+         * nearer the root; the copy joins the pool beside the row (a close pair of roots keeps both) */
+        if (e > G6_DEEP * exact && *np < G6_POOL) {
+            double r[6];
+            for (int i = 0; i < 6; i++) r[i] = q[i];
+            const double e2 = g6_truncated_newton(rb, g, r, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
+            if (e2 < e) {
+                for (int i = 0; i < 6; i++) P[6 * *np + i] = r[i];
+                PE[*np] = e2;
+                (*np)++;
+            }
+        }
     }
     return weak;
 }
