@@ -48,12 +48,14 @@
 #define G6_UNDAMPED_RCOND 1e-13 /* ... for candidates it left between exact and G6_STALLED */
 #define G6_STALLED 1e-3    /* ... (of the size) */
 #define G6_COPY_ANGLE 1e-4 /* the eigenvalue path: two copies of the target rotated by this much (rad) */
-#define G6_POOL 192        /* the eigenvalue path: exact candidates pooled per target */
+#define G6_POOL 512        /* the eigenvalue path: exact rows pooled per target (xarm7 special poses filled
+                            * 192 once the shallow rows were deepened) */
 #define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
 #define G6_PLAIN_MARGIN 4.0  /* the eigenvalue path's Newton: an LU step where sigma_min / sigma_max is
                               * provably above this times its rcond ... */
 #define G6_PLAIN_COND 1e-9    /* ... and above this (the undamped pass's rcond 1e-13 is too near rounding) */
-#define G6_DEEP 1e-3           /* the eigenvalue path's Newton stops at this times the precision */
+#define G6_DEEP 1e-3           /* the eigenvalue path's Newton stops at this times the precision; an exact
+                                * row above it is deepened (g6_eigen_source) */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
 #define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
 
@@ -642,7 +644,8 @@ static void g6_svd(int n, double *a, double *sv, double *v) {
  * 1 / (|Js|_F |Js^-1|_F), a lower bound of sigma_min / sigma_max, shows that every singular value is
  * above G6_PLAIN_MARGIN times rcond (and above G6_PLAIN_COND): then the pseudo-inverse step keeps every
  * singular value and is this step.  0 (dq untouched) otherwise: the SVD decides.  A 6 x 6 LU and its
- * inverse are ~1/10 of the Jacobi SVD's instructions, which were half of the eigenvalue path's. */
+ * inverse take about a third of the Jacobi SVD's instructions (callgrind: ~5 k against ~15 k), and the
+ * SVD steps were half of the eigenvalue path's instructions. */
 static int g6_plain_step(const double *Js, const double *e, double rcond, double *dq) {
     double L[36], inv[36];
     int piv[6];
@@ -703,16 +706,16 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
         }
         double dq[6] = {0, 0, 0, 0, 0, 0};
         if (!g6_plain_step(Js, e, rcond, dq)) {
-        g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
-        double top = 0.0;
-        for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
-        for (int j = 0; j < 6; j++) {
-            if (!(sv[j] > rcond * top)) continue;
-            double proj = 0.0;  /* (U S)_j . e / s_j^2 = u_j . e / s_j */
-            for (int r = 0; r < 6; r++) proj += Js[r * 6 + j] * e[r];
-            proj /= sv[j] * sv[j];
-            for (int i = 0; i < 6; i++) dq[i] += V[6 * i + j] * proj;
-        }
+            g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
+            double top = 0.0;
+            for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
+            for (int j = 0; j < 6; j++) {
+                if (!(sv[j] > rcond * top)) continue;
+                double proj = 0.0;  /* (U S)_j . e / s_j^2 = u_j . e / s_j */
+                for (int r = 0; r < 6; r++) proj += Js[r * 6 + j] * e[r];
+                proj /= sv[j] * sv[j];
+                for (int i = 0; i < 6; i++) dq[i] += V[6 * i + j] * proj;
+            }
         }
         double step = 0.0;
         for (int i = 0; i < 6; i++) dq[i] /= col[i], step = fmax(step, fabs(dq[i]));
@@ -921,9 +924,9 @@ static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12], in
     return n;
 }
 
-/* Candidates of goal g: the certified path (eig 0, ikc_g6_candidates) or the doubtful targets'
- * uncertified eigenvalue path (eig 1, g6_eigen_roots; at most 32 candidates, non-finite ones left NaN
- * for Newton to drop). */
+/* Candidates of goal g: the certified path (eig NULL, ikc_g6_candidates) or the doubtful targets'
+ * uncertified eigenvalue path (eig set, g6_eigen_roots; at most 32 candidates, non-finite ones left NaN
+ * for Newton to drop; *eig receives the source's G6_WEAK_* flags). */
 static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int *eig) {
     /* normalised target Tn and Gn = Tn Mn^-1, inverted for the inverse chain */
     double R[9], t[3];
@@ -1296,8 +1299,9 @@ static int g6_sources_agree(const ikc_robot *rb, const double *P, const double *
  * singular at the target: 189 of 300 Jaco poses with every joint at 0, +-pi/2, pi; docs/general6.md
  * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  First the target's
  * own eigenvalue candidates under every arrangement (g6_eigen_source); where the arrangements disagree
- * (g6_sources_agree), or one gave no candidates, also four copies rotated by +-G6_COPY_ANGLE about two
- * fixed axes under each (a double root splits; a singular pencil becomes regular), as general6.py does.
+ * (g6_sources_agree), one gave no candidates or one was weak (G6_WEAK_*), also four copies rotated by
+ * +-G6_COPY_ANGLE about two fixed axes under each (a double root splits; a singular pencil becomes
+ * regular), as general6.py does.
  * Every source's exact rows are pooled, then merged: one arrangement's rows are not chosen over
  * another's (xarm7, a root pair 1.3e-5 rad apart: each arrangement found one of the two).  -1 when no
  * source gave candidates (the Python general6 takes the target). */
