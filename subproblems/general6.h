@@ -48,8 +48,14 @@
 #define G6_UNDAMPED_RCOND 1e-13 /* ... for candidates it left between exact and G6_STALLED */
 #define G6_STALLED 1e-3    /* ... (of the size) */
 #define G6_COPY_ANGLE 1e-4 /* the eigenvalue path: two copies of the target rotated by this much (rad) */
-#define G6_POOL 192        /* the eigenvalue path: exact candidates pooled per target */
+#define G6_POOL 512        /* the eigenvalue path: exact rows pooled per target (xarm7 special poses filled
+                            * 192 once the shallow rows were deepened) */
 #define G6_SAME 1e-6       /* ... rows closer than this are one (the finish's VERIFY_SAME_ANGLE) */
+#define G6_PLAIN_MARGIN 4.0  /* the eigenvalue path's Newton: an LU step where sigma_min / sigma_max is
+                              * provably above this times its rcond ... */
+#define G6_PLAIN_COND 1e-9    /* ... and above this (the undamped pass's rcond 1e-13 is too near rounding) */
+#define G6_DEEP 1e-3           /* the eigenvalue path's Newton stops at this times the precision; an exact
+                                * row above it is deepened (g6_eigen_source) */
 #define G6_TRUNCATED_STEPS 18  /* the eigenvalue path's truncated Newton steps (general6.py 3 NEWTON_ITERS) */
 #define G6_UNDAMPED_STEPS 30   /* ... then for the stalled ones (general6.py G6_UNDAMPED_STEPS) */
 
@@ -634,6 +640,34 @@ static void g6_svd(int n, double *a, double *sv, double *v) {
     }
 }
 
+/* The truncated step of g6_truncated_newton where it truncates nothing: dq = Js^-1 e by LU, when
+ * 1 / (|Js|_F |Js^-1|_F), a lower bound of sigma_min / sigma_max, shows that every singular value is
+ * above G6_PLAIN_MARGIN times rcond (and above G6_PLAIN_COND): then the pseudo-inverse step keeps every
+ * singular value and is this step.  0 (dq untouched) otherwise: the SVD decides.  A 6 x 6 LU and its
+ * inverse take about a third of the Jacobi SVD's instructions (callgrind: ~5 k against ~15 k), and the
+ * SVD steps were half of the eigenvalue path's instructions. */
+static int g6_plain_step(const double *Js, const double *e, double rcond, double *dq) {
+    double L[36], inv[36];
+    int piv[6];
+    double na = 0.0, ni = 0.0;
+    for (int i = 0; i < 36; i++) L[i] = Js[i], na += Js[i] * Js[i];
+    if (g6_lu(6, L, piv) == 0.0) return 0;
+    for (int j = 0; j < 6; j++) {
+        double x[6] = {0, 0, 0, 0, 0, 0};
+        x[j] = 1.0;
+        g6_lu_solve(6, L, piv, x);
+        for (int i = 0; i < 6; i++) inv[6 * i + j] = x[i], ni += x[i] * x[i];
+    }
+    const double bound = 1.0 / sqrt(na * ni);
+    if (!(bound > G6_PLAIN_MARGIN * rcond && bound > G6_PLAIN_COND)) return 0;
+    for (int i = 0; i < 6; i++) {
+        double s = 0.0;
+        for (int j = 0; j < 6; j++) s += inv[6 * i + j] * e[j];
+        dq[i] = s;
+    }
+    return 1;
+}
+
 /* Truncated Gauss-Newton on the true robot toward goal g (general6.py _newton): columns scaled to unit
  * norm, singular values of the Jacobian below rcond times the largest left out, so that at a double
  * root the step never moves along the weak direction, which the eigenvalue read gave accurately (the
@@ -643,7 +677,7 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
     double G[12], J[36], best[6], x[6];
     for (int i = 0; i < 6; i++) x[i] = best[i] = q[i];
     double best_err = INFINITY;
-    const double done = 1e-3 * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
+    const double done = G6_DEEP * rb->tol * rb->scale;  /* deeper than general6.py: double roots */
     for (int it = 0; it <= iters; it++) {
         ikc_fk_jacobian(rb, x, G, J);
         const double err = ikc_pose_error(rb, G, g);
@@ -670,16 +704,18 @@ static double g6_truncated_newton(const ikc_robot *rb, const double *g, double *
             col[j] = sqrt(s) > 1e-300 ? sqrt(s) : 1e-300;
             for (int r = 0; r < 6; r++) Js[r * 6 + j] = J[r * 6 + j] / col[j];
         }
-        g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
-        double top = 0.0;
-        for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
         double dq[6] = {0, 0, 0, 0, 0, 0};
-        for (int j = 0; j < 6; j++) {
-            if (!(sv[j] > rcond * top)) continue;
-            double proj = 0.0;  /* (U S)_j . e / s_j^2 = u_j . e / s_j */
-            for (int r = 0; r < 6; r++) proj += Js[r * 6 + j] * e[r];
-            proj /= sv[j] * sv[j];
-            for (int i = 0; i < 6; i++) dq[i] += V[6 * i + j] * proj;
+        if (!g6_plain_step(Js, e, rcond, dq)) {
+            g6_svd(6, Js, sv, V);  /* Js V = U S: the columns of Js are now U S */
+            double top = 0.0;
+            for (int j = 0; j < 6; j++) top = fmax(top, sv[j]);
+            for (int j = 0; j < 6; j++) {
+                if (!(sv[j] > rcond * top)) continue;
+                double proj = 0.0;  /* (U S)_j . e / s_j^2 = u_j . e / s_j */
+                for (int r = 0; r < 6; r++) proj += Js[r * 6 + j] * e[r];
+                proj /= sv[j] * sv[j];
+                for (int i = 0; i < 6; i++) dq[i] += V[6 * i + j] * proj;
+            }
         }
         double step = 0.0;
         for (int i = 0; i < 6; i++) dq[i] /= col[i], step = fmax(step, fabs(dq[i]));
@@ -757,11 +793,17 @@ static void g6_basis(double th, int prism, double *u) {
 
 /* Candidates of goal g (12 entries, robot units) in the original joint order, prismatic values in
  * robot units: their count (at most 16), or -1 when the target is doubtful. */
-static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig);
+static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int *eig);
 
 static int ikc_g6_candidates(const ikc_g6 *G, const double *g, double *Qout) {
-    return g6_candidates(G, g, Qout, 0);
+    return g6_candidates(G, g, Qout, NULL);
 }
+
+/* Why the eigenvalue path's candidates of one source may be incomplete (g6_candidates' *eig): B' near
+ * rank loss (its null space is not the equations'), no shift with a regular leading matrix (M(th)
+ * nearly singular at the four angles tried: a pencil singular at the target) */
+#define G6_WEAK_RIGHT 1
+#define G6_WEAK_LEADING 2
 
 /* general6.py's SHIFTS: th_c = delta + 2 atan(y), delta chosen so that the leading matrix is regular */
 static const double g6_shifts[4] = {0.6180339887498949, 2.0943951023931953, -1.3089969389957472, 2.6179938779914944};
@@ -772,7 +814,7 @@ static const double g6_shifts[4] = {0.6180339887498949, 2.0943951023931953, -1.3
  * whose imaginary part is below G6_IMAG_TOL (near-real pairs: a double root split by rounding), the
  * null vector of M(th) by inverse iteration; roots closer than G6_TWIN also read as the two monomial
  * vectors of a 2-D null space.  Thetas into rth, vectors into rv (at most 32); their count or -1. */
-static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
+static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12], int *weak) {
 
     double P[3][144], best = -1.0, delta = g6_shifts[0];
     for (int k = 0; k < 4; k++) {  /* the shift whose leading matrix is best conditioned (Hadamard) */
@@ -794,6 +836,7 @@ static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
             if (ratio > log(G6_LEADING_OK)) break;
         }
     }
+    if (!(best > log(G6_LEADING_OK))) *weak |= G6_WEAK_LEADING;
     const double cd = cos(delta), sd = sin(delta);
     for (int i = 0; i < 12; i++)
         for (int j = 0; j < 12; j++) {
@@ -881,10 +924,10 @@ static int g6_eigen_roots(double Mt[3][12][12], double *rth, double rv[][12]) {
     return n;
 }
 
-/* Candidates of goal g: the certified path (eig 0, ikc_g6_candidates) or the doubtful targets'
- * uncertified eigenvalue path (eig 1, g6_eigen_roots; at most 32 candidates, non-finite ones left NaN
- * for Newton to drop). */
-static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig) {
+/* Candidates of goal g: the certified path (eig NULL, ikc_g6_candidates) or the doubtful targets'
+ * uncertified eigenvalue path (eig set, g6_eigen_roots; at most 32 candidates, non-finite ones left NaN
+ * for Newton to drop; *eig receives the source's G6_WEAK_* flags). */
+static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int *eig) {
     /* normalised target Tn and Gn = Tn Mn^-1, inverted for the inverse chain */
     double R[9], t[3];
     for (int k = 0; k < 9; k++) R[k] = g[k];
@@ -935,7 +978,11 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     int perm[8];
     for (int c = 0; c < nc; c++)
         for (int i = 0; i < 14; i++) Bp[c][i] = B[1 + G->cols[c]][i];
-    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK && !eig) return -1;
+    if (eig) *eig = 0;
+    if (g6_qr(nc, Bp, beta, rdiag, perm) < G6_RANK) {
+        if (!eig) return -1;
+        *eig |= G6_WEAK_RIGHT;
+    }
     double Nl[6][14];
     for (int e = 0; e < 6; e++) {
         for (int i = 0; i < 14; i++) Nl[e][i] = (i == 8 + e) ? 1.0 : 0.0;
@@ -985,7 +1032,7 @@ static int g6_candidates(const ikc_g6 *G, const double *g, double *Qout, int eig
     double rth[32], rv[32][12];
     int nr = 0;
     if (eig) {
-        nr = g6_eigen_roots(Mt, rth, rv);
+        nr = g6_eigen_roots(Mt, rth, rv, eig);
         if (nr < 0) return -1;
     } else {
     /* D on the circle, its Fourier coefficients */
@@ -1163,6 +1210,44 @@ static void g6_rotated_target(const ikc_g6 *G, const double *w, double th, const
 static const double g6_copy_axes[2][3] = {{0.49297937126024555, -0.8307369262465643, 0.2585488326840085},
                                           {0.05063565066984169, 0.9585454499271961, 0.28040444237763246}};
 
+/* One eigenvalue source of g6_eigen_leaves: the candidates of arrangement G for the target gr (g or a
+ * rotated copy), each polished toward the true target g by truncated Newton steps (g6_truncated_newton:
+ * they keep the weak direction the eigenvector read gave), the stalled ones by plain steps; the exact
+ * rows appended to the pool P (error PE, *np of them).  Its G6_WEAK_* flags (0: none), or -1 when the
+ * source gave no candidates (the companion's QR did not converge, a non-finite companion). */
+static int g6_eigen_source(const ikc_robot *rb, const ikc_g6 *G, const double *gr, const double *g, double *P,
+                           double *PE, int *np) {
+    const double exact = rb->tol * rb->scale;
+    double Qc[6 * 32];
+    int weak = 0;
+    const int n = g6_candidates(G, gr, Qc, &weak);
+    if (n < 0) return -1;
+    for (int j = 0; j < n && *np < G6_POOL; j++) {
+        double *q = Qc + 6 * j;
+        double e = g6_truncated_newton(rb, g, q, G6_TRUNCATED_STEPS, G6_PINV_RCOND);
+        if (e > exact && e < G6_STALLED * rb->scale)  /* stalled: a near-double root (_undamped) */
+            e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
+        if (!(e <= exact)) continue;
+        for (int i = 0; i < 6; i++) P[6 * *np + i] = q[i];
+        PE[*np] = e;
+        (*np)++;
+        /* exact but shallow: the truncated steps stopped along a double root's weak direction, up to
+         * ~1e-6 rad from the root.  Plain steps (linear there, the distance halved a step) bring a copy
+         * nearer the root; the copy joins the pool beside the row (a close pair of roots keeps both) */
+        if (e > G6_DEEP * exact && *np < G6_POOL) {
+            double r[6];
+            for (int i = 0; i < 6; i++) r[i] = q[i];
+            const double e2 = g6_truncated_newton(rb, g, r, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
+            if (e2 < e) {
+                for (int i = 0; i < 6; i++) P[6 * *np + i] = r[i];
+                PE[*np] = e2;
+                (*np)++;
+            }
+        }
+    }
+    return weak;
+}
+
 /* The rows P (np, best error first by selection) merged at distance `apart` into Q (at most 16 leaves):
  * their count, or -1 when more than 16 remain. */
 static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int np, double apart, double *Q, double *E,
@@ -1185,14 +1270,41 @@ static int g6_merge(const ikc_robot *rb, const double *P, const double *PE, int 
     return m;
 }
 
+/* Whether the exact rows of the arrangements (pool slices from[k]..from[k + 1]) tell one story: each
+ * merged at G6_SAME gives the same number of rows, at least one, and every row of one has a row of
+ * every other within G6_COLLIDE (a double root's rows end 1e-6..4e-5 apart).  Then the target's own
+ * eigenproblems have found what the rotated copies would add (measured, docs/general6.md "Native path"
+ * item 6); otherwise the copies are solved too. */
+static int g6_sources_agree(const ikc_robot *rb, const double *P, const double *PE, const int *from, int count) {
+    if (count < 2) return 0;
+    double Q0[6 * 16], Qk[6 * 16], E[16];
+    int F[16];
+    const int m0 = g6_merge(rb, P + 6 * from[0], PE + from[0], from[1] - from[0], G6_SAME, Q0, E, F);
+    if (m0 <= 0) return 0;
+    for (int k = 1; k < count; k++) {
+        const int mk = g6_merge(rb, P + 6 * from[k], PE + from[k], from[k + 1] - from[k], G6_SAME, Qk, E, F);
+        if (mk != m0) return 0;
+        for (int side = 0; side < 2; side++)
+            for (int i = 0; i < m0; i++) {
+                const double *a = (side ? Qk : Q0) + 6 * i, *B = side ? Q0 : Qk;
+                int near = 0;
+                for (int j = 0; j < m0 && !near; j++) near = ikc_row_distance(rb, a, B + 6 * j) < G6_COLLIDE;
+                if (!near) return 0;
+            }
+    }
+    return 1;
+}
+
 /* A target doubtful under every arrangement (a double root at a singular configuration, a pencil
  * singular at the target: 189 of 300 Jaco poses with every joint at 0, +-pi/2, pi; docs/general6.md
- * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  The eigenvalue
- * candidates (g6_eigen_roots) of every arrangement for the target and for four copies rotated by
- * +-G6_COPY_ANGLE about two fixed axes (a double root splits; a singular pencil becomes regular), each
- * polished toward the true target by truncated Newton steps (g6_truncated_newton: they keep the weak
- * direction the eigenvector read gave), the stalled ones by plain steps; the exact rows pooled.  -1 when
- * no arrangement gave candidates (the Python general6 takes the target). */
+ * "Special poses"): general6.py's doubtful-target path in C, uncertified as it is.  First the target's
+ * own eigenvalue candidates under every arrangement (g6_eigen_source); where the arrangements disagree
+ * (g6_sources_agree), one gave no candidates or one was weak (G6_WEAK_*), also four copies rotated by
+ * +-G6_COPY_ANGLE about two fixed axes under each (a double root splits; a singular pencil becomes
+ * regular), as general6.py does.
+ * Every source's exact rows are pooled, then merged: one arrangement's rows are not chosen over
+ * another's (xarm7, a root pair 1.3e-5 rad apart: each arrangement found one of the two).  -1 when no
+ * source gave candidates (the Python general6 takes the target). */
 static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, const double *g, double *Q, double *E,
                            int *F) {
     if (rb->dof != 6 || rb->nfree) return -1;  /* the six solved joints alone (g6_truncated_newton) */
@@ -1200,30 +1312,22 @@ static int g6_eigen_leaves(const ikc_robot *rb, const ikc_g6 *G, int count, cons
                                   * absent columns are not treated here (a modular RRRRTT lost 2 of 10
                                   * verify poses): its doubtful targets stay Python's */
         if (G->prism[j]) return -1;
-    const double exact = rb->tol * rb->scale;
     double P[6 * G6_POOL], PE[G6_POOL];
-    int np = 0, answered = 0;
-    for (int c = 0; c < 5; c++)
-        for (int k = 0; k < count; k++) {
-            double Qc[6 * 32], gr[12];
-            if (c == 0)
-                for (int i = 0; i < 12; i++) gr[i] = g[i];
-            else
+    int np = 0, answered = 0, weak = 0, from[count + 1];
+    for (int k = 0; k < count; k++) {
+        from[k] = np;
+        const int w = g6_eigen_source(rb, G + k, g, g, P, PE, &np);
+        answered += w >= 0;
+        weak |= w;  /* -1: every bit */
+    }
+    from[count] = np;
+    if (answered < count || weak || !g6_sources_agree(rb, P, PE, from, count))
+        for (int c = 1; c < 5; c++)
+            for (int k = 0; k < count; k++) {
+                double gr[12];
                 g6_rotated_target(G, g6_copy_axes[(c - 1) % 2], c > 2 ? -G6_COPY_ANGLE : G6_COPY_ANGLE, g, gr);
-            const int n = g6_candidates(G + k, gr, Qc, 1);
-            if (n < 0) continue;
-            answered++;
-            for (int j = 0; j < n && np < G6_POOL; j++) {
-                double *q = Qc + 6 * j;
-                double e = g6_truncated_newton(rb, g, q, G6_TRUNCATED_STEPS, G6_PINV_RCOND);
-                if (e > exact && e < G6_STALLED * rb->scale)  /* stalled: a near-double root (_undamped) */
-                    e = g6_truncated_newton(rb, g, q, G6_UNDAMPED_STEPS, G6_UNDAMPED_RCOND);
-                if (!(e <= exact)) continue;
-                for (int i = 0; i < 6; i++) P[6 * np + i] = q[i];
-                PE[np] = e;
-                np++;
+                answered += g6_eigen_source(rb, G + k, gr, g, P, PE, &np) >= 0;
             }
-        }
     if (!answered) return -1;
     /* the exact rows, best first; one closer than G6_SAME to a kept row is that row (general6.py _pack;
      * at a double root the candidates end 1e-6..4e-5 apart, each exact, and the one nearest the root is

@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from ikcompiler import compiler, configs, robotdb
-from ikcompiler.verify import verify
+from ikcompiler.verify import sample_configurations, verify
 
 # (package, file name, tip link): what the chain is and why it is in the sample
 SAMPLE = [
@@ -746,3 +747,29 @@ def test_a_stalled_copy_of_a_root_at_a_wrist_lock_is_one_row(catalogue, native):
     assert (d <= 1e-4).sum() == 1, d  # the sampled solution once, not also its stalled copy
     Q, valid = module.solve_batch(chain.fk(q)[None], *[np.array([f]) for f in free])
     assert valid[0].sum() == len(rows)
+
+
+def test_a_close_root_pair_split_between_the_arrangements_keeps_both_rows(catalogue):
+    """xarm7.urdf (example-robot-data, free end joint joint7, general-6r): special pose 56 of seed 1 has
+    two root pairs 1.3e-5 and 2.6e-5 rad apart, the sampled vector one of the first.  The C's eigenvalue
+    path (general6.h g6_eigen_leaves) solves the target's own eigenproblems first and the rotated copies
+    only where the arrangements disagree; a version that kept one arrangement's rows lost one row of a
+    pair (each arrangement found one of the two) and the sampled vector with it (199 of 200 recovered).
+    The rows of every source are pooled: the reference runtime's four rows, and all 200 poses."""
+    chain = _entry(catalogue, "example-robot-data", "xarm7.urdf", "link_eef").load()
+    module = configs.compile_chain(chain).module
+    assert module.METHOD == "general-6r" and list(module.FREE_JOINTS) == ["joint7"], module.PLAN
+    Q = sample_configurations(chain, 200, 1, 1.0, (module.LOWER, module.UPPER))
+    q = Q[56]
+    T = chain.fk_batch(Q[56:57])[0]
+    rows = module.solve(T, q[6])
+    module.NATIVE = False
+    try:
+        reference = module.solve(T, q[6])
+    finally:
+        module.NATIVE = True
+    gap = np.abs(np.angle(np.exp(1j * (reference[:, None, :] - rows[None, :, :])))).max(axis=2)
+    assert len(reference) == 4 and gap.min(axis=1).max() < 1e-6, (rows, reference)
+    assert np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1).min() < 1e-6, rows
+    rep = verify(chain, module, samples=200, seed=1, special=1.0, scalar_checks=3)
+    assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0 and rep.duplicates == 0, rep.text()
