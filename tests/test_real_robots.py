@@ -773,3 +773,21 @@ def test_a_close_root_pair_split_between_the_arrangements_keeps_both_rows(catalo
     assert np.abs(np.angle(np.exp(1j * (rows - q)))).max(axis=1).min() < 1e-6, rows
     rep = verify(chain, module, samples=200, seed=1, special=1.0, scalar_checks=3)
     assert rep.wrong == 0 and rep.missed == 0 and rep.batch_mismatch == 0 and rep.duplicates == 0, rep.text()
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_near_gimbal_lock_of_a_snapped_five_joint_arm_takes_the_alternative_chain(catalogue, native):
+    """px150.urdf.xacro (rtb-data) perturbed by 1e-6 (seed 8), verify's special pose 18 of seed 1, q =
+    (pi/2, -pi/2, pi/2, pi/2, pi/2): the snapped O-RRR in (waist, shoulder - elbow - wrist_angle,
+    wrist_rotate) is near its gimbal lock, the outer axes aligned only to about the change in geometry,
+    so no FAMILY leaf: a tangent root, its waist read off nearly parallel vectors (0.21 and -1.43), and
+    two least-squares rows of the other waist branch came back.  Such a target (no exact row, a tangent
+    leaf, a reduced chain with an alternative chain) now takes the alternative chain (H-R: the waist
+    from the position), in C by handing it back (dispatch.Solver.tangent_misses, ikc_polished)."""
+    import numpy as np
+
+    chain, module, q, free = _perturbed_pose(catalogue, "rtb-data", "px150.urdf.xacro", "/ee_arm_link",
+                                             1e-6, 8, 30, 1, 1.0, 18, native)
+    assert np.allclose(np.abs(q), np.pi / 2) and module._ALT_STEPS
+    d = _distances(chain, module.solve(chain.fk(q), *free), q)
+    assert d.min() <= 1e-6, d

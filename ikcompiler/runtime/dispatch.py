@@ -176,6 +176,8 @@ class Solver:
         # two snapped copies) are one row: merged as the Newton route merges split roots
         parts = list(_fk.merge_split_roots(reference.complete(r, TH, rows, none, cont, goals, limits),
                                            r.joint_types))
+        near_lock = self.tangent_misses(parts, flag) & ~defer
+        lock, defer = lock | near_lock, defer | near_lock
         idx = np.nonzero(defer)[0]
         if len(idx):
             # a gimbal lock's fast leaves join the reference steps' candidates (reference._with_leaves)
@@ -184,6 +186,21 @@ class Solver:
             _scatter(parts, idx, self.reference_chunk(goals[idx], Td[idx], init[idx], limits, lock[idx],
                                                       leaves))
         return tuple(parts)
+
+    def tangent_misses(self, parts, flag):
+        """Targets (N,) of a snapped plan of fewer than 6 joints with an alternative chain where no row
+        ended exact and a leaf met a tangent root: the snapped O-RRR near its gimbal lock (the true
+        target's rotation aligns its outer axes only to about the change in geometry, so the lock is
+        no FAMILY leaf), whose outer angles the chain then reads off nearly parallel vectors.  The
+        reference runtime takes the alternative chain there, as at a lock (reference.with_alternative;
+        the C finish hands them back: ikc_polished).  trossen px150 of rtb-data at 1e-6, seed 8, q =
+        (pi/2, -pi/2, pi/2, pi/2, pi/2): two least-squares rows of the other waist branch came back."""
+        r = self.robot
+        if not r.alt_steps or len(r.vary) >= 6:
+            return np.zeros(len(flag), dtype=bool)
+        _, valid, ls, _, _ = parts
+        tangent = ((flag & _fk.TANGENT_ROOT) != 0) & ((flag & _fk.EMPTY) == 0)
+        return tangent.any(axis=1) & ~(valid & ~ls).any(axis=1)
 
     def handed_back(self, goals, Td, init, limits):
         """Targets the C chain could not settle.  It ran the fast path already: what is left is the

@@ -330,7 +330,7 @@ def resolved_families(robot, TH, owner, ls, cont, goals):
         return TH, owner, ls, cont
     exact = robot.tol * robot.scale
     err = robot.error(_rt.fk_batch(robot.twists, np.nan_to_num(TH), robot.home), goals[owner])
-    resolved = cont & ~ls & (err <= exact)
+    resolved = cont & (err <= exact)  # a step's ls flag is stale once Newton made the row exact
     resolved[resolved] = selfmotion.full_rank(robot, TH[resolved])
     rows = np.nonzero(resolved)[0]
     if not len(rows):
