@@ -356,13 +356,20 @@ static double ikc_wrap(double x) {
 #define IKC_CLAMPED_NEWTON 3  /* Newton steps with a clamped joint held (reference.clamped_onto_limits) */
 
 /* fast.represent_one: joint values q (in place) as returned -- a revolute value as its representative in
- * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status. */
-static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
+ * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status.
+ * Inlined with `dof` a constant where the finish is specialised to 6 joints (ikc_finish), and the robot's
+ * arrays read through locals: the stores to q could alias them, so GCC reloaded rb's fields at every
+ * joint (docs/design.md section 14, session 18). */
+static inline __attribute__((always_inline)) int ikc_represent_n(const ikc_robot *rb, double *q, int limits,
+                                                                 int *clamped, const int dof) {
+    const int *revolute = rb->revolute;
+    const double *lower = rb->lower, *upper = rb->upper;
     int status = IKC_INSIDE;
-    for (int j = 0; j < rb->dof; j++) {
-        if (clamped) clamped[j] = 0;
+    if (clamped)
+        for (int j = 0; j < dof; j++) clamped[j] = 0;
+    for (int j = 0; j < dof; j++) {
         double x = q[j];
-        const int rev = rb->revolute[j];
+        const int rev = revolute[j];
         if (rev) {
             x = ikc_wrap(x);
             if (x <= -IKC_PI_F + IKC_PI_SNAP) {
@@ -370,7 +377,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clampe
                 x = IKC_PI_F;
             }
         }
-        const double lo = rb->lower[j], hi = rb->upper[j];
+        const double lo = lower[j], hi = upper[j];
         if (limits && !(lo <= x && x <= hi)) {
             double c[3] = {x, x - IKC_TWO_PI, x + IKC_TWO_PI};
             const int nc = rev ? 3 : 1;
@@ -389,6 +396,10 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clampe
         q[j] = x;
     }
     return status;
+}
+
+static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
+    return ikc_represent_n(rb, q, limits, clamped, rb->dof);
 }
 
 /* Whether joint values q have a representative inside the limits (q itself unchanged). */
@@ -410,9 +421,11 @@ static double ikc_measure(const ikc_robot *rb, const double *g, const double *q)
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
  * path gives them.  Returns the count, IKC_PYTHON, or IKC_FAMILY_MISS.  Outputs: q (slots x dof), res,
  * ls (inexact), cont (a representative of a self-motion). */
-static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
-                      const int *F, int limits, double *q, double *res, int *ls, int *cont) {
-    const int dof = rb->dof;
+static inline __attribute__((always_inline)) int ikc_finish_n(const ikc_robot *rb, const double *g, int n,
+                                                               const double *Q, const double *E, const int *F,
+                                                               int limits, double *q, double *res, int *ls,
+                                                               int *cont, const int dof) {
+    const int *revolute = rb->revolute;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
     const int m = n > 0 ? n : 1;
@@ -454,7 +467,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
         for (int j = 0; j < dof; j++)
             if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-        int held[dof], status = ikc_represent(rb, w, limits, held);
+        int held[dof], status = ikc_represent_n(rb, w, limits, held, dof);
         const int was_exact = err[k] <= exact_tol, clamped = status == IKC_CLAMPED;
         if (clamped) {
             /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
@@ -463,7 +476,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             same = IKC_SPLIT_ROOT;  /* Newton placed this row: a copy of it may stop 1e-7 away */
             for (int j = 0; j < dof; j++)
                 if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-            status = ikc_represent(rb, w, limits, held);
+            status = ikc_represent_n(rb, w, limits, held, dof);
             if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* again: Python */
             if (status != IKC_OUTSIDE) status = IKC_ADJUSTED;
         }
@@ -501,7 +514,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             int differs = 0;
             for (int j = 0; j < dof; j++) {
                 double d = w[j] > o[j] ? w[j] - o[j] : o[j] - w[j];
-                if (rb->revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
+                if (revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
                     d = ikc_mod_two_pi(d);
                     if (d > IKC_PI_F) d = IKC_TWO_PI - d;
                 }
@@ -520,6 +533,15 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         kept++;
     }
     return kept;
+}
+
+/* ikc_finish_n with the joint count a constant for 6-joint arms (the closed-form chains of a batch): the
+ * row copies, the NaN test, ikc_represent and the duplicate test unrolled, no memcpy calls; the same
+ * operations in the same order, so the same bits. */
+static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
+                      const int *F, int limits, double *q, double *res, int *ls, int *cont) {
+    if (rb->dof == 6) return ikc_finish_n(rb, g, n, Q, E, F, limits, q, res, ls, cont, 6);
+    return ikc_finish_n(rb, g, n, Q, E, F, limits, q, res, ls, cont, rb->dof);
 }
 
 /* goal_entries: the 12 entries (rotation row-major, translation) of one raw target (16 entries for a
@@ -1864,8 +1886,8 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     if (finish) {
         double Ql[m * dof], El[m];
         int Fl[m];
+        for (int t = 0; t < n * dof; t++) Ql[t] = Q[4 * t + l];  /* value t = k dof + j of leaf k */
         for (int k = 0; k < n; k++) {
-            for (int j = 0; j < dof; j++) Ql[k * dof + j] = Q[4 * (k * dof + j) + l];
             El[k] = E[4 * k + l];
             Fl[k] = (int)F[4 * k + l];
         }
