@@ -416,6 +416,51 @@ static double ikc_measure(const ikc_robot *rb, const double *g, const double *q)
     return ikc_pose_error(rb, G, g);
 }
 
+/* ---- ikc_finish's test of a row ikc_represent keeps as it is, on 6 joints, 4 lanes at a time (joints
+ * 0-3, then 4, 5 and two zeros) ----
+ * Each lane makes the scalar code's comparisons, so the verdict is the scalar loops' (docs/design.md
+ * section 14, session 18); a row it does not pass takes the scalar NaN test and ikc_represent.  (Tried:
+ * 8-lane vectors, whose comparisons GCC made scalar branches on AVX2; the duplicate test in lanes,
+ * slower than the scalar loop, which mostly stops at the first or second joint.) */
+typedef double ikc_f4 __attribute__((vector_size(32)));
+typedef int64_t ikc_b4 __attribute__((vector_size(32)));
+typedef struct {
+    ikc_f4 a, b;  /* joints 0-3; joints 4, 5 and two zeros */
+} ikc_row6;
+#define IKC_F4(x) ((ikc_f4){(x), (x), (x), (x)})
+
+static inline ikc_row6 ikc_row6_load(const double *w) {
+    ikc_row6 r;
+    __builtin_memcpy(&r.a, w, sizeof r.a);
+    r.b = (ikc_f4){w[4], w[5], 0.0, 0.0};
+    return r;
+}
+
+static inline int ikc_b4_any(ikc_b4 m) {  /* any lane set (the masks are 0 or -1) */
+#if defined(__AVX__) && defined(__GNUC__) && !defined(__clang__)
+    return __builtin_ia32_movmskpd256((ikc_f4)m) != 0;
+#else
+    return ((m[0] | m[1]) | (m[2] | m[3])) != 0;
+#endif
+}
+
+/* ikc_row6_kept's test on 4 lanes: a NaN, a revolute value outside (-pi + IKC_PI_SNAP, pi], a value
+ * outside its limits where they apply */
+static inline ikc_b4 ikc_f4_moved(ikc_f4 x, ikc_b4 rev, ikc_f4 lo, ikc_f4 hi, int limits) {
+    ikc_b4 bad = (x != x) | (rev & ~((x > IKC_F4(-IKC_PI_F + IKC_PI_SNAP)) & (x <= IKC_F4(IKC_PI_F))));
+    if (limits) bad |= ~((lo <= x) & (x <= hi));
+    return bad;
+}
+
+/* Whether ikc_represent would leave row x as it is with IKC_INSIDE, and x holds no NaN: every revolute
+ * value above -pi + IKC_PI_SNAP and at most pi (ikc_wrap keeps it, the snap does not move it), every
+ * value inside its limits where they apply.  rev: -1 on the revolute joints (0 on the padding). */
+static inline int ikc_row6_kept(ikc_row6 x, const ikc_b4 *rev, const ikc_row6 *lo, const ikc_row6 *hi,
+                                int limits) {
+    return !ikc_b4_any(ikc_f4_moved(x.a, rev[0], lo->a, hi->a, limits) |
+                       ikc_f4_moved(x.b, rev[1], lo->b, hi->b, limits));
+}
+
 /* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
  * by error, duplicates (equal modulo 2 pi) and rows outside the limits left out.  Near misses (a
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
@@ -428,6 +473,15 @@ static inline __attribute__((always_inline)) int ikc_finish_n(const ikc_robot *r
     const int *revolute = rb->revolute;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
+    ikc_b4 rev6[2] = {{0, 0, 0, 0}, {0, 0, 0, 0}};  /* the 6-joint row tests' robot: revolute mask, limits */
+    ikc_row6 lo6 = {IKC_F4(0.0), IKC_F4(0.0)}, hi6 = lo6;
+    if (dof == 6) {
+        const int *r = revolute;
+        rev6[0] = (ikc_b4){-(int64_t)(r[0] != 0), -(int64_t)(r[1] != 0), -(int64_t)(r[2] != 0), -(int64_t)(r[3] != 0)};
+        rev6[1] = (ikc_b4){-(int64_t)(r[4] != 0), -(int64_t)(r[5] != 0), 0, 0};
+        lo6 = ikc_row6_load(rb->lower);
+        hi6 = ikc_row6_load(rb->upper);
+    }
     const int m = n > 0 ? n : 1;
     int rows[m], inexact[m], polished[m];
     double W[m * dof], err[m], P[m * dof], PE[m];
@@ -465,9 +519,12 @@ static inline __attribute__((always_inline)) int ikc_finish_n(const ikc_robot *r
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
-        for (int j = 0; j < dof; j++)
-            if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-        int held[dof], status = ikc_represent_n(rb, w, limits, held, dof);
+        int held[dof], status = IKC_INSIDE;
+        if (!(dof == 6 && ikc_row6_kept(ikc_row6_load(w), rev6, &lo6, &hi6, limits))) {
+            for (int j = 0; j < dof; j++)
+                if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
+            status = ikc_represent_n(rb, w, limits, held, dof);
+        }
         const int was_exact = err[k] <= exact_tol, clamped = status == IKC_CLAMPED;
         if (clamped) {
             /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
