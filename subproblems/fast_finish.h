@@ -331,17 +331,25 @@ static double ikc_newton_once(const ikc_robot *rb, const double *g, double *q, i
     return e;
 }
 
-/* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit: fmod returns d itself below 2 pi, so the
- * libm call (~10 a pose in the finish's duplicate test) is made only above. */
-static inline double ikc_mod_two_pi(double d) {
-    return d < IKC_TWO_PI ? d : fmod(d, IKC_TWO_PI);
+/* fmod(x, 2 pi), bit for bit, the libm call made only where it is needed: x itself below 2 pi in
+ * magnitude (fmod returns it), x -+ 2 pi strictly between 2 pi and 4 pi (fmod's x - 2 pi trunc(x / 2 pi)
+ * with a quotient of 1, and the subtraction is exact by Sterbenz's lemma; at -2 pi itself fmod gives
+ * -0.0, so the ends take the call).  ur5's q4, a difference of angles, lies in (-3 pi, 3 pi). */
+static inline double ikc_fmod_two_pi(double x) {
+    const double a = fabs(x);
+    if (a < IKC_TWO_PI) return x;
+    if (IKC_TWO_PI < a && a < 2.0 * IKC_TWO_PI) return x > 0.0 ? x - IKC_TWO_PI : x + IKC_TWO_PI;
+    return fmod(x, IKC_TWO_PI);
 }
+
+/* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit (the finish's duplicate test). */
+static inline double ikc_mod_two_pi(double d) { return ikc_fmod_two_pi(d); }
 
 /* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
  * subtraction is exact by Sterbenz's lemma). */
 static double ikc_wrap(double x) {
     if (-IKC_PI_F < x && x <= IKC_PI_F) return x;
-    double r = fmod(x, IKC_TWO_PI);
+    double r = ikc_fmod_two_pi(x);
     if (r > IKC_PI_F) r -= IKC_TWO_PI;
     else if (r <= -IKC_PI_F) r += IKC_TWO_PI;
     return r;
