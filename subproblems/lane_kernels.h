@@ -14,8 +14,10 @@
  * ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar IEEE operation: no
  * -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
  * whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
- * angles (atan2, acos: the joint values themselves, never the cosines and sines the chain reads) come
- * from glibc's libmvec, within a few ulps of libm's (benchmarks/results/batch_simd.md).
+ * angles (atan2, acos: the joint values themselves, never the cosines and sines of a kernel's outputs,
+ * which come from its pairs) come from glibc's libmvec, within a few ulps of libm's
+ * (benchmarks/results/batch_simd.md), and so do cos and sin of a value the chain computes from those
+ * angles (ur5's q4, ikc_v_cos / ikc_v_sin), which is a few ulps from ikc_chain's already.
  */
 #ifndef IKC_LANE_KERNELS_H
 #define IKC_LANE_KERNELS_H
