@@ -373,17 +373,25 @@ static double ikc_newton_once(const ikc_robot *rb, const double *g, double *q, i
     return e;
 }
 
-/* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit: fmod returns d itself below 2 pi, so the
- * libm call (~10 a pose in the finish's duplicate test) is made only above. */
-static inline double ikc_mod_two_pi(double d) {
-    return d < IKC_TWO_PI ? d : fmod(d, IKC_TWO_PI);
+/* fmod(x, 2 pi), bit for bit, the libm call made only where it is needed: x itself below 2 pi in
+ * magnitude (fmod returns it), x -+ 2 pi strictly between 2 pi and 4 pi (fmod's x - 2 pi trunc(x / 2 pi)
+ * with a quotient of 1, and the subtraction is exact by Sterbenz's lemma; at -2 pi itself fmod gives
+ * -0.0, so the ends take the call).  ur5's q4, a difference of angles, lies in (-3 pi, 3 pi). */
+static inline double ikc_fmod_two_pi(double x) {
+    const double a = fabs(x);
+    if (a < IKC_TWO_PI) return x;
+    if (IKC_TWO_PI < a && a < 2.0 * IKC_TWO_PI) return x > 0.0 ? x - IKC_TWO_PI : x + IKC_TWO_PI;
+    return fmod(x, IKC_TWO_PI);
 }
+
+/* fmod(d, 2 pi) of a distance d >= 0 (or NaN), bit for bit (the finish's duplicate test). */
+static inline double ikc_mod_two_pi(double d) { return ikc_fmod_two_pi(d); }
 
 /* subproblems.angles.wrap, bit for bit: x - 2 pi k in (-pi, pi], exact (fmod is exact, and the one
  * subtraction is exact by Sterbenz's lemma). */
 static double ikc_wrap(double x) {
     if (-IKC_PI_F < x && x <= IKC_PI_F) return x;
-    double r = fmod(x, IKC_TWO_PI);
+    double r = ikc_fmod_two_pi(x);
     if (r > IKC_PI_F) r -= IKC_TWO_PI;
     else if (r <= -IKC_PI_F) r += IKC_TWO_PI;
     return r;
@@ -398,13 +406,20 @@ static double ikc_wrap(double x) {
 #define IKC_CLAMPED_NEWTON 3  /* Newton steps with a clamped joint held (reference.clamped_onto_limits) */
 
 /* fast.represent_one: joint values q (in place) as returned -- a revolute value as its representative in
- * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status. */
-static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
+ * (-pi, pi] where that lies inside the limits, else its 2 pi alias inside them -- and the status.
+ * Inlined with `dof` a constant where the finish is specialised to 6 joints (ikc_finish), and the robot's
+ * arrays read through locals: the stores to q could alias them, so GCC reloaded rb's fields at every
+ * joint (docs/design.md section 14, session 18). */
+static inline __attribute__((always_inline)) int ikc_represent_n(const ikc_robot *rb, double *q, int limits,
+                                                                 int *clamped, const int dof) {
+    const int *revolute = rb->revolute;
+    const double *lower = rb->lower, *upper = rb->upper;
     int status = IKC_INSIDE;
-    for (int j = 0; j < rb->dof; j++) {
-        if (clamped) clamped[j] = 0;
+    if (clamped)
+        for (int j = 0; j < dof; j++) clamped[j] = 0;
+    for (int j = 0; j < dof; j++) {
         double x = q[j];
-        const int rev = rb->revolute[j];
+        const int rev = revolute[j];
         if (rev) {
             x = ikc_wrap(x);
             if (x <= -IKC_PI_F + IKC_PI_SNAP) {
@@ -412,7 +427,7 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clampe
                 x = IKC_PI_F;
             }
         }
-        const double lo = rb->lower[j], hi = rb->upper[j];
+        const double lo = lower[j], hi = upper[j];
         if (limits && !(lo <= x && x <= hi)) {
             double c[3] = {x, x - IKC_TWO_PI, x + IKC_TWO_PI};
             const int nc = rev ? 3 : 1;
@@ -433,6 +448,10 @@ static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clampe
     return status;
 }
 
+static int ikc_represent(const ikc_robot *rb, double *q, int limits, int *clamped) {
+    return ikc_represent_n(rb, q, limits, clamped, rb->dof);
+}
+
 /* Whether joint values q have a representative inside the limits (q itself unchanged). */
 static int ikc_row_inside(const ikc_robot *rb, const double *q) {
     double w[rb->dof];
@@ -447,16 +466,72 @@ static double ikc_measure(const ikc_robot *rb, const double *g, const double *q)
     return ikc_pose_error(rb, G, g);
 }
 
+/* ---- ikc_finish's test of a row ikc_represent keeps as it is, on 6 joints, 4 lanes at a time (joints
+ * 0-3, then 4, 5 and two zeros) ----
+ * Each lane makes the scalar code's comparisons, so the verdict is the scalar loops' (docs/design.md
+ * section 14, session 18); a row it does not pass takes the scalar NaN test and ikc_represent.  (Tried:
+ * 8-lane vectors, whose comparisons GCC made scalar branches on AVX2; the duplicate test in lanes,
+ * slower than the scalar loop, which mostly stops at the first or second joint.) */
+typedef double ikc_f4 __attribute__((vector_size(32)));
+typedef int64_t ikc_b4 __attribute__((vector_size(32)));
+typedef struct {
+    ikc_f4 a, b;  /* joints 0-3; joints 4, 5 and two zeros */
+} ikc_row6;
+#define IKC_F4(x) ((ikc_f4){(x), (x), (x), (x)})
+
+static inline ikc_row6 ikc_row6_load(const double *w) {
+    ikc_row6 r;
+    __builtin_memcpy(&r.a, w, sizeof r.a);
+    r.b = (ikc_f4){w[4], w[5], 0.0, 0.0};
+    return r;
+}
+
+static inline int ikc_b4_any(ikc_b4 m) {  /* any lane set (the masks are 0 or -1) */
+#if defined(__AVX__) && defined(__GNUC__) && !defined(__clang__)
+    return __builtin_ia32_movmskpd256((ikc_f4)m) != 0;
+#else
+    return ((m[0] | m[1]) | (m[2] | m[3])) != 0;
+#endif
+}
+
+/* ikc_row6_kept's test on 4 lanes: a NaN, a revolute value outside (-pi + IKC_PI_SNAP, pi], a value
+ * outside its limits where they apply */
+static inline ikc_b4 ikc_f4_moved(ikc_f4 x, ikc_b4 rev, ikc_f4 lo, ikc_f4 hi, int limits) {
+    ikc_b4 bad = (x != x) | (rev & ~((x > IKC_F4(-IKC_PI_F + IKC_PI_SNAP)) & (x <= IKC_F4(IKC_PI_F))));
+    if (limits) bad |= ~((lo <= x) & (x <= hi));
+    return bad;
+}
+
+/* Whether ikc_represent would leave row x as it is with IKC_INSIDE, and x holds no NaN: every revolute
+ * value above -pi + IKC_PI_SNAP and at most pi (ikc_wrap keeps it, the snap does not move it), every
+ * value inside its limits where they apply.  rev: -1 on the revolute joints (0 on the padding). */
+static inline int ikc_row6_kept(ikc_row6 x, const ikc_b4 *rev, const ikc_row6 *lo, const ikc_row6 *hi,
+                                int limits) {
+    return !ikc_b4_any(ikc_f4_moved(x.a, rev[0], lo->a, hi->a, limits) |
+                       ikc_f4_moved(x.b, rev[1], lo->b, hi->b, limits));
+}
+
 /* finish_one: solutions of one target (goal g, 12 entries) from its leaves, sorted exact first then
  * by error, duplicates (equal modulo 2 pi) and rows outside the limits left out.  Near misses (a
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
  * path gives them.  Returns the count, IKC_PYTHON, or IKC_FAMILY_MISS.  Outputs: q (slots x dof), res,
  * ls (inexact), cont (a representative of a self-motion). */
-static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
-                      const int *F, int limits, double *q, double *res, int *ls, int *cont) {
-    const int dof = rb->dof;
+static inline __attribute__((always_inline)) int ikc_finish_n(const ikc_robot *rb, const double *g, int n,
+                                                               const double *Q, const double *E, const int *F,
+                                                               int limits, double *q, double *res, int *ls,
+                                                               int *cont, const int dof) {
+    const int *revolute = rb->revolute;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
+    ikc_b4 rev6[2] = {{0, 0, 0, 0}, {0, 0, 0, 0}};  /* the 6-joint row tests' robot: revolute mask, limits */
+    ikc_row6 lo6 = {IKC_F4(0.0), IKC_F4(0.0)}, hi6 = lo6;
+    if (dof == 6) {
+        const int *r = revolute;
+        rev6[0] = (ikc_b4){-(int64_t)(r[0] != 0), -(int64_t)(r[1] != 0), -(int64_t)(r[2] != 0), -(int64_t)(r[3] != 0)};
+        rev6[1] = (ikc_b4){-(int64_t)(r[4] != 0), -(int64_t)(r[5] != 0), 0, 0};
+        lo6 = ikc_row6_load(rb->lower);
+        hi6 = ikc_row6_load(rb->upper);
+    }
     const int m = n > 0 ? n : 1;
     int rows[m], inexact[m], polished[m];
     double W[m * dof], err[m], P[m * dof], PE[m];
@@ -494,9 +569,12 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             same = IKC_SPLIT_ROOT;  /* Newton converges only linearly at a double root */
         }
         if (flag & IKC_TANGENT_ROOT) same = IKC_SPLIT_ROOT;
-        for (int j = 0; j < dof; j++)
-            if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-        int held[dof], status = ikc_represent(rb, w, limits, held);
+        int held[dof], status = IKC_INSIDE;
+        if (!(dof == 6 && ikc_row6_kept(ikc_row6_load(w), rev6, &lo6, &hi6, limits))) {
+            for (int j = 0; j < dof; j++)
+                if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
+            status = ikc_represent_n(rb, w, limits, held, dof);
+        }
         const int was_exact = err[k] <= exact_tol, clamped = status == IKC_CLAMPED;
         if (clamped) {
             /* a value clamped onto its limit (a root at a limit, located to roundoff): Newton steps on
@@ -505,7 +583,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             same = IKC_SPLIT_ROOT;  /* Newton placed this row: a copy of it may stop 1e-7 away */
             for (int j = 0; j < dof; j++)
                 if (w[j] != w[j]) return ikc_hand_back(IKC_WHY_NAN);
-            status = ikc_represent(rb, w, limits, held);
+            status = ikc_represent_n(rb, w, limits, held, dof);
             if (status == IKC_CLAMPED) return ikc_hand_back(IKC_WHY_CLAMPED);  /* again: Python */
             if (status != IKC_OUTSIDE) status = IKC_ADJUSTED;
         }
@@ -543,7 +621,7 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
             int differs = 0;
             for (int j = 0; j < dof; j++) {
                 double d = w[j] > o[j] ? w[j] - o[j] : o[j] - w[j];
-                if (rb->revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
+                if (revolute[j]) {  /* modulo 2 pi: the rows may hold 2 pi aliases */
                     d = ikc_mod_two_pi(d);
                     if (d > IKC_PI_F) d = IKC_TWO_PI - d;
                 }
@@ -562,6 +640,15 @@ static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double 
         kept++;
     }
     return kept;
+}
+
+/* ikc_finish_n with the joint count a constant for 6-joint arms (the closed-form chains of a batch): the
+ * row copies, the NaN test, ikc_represent and the duplicate test unrolled, no memcpy calls; the same
+ * operations in the same order, so the same bits. */
+static int ikc_finish(const ikc_robot *rb, const double *g, int n, const double *Q, const double *E,
+                      const int *F, int limits, double *q, double *res, int *ls, int *cont) {
+    if (rb->dof == 6) return ikc_finish_n(rb, g, n, Q, E, F, limits, q, res, ls, cont, 6);
+    return ikc_finish_n(rb, g, n, Q, E, F, limits, q, res, ls, cont, rb->dof);
 }
 
 /* goal_entries: the 12 entries (rotation row-major, translation) of one raw target (16 entries for a
@@ -1912,8 +1999,8 @@ static void ikc_block_pose(const ikc_robot *rb, const ikc_job *job, int64_t i, i
     if (finish) {
         double Ql[m * dof], El[m];
         int Fl[m];
+        for (int t = 0; t < n * dof; t++) Ql[t] = Q[4 * t + l];  /* value t = k dof + j of leaf k */
         for (int k = 0; k < n; k++) {
-            for (int j = 0; j < dof; j++) Ql[k * dof + j] = Q[4 * (k * dof + j) + l];
             El[k] = E[4 * k + l];
             Fl[k] = (int)F[4 * k + l];
         }

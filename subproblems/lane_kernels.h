@@ -14,8 +14,10 @@
  * ikc_chain computes for that pose (every +, -, *, /, sqrt of a lane is the scalar IEEE operation: no
  * -ffast-math, -ffp-contract=off); any other lane is handed to the scalar chain
  * whole (fast_finish.h ikc_many_block).  The one difference allowed: with IKC_LIBMVEC the
- * angles (atan2, acos: the joint values themselves, never the cosines and sines the chain reads) come
- * from glibc's libmvec, within a few ulps of libm's (benchmarks/results/batch_simd.md).
+ * angles (atan2, acos: the joint values themselves, never the cosines and sines of a kernel's outputs,
+ * which come from its pairs) come from glibc's libmvec, within a few ulps of libm's
+ * (benchmarks/results/batch_simd.md), and so do cos and sin of a value the chain computes from those
+ * angles (ur5's q4, ikc_v_cos / ikc_v_sin), which is a few ulps from ikc_chain's already.
  */
 #ifndef IKC_LANE_KERNELS_H
 #define IKC_LANE_KERNELS_H
@@ -115,15 +117,33 @@ static inline ikc_v4 ikc_v_acos(ikc_v4 x) { return ikc_v_acos_libm(x); }
 #endif
 
 /* cos and sin that a chain reads of a value other than a kernel's output (ur5's q4, a difference of
- * angles): libm's, lane by lane, so they round as ikc_chain's.  Written lane by lane, not as a loop, so
+ * angles).  libm's, lane by lane, so they round as ikc_chain's: written lane by lane, not as a loop, so
  * that GCC pairs cos and sin of one lane into one sincos call, as it does in ikc_chain (the same
- * values: glibc's sincos is its sin and cos; 8 libm calls a leaf became 4 on ur5) */
-static inline ikc_v4 ikc_v_cos(ikc_v4 x) {
+ * values: glibc's sincos is its sin and cos; 8 libm calls a leaf became 4 on ur5). */
+static inline ikc_v4 ikc_v_cos_libm(ikc_v4 x) {
     return (ikc_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
 }
-static inline ikc_v4 ikc_v_sin(ikc_v4 x) {
+static inline ikc_v4 ikc_v_sin_libm(ikc_v4 x) {
     return (ikc_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
 }
+#if IKC_LANE_VECTOR_ANGLES
+/* With libmvec's angles such a value is already a few ulps from ikc_chain's (its angles come from
+ * libmvec), so its cos and sin come from libmvec too (docs/design.md section 14, session 18); libm's
+ * where ikc_block_libm asks for them, whose lanes must be ikc_chain's bit for bit. */
+extern ikc_v4 _ZGVdN4v_cos(ikc_v4 x);
+extern ikc_v4 _ZGVdN4v_sin(ikc_v4 x);
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_cos_again(ikc_v4 x) { return ikc_v_cos_libm(x); }
+__attribute__((cold, noinline)) static ikc_v4 ikc_v_sin_again(ikc_v4 x) { return ikc_v_sin_libm(x); }
+static inline ikc_v4 ikc_v_cos(ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_cos_again(x) : _ZGVdN4v_cos(x);
+}
+static inline ikc_v4 ikc_v_sin(ikc_v4 x) {
+    return __builtin_expect(ikc_lane_libm, 0) ? ikc_v_sin_again(x) : _ZGVdN4v_sin(x);
+}
+#else
+static inline ikc_v4 ikc_v_cos(ikc_v4 x) { return ikc_v_cos_libm(x); }
+static inline ikc_v4 ikc_v_sin(ikc_v4 x) { return ikc_v_sin_libm(x); }
+#endif
 
 static inline ikc_v4 ikc_v_dot(const ikc_v4 *a, const ikc_v4 *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 

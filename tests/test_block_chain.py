@@ -215,3 +215,34 @@ def test_tangent_lanes_run_again_with_libm_angles_and_give_the_scalar_rows(monke
     assert np.array_equal(k0, k1) and (k0 > 0).all()
     for a, b in ((Q0, Q1), (v0, v1), (ls0, ls1), (r0, r1), (c0, c1)):
         assert np.array_equal(a, b)
+
+
+def _imported(nc):
+    """The names the block chain's library imports (nm -D, the version suffixes left off)."""
+    import subprocess
+
+    out = subprocess.run(["nm", "-D", "--undefined-only", nc._block_lib._name], capture_output=True,
+                         text=True, check=True).stdout
+    return {word.split("@")[0] for word in out.split()}
+
+
+def test_cos_and_sin_of_a_chain_value_come_from_libmvec_with_its_angles(monkeypatch):
+    """ur5's q4 is a difference of the lanes' angles (libmvec's, a few ulps from libm's), so its cos and
+    sin come from libmvec's AVX2 variants too, 4 lanes a call (lane_kernels.h ikc_v_cos / ikc_v_sin;
+    libm's in ikc_block_libm's run, whose lanes must be the scalar chain's, which
+    test_tangent_lanes_run_again_with_libm_angles_and_give_the_scalar_rows holds).  Fails where the
+    block chain built with libmvec takes them from libm lane by lane (the sincos calls of before:
+    ~1.6k of ur5's 14.3k instructions a pose)."""
+    import shutil
+
+    if "-mavx2" not in native.machine_flags():
+        pytest.skip("libmvec's AVX2 variants need an AVX2 build")
+    if shutil.which("nm") is None:
+        pytest.skip("no nm to list the block chain's symbols")
+    _, nc = _chains("ur5", monkeypatch, libmvec=True)
+    listed = _imported(nc)
+    assert "_ZGVdN4vv_atan2" in listed  # built with libmvec at all
+    assert "_ZGVdN4v_cos" in listed and "_ZGVdN4v_sin" in listed, listed
+    _, nc = _chains("ur5", monkeypatch, libmvec=False)  # libm's lane by lane without libmvec
+    listed = _imported(nc)
+    assert "_ZGVdN4v_cos" not in listed and "_ZGVdN4v_sin" not in listed
