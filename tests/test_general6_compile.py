@@ -427,6 +427,35 @@ def test_one_free_end_pose_is_moved_solved_and_checked_in_one_c_call(free):
     assert len(rows) and np.abs(np.angle(np.exp(1j * (rows - Q[0])))).max(axis=1).min() < 1e-6
 
 
+def test_free_joints_at_both_ends_move_the_target_from_both_sides_in_c():
+    # an 8-joint chain with j1 and j8 free, given last-first: the C's moved target has both P and S
+    # (free_ends.h ikc_fe_moved), each free value from its own slot; rows those of the Python reference
+    rng = np.random.default_rng(3)
+    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)),
+                         -math.pi, math.pi) for i in range(8))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    chain = Chain("random-8r", joints, home)
+    module = compile_robot(chain, free=("j8", "j1"))
+    assert module.METHOD == "general-6r" and module._SOLVER.free_ends_native() is not None
+    Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(20, 8))
+    T = chain.fk_batch(Q)
+    S, V = module.solve_batch(T, Q[:, 7], Q[:, 0])
+    module.NATIVE = False
+    try:
+        S2, V2 = module.solve_batch(T, Q[:, 7], Q[:, 0])
+    finally:
+        module.NATIVE = True
+    np.testing.assert_array_equal(V.sum(axis=1), V2.sum(axis=1))
+    for n in range(len(Q)):
+        a, b = S[n][V[n]], S2[n][V2[n]]
+        assert np.all(a[:, 0] == Q[n, 0]) and np.all(a[:, 7] == Q[n, 7])
+        gap = np.abs(np.angle(np.exp(1j * (a[:, None, :] - b[None, :, :])))).max(axis=2)
+        assert gap.min(axis=1).max() < 1e-9, n
+        assert np.abs(np.angle(np.exp(1j * (a - Q[n])))).max(axis=1).min() < 1e-6, n
+        np.testing.assert_array_equal(module.solve(T[n], Q[n, 7], Q[n, 0]), a)
+
+
 @pytest.mark.parametrize("free", ["j3", "j4"])
 def test_a_free_joint_between_solved_ones_folds_the_six_twists(free):
     # E = exp(xi_f q_f): the twists after the free joint become Ad_E xi_k, one 6R chain per free value
