@@ -427,6 +427,41 @@ def test_one_free_end_pose_is_moved_solved_and_checked_in_one_c_call(free):
     assert len(rows) and np.abs(np.angle(np.exp(1j * (rows - Q[0])))).max(axis=1).min() < 1e-6
 
 
+def test_the_c_hands_back_a_target_whose_exact_rows_miss_on_the_whole_robot():
+    # the whole-robot check in C is live: printed with M^-1 off by 1e-9 (the moved target wrong, the
+    # six's rows exact for it), every target goes back to Python, the reason IKC_WHY_WHOLE (10); with
+    # the true M^-1 the same targets are settled in C
+    from ikcompiler.codegen.csource import free_ends_c_source
+    from ikcompiler.runtime.freeends import NativeFreeEnds
+    from subproblems import native
+
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=("j7",))
+    robot = module._SOLVER.robot
+    Q = np.random.default_rng(31).uniform(-math.pi, math.pi, size=(8, 7))
+    T = chain.fk_batch(Q)
+
+    def bound(home_inv):
+        source = free_ends_c_source(
+            robot.general6, joint_types=robot.joint_types, lower=robot.lower, upper=robot.upper,
+            scale=robot.scale, tol=robot.tol, slots=robot.slots, twists=robot.twists, home=robot.home,
+            home_inv=home_inv, A=robot.A, b=robot.B, solved=list(range(6)), solved_pos=list(range(6)),
+            free_cols=[6], free_pos=[6])
+        lib = native.load(source)
+        return NativeFreeEnds(robot, lib, native.NativeChain(lib, dof=6, slots=robot.slots, nfree=0,
+                                                             target="pose"))
+
+    off = robot.home_inv.copy()
+    off[:3, 3] += 1e-9 * robot.scale
+    good, bad = bound(robot.home_inv), bound(off)
+    for n in range(len(Q)):
+        assert good.one(T[n], [float(Q[n, 6])], False) is not None, n
+        assert bad.one(T[n], [float(Q[n, 6])], False) is None, n
+        assert bad.native.last_reason() == 10, n
+    _, redo = bad.many(T, np.where(np.arange(7) == 6, Q, np.nan), limits=False)
+    assert redo.all()
+
+
 def test_free_joints_at_both_ends_move_the_target_from_both_sides_in_c():
     # an 8-joint chain with j1 and j8 free, given last-first: the C's moved target has both P and S
     # (free_ends.h ikc_fe_moved), each free value from its own slot; rows those of the Python reference
