@@ -55,7 +55,8 @@ last_error: str | None = None  # why the last load returned None (for `ikc compi
 _loaded: dict[str, ctypes.CDLL] = {}
 
 
-HEADERS = ("fast_kernels.h", "fast_finish.h", "general6.h")  # beside this file, put in front of every chain
+# beside this file, put in front of every chain
+HEADERS = ("fast_kernels.h", "fast_finish.h", "general6.h", "free_ends.h")
 
 
 def kernels_source() -> str:
@@ -225,9 +226,10 @@ def _key(*parts: str) -> str:
 # each signature from the header itself, so the two sides cannot disagree.  The finish calls the
 # chain through `ikc_robot.chain` (a pointer) either way: nothing is lost across the library edge.
 FINISH_ENTRIES = ("ikc_one", "ikc_one_exact", "ikc_many", "ikc_last_reason", "ikc_g6_leaves",
-                  "ikc_many_block")  # chains call
+                  "ikc_many_block", "ikc_free_one", "ikc_free_many")  # chains call
 # (ikc_last_reason: why this thread's last target was handed back, for the benchmarks' cause counts;
-# ikc_g6_leaves: the general-6r elimination of general6.h, docs/general6.md "Native path")
+# ikc_g6_leaves: the general-6r elimination of general6.h, docs/general6.md "Native path"; ikc_free_one,
+# ikc_free_many: free_ends.h, a general-6r module's free end joints, runtime/freeends.py)
 SHARED_PREFIX = "ikc_shared_"
 
 

@@ -190,53 +190,6 @@ def fk_batch(twists, Q, home=None) -> np.ndarray:
     return g if home is None else g @ np.asarray(home, dtype=float)
 
 
-class FixedTwistsFK:
-    """:func:`fk_batch` of one chain of fixed twists, its per-joint constants computed once: for a
-    twist xi (unit w, or w = 0) ``exp(xi^ t) = I + sin(t) A + (1 - cos(t)) B + t C`` with
-    ``A = [[W, -W (w x v)], [0, 0]]``, ``B = [[W^2, -W^2 (w x v)], [0, 0]]``, ``C = [[0, w (w.v)], [0, 0]]``
-    (W the hat of w; a prismatic twist has only ``C = [[0, v], [0, 0]]``).  Every joint's exponential of
-    every row is then one expression and the chain product n stacked matmuls: a few rows cost ~15 us
-    instead of fk_batch's ~40 us a joint (the free-end joints' whole-robot check of one pose,
-    runtime/freeends.py).  Agrees with :func:`fk_batch` to roundoff.
-
-    >>> tw = np.array([revolute_twist([0, 0, 1], [1, 0, 0]), prismatic_twist([0, 1, 0])])
-    >>> Q = np.array([[0.3, 2.0], [-1.0, 0.5]])
-    >>> bool(np.allclose(FixedTwistsFK(tw, np.eye(4))(Q), fk_batch(tw, Q, np.eye(4)), atol=1e-15))
-    True
-    """
-
-    def __init__(self, twists, home=None):
-        tw = np.asarray(twists, dtype=float).reshape(-1, 6)
-        # K[i] rows: A, B, C and I of joint i, flattened; a joint's exponential is [s, 1 - c, t, 1] @ K[i]
-        self.K = np.zeros((len(tw), 4, 4, 4))
-        self.K[:, 3] = np.eye(4)
-        for i, (v, w) in enumerate(zip(tw[:, :3], tw[:, 3:])):
-            if not w.any():
-                self.K[i, 2, :3, 3] = v
-                continue
-            W = hat(w)
-            wxv = cross3(w, v)
-            self.K[i, 0, :3, :3], self.K[i, 0, :3, 3] = W, -W @ wxv
-            self.K[i, 1, :3, :3], self.K[i, 1, :3, 3] = W @ W, -(W @ W) @ wxv
-            self.K[i, 2, :3, 3] = w * (w @ v)
-        self.K = self.K.reshape(len(tw), 4, 16)
-        self.home = None if home is None else np.asarray(home, dtype=float)
-
-    def __call__(self, Q) -> np.ndarray:
-        """Poses (M, 4, 4) of joint vectors Q (M, n), times home on the right when given."""
-        Q = np.asarray(Q, dtype=float)
-        M, n = Q.shape
-        if not n:
-            g = np.broadcast_to(np.eye(4), (M, 4, 4)).copy()
-            return g if self.home is None else g @ self.home
-        terms = np.stack([np.sin(Q), 1.0 - np.cos(Q), Q, np.ones_like(Q)], axis=-1)  # (M, n, 4)
-        G = (terms[:, :, None, :] @ self.K).reshape(M, n, 4, 4)
-        g = G[:, 0]
-        for i in range(1, n):
-            g = g @ G[:, i]
-        return g if self.home is None else g @ self.home
-
-
 def inverse_transform(g) -> np.ndarray:
     """Inverse of a rigid transform (4x4, or stacked (..., 4, 4)).
 

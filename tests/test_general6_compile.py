@@ -356,6 +356,141 @@ def test_a_free_end_value_and_its_2pi_alias_take_the_same_path_and_give_the_refe
             assert gap.min(axis=1).max() < 1e-9, n
 
 
+def _moved_in_python(fe, robot, T, value):
+    """The rows of one raw target as the free-end layer made them in Python (session 17): the moved
+    target by FreeEnds.targets, the six's C call on it, each exact row checked by our FK on the whole
+    robot; (q, residual, ls) or None where that layer handed the target to the batch form."""
+    init = np.full((1, len(robot.kinds)), np.nan)
+    init[0, robot.independent[robot.free[0]]] = value
+    found = fe.native.one(fe.split.targets(np.asarray(T, float)[None], init)[0], (), True)
+    if found is None:
+        return None
+    q6, res, ls, _ = found
+    Q = np.zeros((len(q6), len(robot.joint_names)))
+    Q[:, [robot.independent.index(j) for j in fe.split.solved]] = q6
+    Q[:, robot.free[0]] = value
+    err = robot.error(np.array([robot.fk(q) for q in Q]).reshape(-1, 4, 4), np.asarray(T, float)[None])
+    if not (err[~ls] <= robot.tol * robot.scale).all():
+        return None
+    res = res.copy()
+    res[~ls] = err[~ls]
+    return Q, res, ls
+
+
+@pytest.mark.parametrize("free", ["j1", "j7"])
+def test_one_free_end_pose_is_moved_solved_and_checked_in_one_c_call(free):
+    # NativeFreeEnds.one takes the raw target: the C (subproblems/free_ends.h) checks it, moves it by the
+    # free value, solves the six and checks every exact row on the whole robot; the rows are those of the
+    # Python layer it replaces (moved target, C call, our FK check) as sets to 1e-12, the residuals of
+    # exact rows the whole robot's error; a target that is not a rigid transform comes back None (the
+    # batch form then raises the module's typed error)
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=(free,))
+    fe, robot = module._SOLVER.free_ends_native(), module._SOLVER.robot
+    k = chain.independent_names.index(free)
+    Q = np.concatenate([np.random.default_rng(21).uniform(-math.pi, math.pi, size=(15, 7)),
+                        verify_mod.sample_configurations(chain, 15, seed=22, special=1.0)])
+    T = chain.fk_batch(Q)
+    compared = 0
+    for n in range(len(Q)):
+        got = fe.one(T[n], [float(Q[n, k])], True)
+        want = _moved_in_python(fe, robot, T[n], float(Q[n, k]))
+        assert (got is None) == (want is None), n
+        if got is None:
+            continue
+        compared += 1
+        q, res, ls, _ = got
+        assert np.all(q[:, k] == Q[n, k])  # the free value as given, in its column
+        assert len(q) == len(want[0]) and np.array_equal(ls, want[2]), n
+        gap = np.abs(np.angle(np.exp(1j * (q[:, None, :] - want[0][None, :, :])))).max(axis=2)
+        assert gap.min(axis=1).max() <= 1e-12 and gap.min(axis=0).max() <= 1e-12, n
+        # an exact row's residual is the whole robot's error of that row (our FK's, to its roundoff)
+        ours = robot.error(np.array([robot.fk(row) for row in q[~ls]]).reshape(-1, 4, 4), T[n][None])
+        np.testing.assert_allclose(res[~ls], ours, rtol=0, atol=1e-2 * robot.tol * robot.scale)
+        assert (res[~ls] <= robot.tol * robot.scale).all()
+    assert compared >= 25
+    bad = T[0].copy()
+    bad[0, 0] = np.nan
+    skew = T[0].copy()
+    skew[:3, :3] *= 1.01
+    lifted = T[0].copy()
+    lifted[3, 0] = 1e-9
+    for target in (bad, skew, lifted):
+        assert fe.one(target, [float(Q[0, k])], True) is None
+        with pytest.raises(module.InvalidTargetError):
+            module.solve(target, float(Q[0, k]))
+    # a rotation orthonormal only to ~1e-10 is projected (the Python check), then solved exactly
+    near = T[0].copy()
+    near[:3, :3] += 1e-10 * np.random.default_rng(23).normal(size=(3, 3))
+    assert fe.one(near, [float(Q[0, k])], True) is None
+    rows = module.solve(near, float(Q[0, k]))
+    assert len(rows) and np.abs(np.angle(np.exp(1j * (rows - Q[0])))).max(axis=1).min() < 1e-6
+
+
+def test_the_c_hands_back_a_target_whose_exact_rows_miss_on_the_whole_robot():
+    # the whole-robot check in C is live: printed with M^-1 off by 1e-9 (the moved target wrong, the
+    # six's rows exact for it), every target goes back to Python, the reason IKC_WHY_WHOLE (10); with
+    # the true M^-1 the same targets are settled in C
+    from ikcompiler.codegen.csource import free_ends_c_source
+    from ikcompiler.runtime.freeends import NativeFreeEnds
+    from subproblems import native
+
+    chain = _random_7r(3)
+    module = compile_robot(chain, free=("j7",))
+    robot = module._SOLVER.robot
+    Q = np.random.default_rng(31).uniform(-math.pi, math.pi, size=(8, 7))
+    T = chain.fk_batch(Q)
+
+    def bound(home_inv):
+        source = free_ends_c_source(
+            robot.general6, joint_types=robot.joint_types, lower=robot.lower, upper=robot.upper,
+            scale=robot.scale, tol=robot.tol, slots=robot.slots, twists=robot.twists, home=robot.home,
+            home_inv=home_inv, A=robot.A, b=robot.B, solved=list(range(6)), solved_pos=list(range(6)),
+            free_cols=[6], free_pos=[6])
+        lib = native.load(source)
+        return NativeFreeEnds(robot, lib, native.NativeChain(lib, dof=6, slots=robot.slots, nfree=0,
+                                                             target="pose"))
+
+    off = robot.home_inv.copy()
+    off[:3, 3] += 1e-9 * robot.scale
+    good, bad = bound(robot.home_inv), bound(off)
+    for n in range(len(Q)):
+        assert good.one(T[n], [float(Q[n, 6])], False) is not None, n
+        assert bad.one(T[n], [float(Q[n, 6])], False) is None, n
+        assert bad.native.last_reason() == 10, n
+    _, redo = bad.many(T, np.where(np.arange(7) == 6, Q, np.nan), limits=False)
+    assert redo.all()
+
+
+def test_free_joints_at_both_ends_move_the_target_from_both_sides_in_c():
+    # an 8-joint chain with j1 and j8 free, given last-first: the C's moved target has both P and S
+    # (free_ends.h ikc_fe_moved), each free value from its own slot; rows those of the Python reference
+    rng = np.random.default_rng(3)
+    joints = tuple(Joint(f"j{i + 1}", "R", revolute_twist(rng.normal(size=3), rng.uniform(-0.5, 0.5, 3)),
+                         -math.pi, math.pi) for i in range(8))
+    home = np.eye(4)
+    home[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    chain = Chain("random-8r", joints, home)
+    module = compile_robot(chain, free=("j8", "j1"))
+    assert module.METHOD == "general-6r" and module._SOLVER.free_ends_native() is not None
+    Q = np.random.default_rng(4).uniform(-math.pi, math.pi, size=(20, 8))
+    T = chain.fk_batch(Q)
+    S, V = module.solve_batch(T, Q[:, 7], Q[:, 0])
+    module.NATIVE = False
+    try:
+        S2, V2 = module.solve_batch(T, Q[:, 7], Q[:, 0])
+    finally:
+        module.NATIVE = True
+    np.testing.assert_array_equal(V.sum(axis=1), V2.sum(axis=1))
+    for n in range(len(Q)):
+        a, b = S[n][V[n]], S2[n][V2[n]]
+        assert np.all(a[:, 0] == Q[n, 0]) and np.all(a[:, 7] == Q[n, 7])
+        gap = np.abs(np.angle(np.exp(1j * (a[:, None, :] - b[None, :, :])))).max(axis=2)
+        assert gap.min(axis=1).max() < 1e-9, n
+        assert np.abs(np.angle(np.exp(1j * (a - Q[n])))).max(axis=1).min() < 1e-6, n
+        np.testing.assert_array_equal(module.solve(T[n], Q[n, 7], Q[n, 0]), a)
+
+
 @pytest.mark.parametrize("free", ["j3", "j4"])
 def test_a_free_joint_between_solved_ones_folds_the_six_twists(free):
     # E = exp(xi_f q_f): the twists after the free joint become Ad_E xi_k, one 6R chain per free value

@@ -216,6 +216,71 @@ def general6_c_source(solver, *, kinds: str, lower, upper, target: str, scale: f
                          A=A.tolist(), b=b.tolist())
 
 
+def free_ends_c_source(solver, *, joint_types: str, lower, upper, scale: float, tol: float, slots: int,
+                       twists, home, home_inv, A, b, solved, solved_pos, free_cols, free_pos) -> str | None:
+    """C source of a general-6r module with free end joints (``runtime.freeends``): the elimination of
+    its six solved joints (:func:`general6_c_source` on them) and ``ikc_free_solve_one`` /
+    ``ikc_free_solve_many`` of ``subproblems/free_ends.h``, which move the target by the free values,
+    solve the six and check every exact row on the whole robot.  ``twists`` (every chain joint), ``A``,
+    ``b`` (all joint values = A q + b), ``joint_types``, ``lower``, ``upper``: the whole robot, in its
+    returned joints' order; ``solved`` the six's chain columns, ``solved_pos`` their returned columns;
+    ``free_cols``, ``free_pos``: each free value's chain column and returned column.  None where the
+    six have no C."""
+    twists = np.asarray(twists, float)
+    six = general6_c_source(solver, kinds="".join(joint_types[p] for p in solved_pos),
+                            lower=np.asarray(lower)[solved_pos], upper=np.asarray(upper)[solved_pos],
+                            target="pose", scale=scale, tol=tol, slots=slots, twists=twists[solved],
+                            home=home, A=np.eye(6), b=np.zeros(6))
+    if six is None:
+        return None
+    n, nall = len(joint_types), len(twists)
+    order = sorted(range(len(free_cols)), key=lambda i: free_cols[i])  # chain order
+    before = [i for i in order if free_cols[i] < min(solved)]
+    after = [i for i in order if free_cols[i] > max(solved)]
+    if len(before) + len(after) != len(free_cols):
+        return None  # a free joint between solved ones: the fold's (runtime.freefold), not this
+    flat = lambda x: _array(np.asarray(x, float).ravel().tolist() or [0.0], _number)  # noqa: E731
+    ints = lambda x: _array(list(x) or [0], str)  # noqa: E731
+    hi = np.asarray(home_inv, float)
+    data = [
+        f"static const int ikc_fe_revolute_[{n}] = {ints(1 if k == 'R' else 0 for k in joint_types)};",
+        f"static const double ikc_fe_lower_[{n}] = {flat(lower)};",
+        f"static const double ikc_fe_upper_[{n}] = {flat(upper)};",
+        f"static const int ikc_fe_is_free_[{n}] = {ints(1 if j in free_pos else 0 for j in range(n))};",
+        f"static const double ikc_fe_twists_[{6 * nall}] = {flat(twists)};",
+        f"static const double ikc_fe_A_[{nall * n}] = {flat(A)};",
+        f"static const double ikc_fe_b_[{nall}] = {flat(b)};",
+        f"static const ikc_robot ikc_whole = {{{n}, {len(free_pos)}, 0, {slots}, 0, ikc_fe_revolute_,",
+        f"    ikc_fe_lower_, ikc_fe_upper_, {_number(scale)}, {_number(tol)}, NULL, {nall}, ikc_fe_twists_,",
+        "    ikc_home_, ikc_fe_A_, ikc_fe_b_, ikc_fe_is_free_, 0, 0, 0, NULL, 0, 0.0};",
+        f"static const int ikc_fe_free_pos_[{max(1, len(free_pos))}] = {ints(free_pos)};",
+        f"static const int ikc_fe_solved_pos_[6] = {ints(solved_pos)};",
+        f"static const int ikc_fe_before_[{max(1, len(before))}] = {ints(before)};",
+        f"static const int ikc_fe_after_[{max(1, len(after))}] = {ints(after)};",
+        f"static const double ikc_fe_tw_before_[{6 * max(1, len(before))}] = "
+        f"{flat([twists[free_cols[i]] for i in before])};",
+        f"static const double ikc_fe_tw_after_[{6 * max(1, len(after))}] = "
+        f"{flat([twists[free_cols[i]] for i in after])};",
+        f"static const double ikc_fe_home_inv_[12] = {flat(list(hi[:3, :3].ravel()) + list(hi[:3, 3]))};",
+        f"static const ikc_free_ends ikc_fe_this = {{&ikc_this, &ikc_whole, {len(free_pos)},",
+        f"    ikc_fe_free_pos_, ikc_fe_solved_pos_, {len(before)}, {len(after)}, ikc_fe_before_,",
+        "    ikc_fe_after_,",
+        "    ikc_fe_tw_before_, ikc_fe_tw_after_, ikc_fe_home_inv_};",
+        "",
+        "int ikc_free_solve_one(const double *T, const double *fr, int limits, double *q, double *res,",
+        "                       int *ls, int *cont) {",
+        "    return ikc_free_one(&ikc_fe_this, T, fr, limits, q, res, ls, cont);",
+        "}",
+        "",
+        "void ikc_free_solve_many(int64_t n, const double *goals, const double *fr, int limits, double *q,",
+        "                         double *res, int *ls, int *cont, int *count, int threads) {",
+        "    ikc_free_many(&ikc_fe_this, n, goals, fr, limits, q, res, ls, cont, count, threads);",
+        "}",
+    ]
+    head = ["", "/* the free end joints (subproblems/free_ends.h): the moved target and the whole robot */"]
+    return six + "\n".join(head + [w for line in data for w in wrap(line)]) + "\n"
+
+
 def translatable(program: ir.Program | None, *, target: str, dof: int) -> bool:
     """Whether :func:`chain_c_source` gives C for ``program`` (the module's ``NATIVE``)."""
     if program is None or target not in TARGET_CODES:

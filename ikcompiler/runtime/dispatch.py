@@ -248,8 +248,9 @@ class Solver:
         fe = self.free_ends_native()
         if fe is not None:
             given = _plain_free(free, len(r.free))
-            if given is not None:  # the scalar route (NativeFreeEnds.one), else the batch form's
-                found = fe.one(targets.valid_targets(r, np.asarray(T, dtype=float)[None])[0], given, limits)
+            # the scalar route (NativeFreeEnds.one: the C checks T), else the batch form's
+            if given is not None:
+                found = fe.one(T, given, limits)
                 if found is not None:
                     return found[0][~found[2]] if exact_only else found
             goals, Td, init = self._one_target(T, free)
