@@ -578,7 +578,7 @@ def _quartic_real(m, b, c, d, e):
     k = m.pos(_cubic_largest(m, p, 0.25 * p * p - r, -0.125 * q * q))
     s = m.sqrt(2.0 * k)
     tiny = s * s <= 1e-14 * (abs(p) + m.sqrt(abs(r)) + TINY)  # q ~ 0: y^4 + p y^2 + r, a quadratic in y^2
-    h = m.where(tiny, 0.0, q / (2.0 * m.where(tiny, 1.0, s)))
+    h = m.where(tiny, 0.0, q / (2.0 * m.big(m.where(tiny, 1.0, s))))  # big: s = 0 where r is NaN
     z = m.sqrt(m.pos(0.25 * p * p - r))
     out, discs = [], []
     for sign in (1.0, -1.0):

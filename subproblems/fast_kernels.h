@@ -560,7 +560,7 @@ static inline void ikc_rrr_quartic_real(double b, double c, double d, double e, 
     double k = ikc_pos(ikc_rrr_cubic_largest(p, 0.25 * p * p - r, -0.125 * q * q));
     double s = sqrt(2.0 * k);
     int tiny = s * s <= 1e-14 * (fabs(p) + sqrt(fabs(r)) + IKC_TINY);
-    double h = tiny ? 0.0 : q / (2.0 * (tiny ? 1.0 : s));
+    double h = tiny ? 0.0 : q / (2.0 * ikc_big(tiny ? 1.0 : s));
     double z = sqrt(ikc_pos(0.25 * p * p - r));
     for (int i = 0; i < 2; i++) {
         double sign = i == 0 ? 1.0 : -1.0;
