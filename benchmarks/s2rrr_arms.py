@@ -11,18 +11,21 @@ kernel: the fast chain called the reference solver (4-9 ms a solve; docs/design.
 perturbed by 1e-6 and 1e-3 of its size (``configs.perturbed``, seed 7) where the plan still takes
 S2-RRR.  Poses: ``--poses`` random joint vectors inside the limits (seed 7) and ``--special`` at
 special angles (every revolute value 0, +-pi/2 or pi, drawn among those inside its limits), the free
-joint at its sampled value.  Each pose is solved once by ``module.solve`` (limits on) and timed in CPU time (fastest of 3);
+joint at its sampled value.  Each pose is solved by ``module.solve`` (limits on), timed in CPU time
+(fastest of 2);
 every row is checked by the chain's forward kinematics (position 1e-12 of the size, rotation 1e-12
 Frobenius) and the sampled vector must be among the rows (1e-6 rad).  With ``--against``, a pose
 *differs* when a row of one checkout has no row of the other within 1e-6 rad (counted apart where both
 return representatives of a self-motion, ``solve_info``'s continuum flag: a wrist lock's representative
 is the C finish's there, the Python runtime's before).  Writes ``benchmarks/results/s2rrr_arms.md``;
-exits 1 on a wrong row, more misses than the other checkout, or a pose that differs off a self-motion.
+exits 1 on a wrong row, more misses than the other checkout, or a pose that differs off a self-motion
+where this checkout does not recover a sample the other misses.
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import os
 import platform
 import subprocess
@@ -62,6 +65,9 @@ if eps:
 compiled = configs.compile_chain(chain)
 module = compiled.module
 codes = [s["code"] for s in module._STEPS]
+if "S2-RRR" not in codes:  # nothing to measure here
+    np.savez(out, codes=np.array(codes))
+    sys.exit(0)
 cols = [module.JOINT_NAMES.index(f) for f in module.FREE_JOINTS]
 rng = np.random.default_rng(7)
 lo, hi = np.maximum(module.LOWER, -np.pi), np.minimum(module.UPPER, np.pi)
@@ -77,7 +83,7 @@ rows, times = {}, []
 for i in range(len(T)):
     free = [float(Q[i, c]) for c in cols]
     best = np.inf
-    for _ in range(3):
+    for _ in range(2):
         t0 = time.process_time()
         r = module.solve(T[i], *free)
         best = min(best, time.process_time() - t0)
@@ -99,8 +105,8 @@ def log(msg: str) -> None:
 def run(root: Path, name: str, eps: float, n_rand: int, n_special: int, out: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(root)}
     source = SOLVE.replace("__ARMS__", repr(ARMS))
-    subprocess.run([sys.executable, "-c", source, str(root), name, str(eps), str(n_rand), str(n_special), str(out)],
-                   env=env, check=True, capture_output=True, text=True)
+    argv = [str(root), name, str(eps), str(n_rand), str(n_special), str(out)]
+    subprocess.run([sys.executable, "-c", source, *argv], env=env, check=True, capture_output=True, text=True)
     with np.load(out) as data:
         return {k: data[k] for k in data.files}
 
@@ -128,19 +134,24 @@ def check(res: dict, chain_fk) -> tuple[int, int, int]:
     return wrong, missed, total
 
 
-def differing(a: dict, b: dict) -> tuple[int, int]:
-    """(poses whose rows differ as sets, of them those where both checkouts return representatives of
-    a self-motion: another member of the same family is as right)."""
+def differing(a: dict, b: dict) -> tuple[int, int, int]:
+    """(poses whose rows differ as sets; of them those where both checkouts return representatives of
+    a self-motion, another member of the same family being as right; and those where ``a`` recovers
+    the sample and ``b`` does not)."""
     rev = a["revolute"]
-    n = fam = 0
+    n = fam = fixed = 0
     for i in range(len(a["Q"])):
         ra, rb = a[f"rows_{i}"], b[f"rows_{i}"]
         one = all(any(_close(x, y, rev) for y in rb) for x in ra)
         two = all(any(_close(x, y, rev) for x in ra) for y in rb)
         if not (one and two):
             n += 1
-            fam += int(bool(a[f"cont_{i}"]) and bool(b[f"cont_{i}"]))
-    return n, fam
+            if bool(a[f"cont_{i}"]) and bool(b[f"cont_{i}"]):
+                fam += 1
+            else:
+                q = a["Q"][i]
+                fixed += int(any(_close(r, q, rev) for r in ra) and not any(_close(r, q, rev) for r in rb))
+    return n, fam, fixed
 
 
 def _chain(name: str, eps: float):
@@ -160,6 +171,7 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=200)
     ap.add_argument("--special", type=int, default=100)
     ap.add_argument("--cases", nargs="*", default=list(ARMS))
+    ap.add_argument("--jobs", type=int, default=1, help="cases measured at once (one process each)")
     ap.add_argument("--out", type=Path, default=RESULTS / "s2rrr_arms.md")
     args = ap.parse_args(argv)
     lines = [
@@ -167,45 +179,48 @@ def main(argv=None) -> int:
         "",
         f"`python benchmarks/s2rrr_arms.py{' --against DIR' if args.against else ''} --poses {args.poses} "
         f"--special {args.special}`; {platform.machine()}, load {os.getloadavg()[0]:.1f} at the start.",
-        "Median / 90th percentile CPU ms of `module.solve` (limits on), fastest of 3 a pose; wrong: rows off",
-        "the target by more than 1e-12; missed: samples not among the rows (1e-6 rad), poses at a self-motion",
-        "(a continuum row) left out; differ: poses whose rows differ from the other checkout's as sets (1e-6",
-        "rad), in parentheses those where both return representatives of a self-motion.",
+        "Median / 90th percentile CPU ms of `module.solve` (limits on), fastest of 2 a pose; wrong: rows off",
+        "the target by more than 1e-12; missed: samples not among the rows (1e-6 rad), poses at a",
+        "self-motion (a continuum row) left out; differ: poses whose rows differ from the other",
+        "checkout's as sets (1e-6 rad), in parentheses those where both return representatives of a",
+        "self-motion and those where only this checkout recovers the sample.",
         "",
         "| arm | perturbed | plan | C | poses | rows | wrong | missed | median ms | p90 ms |"
-        + (" before median | before p90 | before C | before missed | differ (self-motion) |"
+        + (" before median | before p90 | before C | before missed | differ (self-motion, fixed) |"
            if args.against else ""),
         "|---|---|---|---|---|---|---|---|---|---|" + ("---|---|---|---|---|" if args.against else ""),
     ]
-    bad = 0
-    with tempfile.TemporaryDirectory() as tmp:
-        for name in args.cases:
-            for eps in EPS:
-                log(f"{name} eps={eps:g}")
-                now = run(ROOT, name, eps, args.poses, args.special, Path(tmp) / "now.npz")
-                codes = [str(c) for c in now["codes"]]
-                if "S2-RRR" not in codes:
-                    lines.append(f"| {name} | {eps:g} | {' '.join(codes)} (no S2-RRR) | | | | | | | |"
-                                 + (" | | | | |" if args.against else ""))
-                    continue
-                chain = _chain(name, eps)
-                wrong, missed, total = check(now, chain.fk)
-                bad += wrong
-                t = now["times"] * 1e3
-                row = (f"| {name} | {eps:g} | {' + '.join(codes)} | {'yes' if now['native'] else 'no'} | "
-                       f"{len(now['Q'])} | {total} | {wrong} | {missed} | {np.median(t):.3f} | "
-                       f"{np.percentile(t, 90):.3f} |")
-                if args.against:
-                    before = run(args.against.resolve(), name, eps, args.poses, args.special,
-                                 Path(tmp) / "before.npz")
-                    tb = before["times"] * 1e3
-                    d, fam = differing(now, before)
-                    _, missed_before, _ = check(before, chain.fk)
-                    bad += d - fam + max(0, missed - missed_before)
-                    row += (f" {np.median(tb):.3f} | {np.percentile(tb, 90):.3f} | "
-                            f"{'yes' if before['native'] else 'no'} | {missed_before} | {d} ({fam}) |")
-                lines.append(row)
-                log(row)
+    def case(name: str, eps: float, tmp: Path) -> tuple[str, int]:
+        log(f"{name} eps={eps:g}")
+        now = run(ROOT, name, eps, args.poses, args.special, tmp / f"now_{name}_{eps:g}.npz")
+        codes = [str(c) for c in now["codes"]]
+        if "S2-RRR" not in codes:
+            return (f"| {name} | {eps:g} | {' '.join(codes)} (no S2-RRR) | | | | | | | |"
+                    + (" | | | | |" if args.against else "")), 0
+        chain = _chain(name, eps)
+        wrong, missed, total = check(now, chain.fk)
+        bad = wrong
+        t = now["times"] * 1e3
+        row = (f"| {name} | {eps:g} | {' + '.join(codes)} | {'yes' if now['native'] else 'no'} | "
+               f"{len(now['Q'])} | {total} | {wrong} | {missed} | {np.median(t):.3f} | "
+               f"{np.percentile(t, 90):.3f} |")
+        if args.against:
+            before = run(args.against.resolve(), name, eps, args.poses, args.special,
+                         tmp / f"before_{name}_{eps:g}.npz")
+            tb = before["times"] * 1e3
+            d, fam, fixed = differing(now, before)
+            _, missed_before, _ = check(before, chain.fk)
+            bad += d - fam - fixed + max(0, missed - missed_before)
+            row += (f" {np.median(tb):.3f} | {np.percentile(tb, 90):.3f} | "
+                    f"{'yes' if before['native'] else 'no'} | {missed_before} | {d} ({fam}, {fixed}) |")
+        log(row)
+        return row, bad
+
+    work = [(name, eps) for name in args.cases for eps in EPS]
+    with tempfile.TemporaryDirectory() as tmp, concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
+        done = list(pool.map(lambda w: case(*w, Path(tmp)), work))
+    lines += [row for row, _ in done]
+    bad = sum(b for _, b in done)
     lines += ["", f"load {os.getloadavg()[0]:.1f} at the end."]
     args.out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -1,7 +1,7 @@
 """Plain-arithmetic kernels of the subproblems that generated fast paths call, one source for two backends.
 
 Every kernel here is written with ``+ - * /`` on 3-tuples and the few functions of a *backend* ``m``:
-``m.sin, m.cos, m.sqrt, m.atan2, m.acos, m.clip1`` (clamp to [-1, 1]), ``m.pos`` (clamp below at 0),
+``m.sin, m.cos, m.sqrt, m.atan2, m.acos, m.cbrt, m.clip1`` (clamp to [-1, 1]), ``m.pos`` (clamp below at 0),
 ``m.big`` (max with a tiny positive number) and ``m.small`` (``x <= y``).  With :data:`SCALAR` the
 numbers are Python floats and one call costs a few microseconds; with :data:`ARRAY` they are numpy arrays
 over N instances, vectorised with no Python loop over instances.  One source for both paths keeps
@@ -41,6 +41,8 @@ Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 * :func:`point_rr_parallel`  S2-RR, parallel axes              2 slots
 * :func:`rot_r`, :func:`rot_rr`, :func:`rot_rrr`   O-R, O-RR, O-RRR on a rotation ``R`` (9-tuple,
   row-major): 1, 1 and 2 slots
+* :func:`point_rrr` S2-RRR ``exp(xi1 t1) exp(xi2 t2) exp(xi3 t3)(p) = q``, the regular case (a quartic)
+  4 slots
 """
 
 from __future__ import annotations
@@ -603,9 +605,10 @@ def point_rrr(m, w1, r1, w2, r2, w3, r3, p, q):
     half-angle substitution (centred where the quartic is largest) and Ferrari, then Newton steps;
     t3 from Cramer's point, t2 turns ``z`` onto ``y`` (S2-R); one Newton step on the whole equation.
     A complex pair's slots are :data:`EMPTY` where the other pair is real.  Deferred: both pairs
-    complex (unreachable: the reference path's least-squares row), M nearly rank 1 (:data:`RRR_REGULAR`), ``p`` on axis 3
-    or ``q`` on axis 1, a quartic vanishing identically (t1 free), a (nearly) double root
-    (:data:`RRR_DOUBLE`), the middle point on axis 2 (t2 free).  4 slots."""
+    complex (unreachable: the reference path's least-squares row), M nearly rank 1
+    (:data:`RRR_REGULAR`), ``p`` on axis 3 or ``q`` on axis 1, a quartic vanishing identically (t1
+    free), a (nearly) double root (:data:`RRR_DOUBLE`), the middle point on axis 2 (t2 free).
+    4 slots."""
     size2 = dot(p, p) + dot(q, q) + dot(r1, r1) + dot(r2, r2) + dot(r3, r3)
     size = m.sqrt(size2) + TINY
     # circle of q about axis 1: y = c0 + cc cos t1 - cs sin t1; of p about axis 3: z = e0 + ec cos + es sin
@@ -685,9 +688,11 @@ def point_rrr(m, w1, r1, w2, r2, w3, r3, p, q):
         t3 = m.atan2((a0[1] + ac[1] * c + as_[1] * s) * det, (a0[0] + ac[0] * c + as_[0] * s) * det)
         y = (c0[0] + cc[0] * c - cs[0] * s, c0[1] + cc[1] * c - cs[1] * s, c0[2] + cc[2] * c - cs[2] * s)
         c3, s3 = m.cos(t3), m.sin(t3)
-        z = (e0[0] + ec[0] * c3 + es[0] * s3, e0[1] + ec[1] * c3 + es[1] * s3, e0[2] + ec[2] * c3 + es[2] * s3)
+        z = (e0[0] + ec[0] * c3 + es[0] * s3, e0[1] + ec[1] * c3 + es[1] * s3,
+             e0[2] + ec[2] * c3 + es[2] * s3)
         t2, f2, c2t, s2t = angle_about_cs(m, w2, sub(z, r2), sub(y, r2), size2)
-        n1, n2, n3 = _rrr_gauss_newton(m, w1, r1, w2, r2, w3, r3, p, q, (t1, t2, t3), (c, s, c2t, s2t, c3, s3))
+        n1, n2, n3 = _rrr_gauss_newton(m, w1, r1, w2, r2, w3, r3, p, q, (t1, t2, t3),
+                                       (c, s, c2t, s2t, c3, s3))
         t1, t2, t3 = m.where(real, n1, t1), m.where(real, n2, t2), m.where(real, n3, t3)
         out.append((t1, t2, t3, flag | f2 | double * DEFER | kind))
     return tuple(out)
@@ -759,8 +764,8 @@ def _input(name, value, n=None):
 def reference(m, code, twists, inputs):
     """Any registered subproblem through its reference solver, in the kernels' slot convention.
 
-    For steps with no plain-arithmetic kernel (S2-RRR, S2-RR with skew axes, the other class I and
-    class III types): ``twists`` are 6-tuples ``(v, w)`` of floats or arrays, ``inputs`` maps the
+    For steps with no plain-arithmetic kernel (S2-RRR of a snapped plan, S2-RR with skew axes, the other
+    class I and class III types): ``twists`` are 6-tuples ``(v, w)`` of floats or arrays, ``inputs`` maps the
     solver's keywords (``T`` as 12 entries, ``p``, ``q``, ``h`` as 3-tuples, ``d``) to values.  A
     continuum defers; unfilled slots are flagged :data:`EMPTY`; least-squares rows are returned like
     exact ones (the caller's pose check tells them apart).

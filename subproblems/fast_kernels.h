@@ -13,7 +13,7 @@
  *    double *q, slots x outs values slot-major (slot k, output j at q[k * outs + j]), and int *f,
  *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide1 1x1, slide3 1x3,
  *    turn_slide2 1x3, slide2_turn 2x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
- *    rot_rrr 2x3;
+ *    rot_rrr 2x3, point_rrr 4x3;
  *  - the angle kernels (plane_r, dist_r, point_r, point_rr_meet, point_rr_parallel, rot_r, rot_rr,
  *    rot_rrr) have an ikc_NAME_cs form, fast.NAME_cs's port, that also writes double *cs: slots x outs
  *    pairs (cos, sin) of each output angle (slot k, output j at cs[2 * (k * outs + j)]), computed from

@@ -40,7 +40,9 @@ but more than ``EXACT``, and the checks below apply where it does not):
    parallel axes gave NaN on ARRAY (``pos``/``big`` now map NaN like the scalar comparisons).
 
 Not covered by the specs: ``slide3`` and ``turn_slide2`` (added to ``fast.py`` after this file was
-specified); ``slide2_turn`` (S2-TTR) has its own round trip and reference agreement at the end.
+specified); ``slide2_turn`` (S2-TTR) and ``point_rrr`` (S2-RRR: round trip and the reference's exact
+rows on general and pr2-like instances, its degenerate cases deferred, ARRAY against SCALAR) have their
+own tests at the end.
 
 Budgets follow the active hypothesis profile (``HYPOTHESIS_PROFILE``).
 """
@@ -1054,7 +1056,8 @@ def rrr_drawn(rng, reachable: bool = True, family: str = "general"):
     if family == "arm":
         roll = rng.choice([rng.uniform(-math.pi, math.pi), 0.3, -2.0])
         upper = np.array([1.0, 0.0, 0.0])
-        W = [np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]), rotation_exp(upper, roll) @ [0.0, 1.0, 0.0]]
+        ey = np.array([0.0, 1.0, 0.0])
+        W = [np.array([0.0, 0.0, 1.0]), ey, rotation_exp(upper, roll) @ ey]
         R = [np.zeros(3), np.array([0.1, 0.0, 0.0]), np.array([0.5, 0.0, 0.0])]
         p = np.array([0.82, 0.0, 0.0]) + rng.uniform(-0.05, 0.05, 3) * (rng.random() < 0.5)
     else:
@@ -1079,11 +1082,11 @@ def rrr_corners():
     elbow = rotation_exp(ex, 0.7) @ ey
     arm = [ez, z, ey, 0.1 * ex, elbow, 0.5 * ex]
     W, R = arm[0::2], arm[1::2]
-    wrist = 0.82 * ex
+    wrist, on3 = 0.82 * ex, 0.5 * ex + 0.3 * elbow
     out = {
         "tangent": (*arm, wrist, _rrr_point(W, R, (0.3, 0.4, 0.0), wrist)),  # the arm stretched
         "unreachable": (*arm, wrist, 10.0 * ex),
-        "p on axis 3": (*arm, 0.5 * ex + 0.3 * elbow, _rrr_point(W, R, (0.3, 0.4, 1.0), 0.5 * ex + 0.3 * elbow)),
+        "p on axis 3": (*arm, on3, _rrr_point(W, R, (0.3, 0.4, 1.0), on3)),
         "q on axis 1": (*arm, wrist, 0.6 * ez),
         "axes 2, 3 parallel": (ez, z, ey, 0.1 * ex, ey, 0.5 * ex, wrist, _rrr_point(
             [ez, ey, ey], R, (0.3, 0.4, 1.0), wrist)),
@@ -1188,3 +1191,26 @@ def test_point_rrr_backends_agree():
                     assert math.isnan(a) and math.isnan(b), (k, c)
                 else:
                     assert angle_distance(a, b) <= 1e-12, (k, c, a, b)
+
+
+def _rrr_used(args):
+    """The filled slots' angles, or None where the caller hands the instance to the reference path."""
+    slots = [s for s in _rrr_slots(args) if not int(s[3]) & fast.EMPTY]
+    return None if any(int(s[3]) & fast.DEFER for s in slots) else [s[:3] for s in slots]
+
+
+@pytest.mark.parametrize("factor", [1e-3, 1e3])
+def test_point_rrr_is_scale_invariant(factor):
+    """The same instance in other units (lengths times 1e-3 or 1e3): handed back alike, else the same
+    solutions (its tolerances are relative to the geometry's size)."""
+    rng = np.random.default_rng(53)
+    for k in range(60):
+        args = rrr_instance(rng, k % 3 != 0)
+        scaled = tuple(a if i in (0, 2, 4) else a * factor for i, a in enumerate(args))
+        one, other = _rrr_used(args), _rrr_used(scaled)
+        assert (one is None) == (other is None), (args, factor)
+        if one is not None:
+            assert len(one) == len(other)
+            for s in one:
+                gap = min(max(angle_distance(a, b) for a, b in zip(s, t)) for t in other)
+                assert gap <= 1e-9, (args, factor)
