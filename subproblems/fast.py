@@ -1,7 +1,7 @@
 """Plain-arithmetic kernels of the subproblems that generated fast paths call, one source for two backends.
 
 Every kernel here is written with ``+ - * /`` on 3-tuples and the few functions of a *backend* ``m``:
-``m.sin, m.cos, m.sqrt, m.atan2, m.acos, m.clip1`` (clamp to [-1, 1]), ``m.pos`` (clamp below at 0),
+``m.sin, m.cos, m.sqrt, m.atan2, m.acos, m.cbrt, m.clip1`` (clamp to [-1, 1]), ``m.pos`` (clamp below at 0),
 ``m.big`` (max with a tiny positive number) and ``m.small`` (``x <= y``).  With :data:`SCALAR` the
 numbers are Python floats and one call costs a few microseconds; with :data:`ARRAY` they are numpy arrays
 over N instances, vectorised with no Python loop over instances.  One source for both paths keeps
@@ -41,6 +41,8 @@ Equations (axis ``w`` unit, through point ``r``; ``exp`` the joint motion):
 * :func:`point_rr_parallel`  S2-RR, parallel axes              2 slots
 * :func:`rot_r`, :func:`rot_rr`, :func:`rot_rrr`   O-R, O-RR, O-RRR on a rotation ``R`` (9-tuple,
   row-major): 1, 1 and 2 slots
+* :func:`point_rrr` S2-RRR ``exp(xi1 t1) exp(xi2 t2) exp(xi3 t3)(p) = q``, the regular case (a quartic)
+  4 slots
 """
 
 from __future__ import annotations
@@ -74,6 +76,7 @@ SCALAR = SimpleNamespace(
     clip1=lambda x: -1.0 if x < -1.0 else (1.0 if x > 1.0 else x),
     pos=lambda x: x if x > 0.0 else 0.0,
     big=lambda x: x if x > TINY else TINY,
+    cbrt=math.cbrt,
     maxabs=lambda *xs: max(map(abs, xs)),
     where=lambda c, a, b: a if c else b,
     max2=max,
@@ -86,6 +89,7 @@ ARRAY = SimpleNamespace(
     sqrt=np.sqrt,
     atan2=np.arctan2,
     acos=np.arccos,
+    cbrt=np.cbrt,
     clip1=lambda x: np.clip(x, -1.0, 1.0),
     pos=lambda x: np.fmax(x, 0.0),  # fmax: NaN -> 0.0, as the scalar comparison gives
     big=lambda x: np.fmax(x, TINY),
@@ -525,6 +529,212 @@ def rot_rrr_cs(m, w1, w2, w3, R, rep=0.0):
     return tuple(out)
 
 
+# ---------------------------------------------------------------------------------------------------
+# S2-RRR: a point carried onto a point by three turns (subproblems/s2_rrr.py, the regular case)
+
+#: |det M| below this times |M|^2 (axes 2 and 3 nearly parallel or meeting: M nearly rank 1, where
+#: Cramer's rule loses the digits the quartic needs): the reference path (its rank-1 construction).
+RRR_REGULAR = tolerances.FAST_RRR_REGULAR
+#: A polished root whose derivative is below this (relative) is (nearly) double: a tangency, roots
+#: split by roundoff, or a complex pair beside the circle: the reference path merges or projects it.
+RRR_DOUBLE = tolerances.FAST_RRR_DOUBLE
+RRR_NEWTON = 3  # Newton steps on the quartic's trigonometric form (Ferrari's roots have ~1e-8 errors)
+# the half-angle substitution is centred on one of these angles (where |F| is largest: no root is
+# near it, so the quartic's leading coefficient is the largest sample and its roots stay bounded)
+_RRR_SAMPLES = tuple((math.cos(k * math.pi / 4), math.sin(k * math.pi / 4)) for k in range(8))
+
+
+def _trig2(f, c, s):
+    """``f0 + c1 cos + s1 sin + c2 cos 2 + s2 sin 2`` at the angle of (cos, sin) = (c, s)."""
+    f0, c1, s1, c2, s2 = f
+    return f0 + c1 * c + s1 * s + c2 * (c * c - s * s) + s2 * (2.0 * s * c)
+
+
+def _cubic_largest(m, p, q, r):
+    """The largest real root of ``x^3 + p x^2 + q x + r`` (Cardano's or Viete's form, then two
+    Newton steps)."""
+    a = q - p * p / 3.0
+    b = 2.0 * p * p * p / 27.0 - p * q / 3.0 + r
+    disc = 0.25 * b * b + a * a * a / 27.0
+    sq = m.sqrt(m.pos(disc))
+    one = m.cbrt(-0.5 * b + sq) + m.cbrt(-0.5 * b - sq)  # one real root
+    ra = m.sqrt(m.pos(-a / 3.0))  # three real roots: 2 ra cos(acos(...) / 3)
+    three = 2.0 * ra * m.cos(m.acos(m.clip1(-0.5 * b / m.big(ra * ra * ra))) / 3.0)
+    x = m.where(disc > 0.0, one, three) - p / 3.0
+    for _ in range(2):
+        g = ((x + p) * x + q) * x + r
+        dg = (3.0 * x + 2.0 * p) * x + q
+        x = x - g * dg / (dg * dg + TINY)
+    return x
+
+
+def _quartic_real(m, b, c, d, e):
+    """The four roots of ``x^4 + b x^3 + c x^2 + d x + e`` as real numbers (Ferrari): two quadratics,
+    a complex pair's real part twice; each quadratic's discriminant (negative: a complex pair); the
+    depressed quartic's ``p`` and the resolvent's root ``k`` (the discriminants' scale)."""
+    b4 = 0.25 * b
+    p = c - 6.0 * b4 * b4
+    q = d - 2.0 * c * b4 + 8.0 * b4 * b4 * b4
+    r = e - d * b4 + c * b4 * b4 - 3.0 * b4 * b4 * b4 * b4
+    # y^4 + p y^2 + q y + r = (y^2 + p/2 + k)^2 - 2k (y - q / 4k)^2 with k the resolvent's root
+    k = m.pos(_cubic_largest(m, p, 0.25 * p * p - r, -0.125 * q * q))
+    s = m.sqrt(2.0 * k)
+    tiny = s * s <= 1e-14 * (abs(p) + m.sqrt(abs(r)) + TINY)  # q ~ 0: y^4 + p y^2 + r, a quadratic in y^2
+    h = m.where(tiny, 0.0, q / (2.0 * m.big(m.where(tiny, 1.0, s))))  # big: s = 0 where r is NaN
+    z = m.sqrt(m.pos(0.25 * p * p - r))
+    out, discs = [], []
+    for sign in (1.0, -1.0):
+        # ferrari: y^2 - sign s y + (p/2 + k + sign h) = 0; biquadratic: y^2 = -p/2 - sign z
+        disc_f = 0.25 * s * s - (0.5 * p + k + sign * h)
+        y2 = -0.5 * p - sign * z
+        disc = m.where(tiny, y2, disc_f)
+        root = m.sqrt(m.pos(disc))
+        centre = m.where(tiny, 0.0, 0.5 * sign * s)
+        out += [centre + root - b4, centre - root - b4]
+        discs.append(disc)
+    return out, discs, p, k
+
+
+def point_rrr(m, w1, r1, w2, r2, w3, r3, p, q):
+    """S2-RRR: ``exp(xi1 t1) exp(xi2 t2) exp(xi3 t3)(p) = q`` (axes (w_i, r_i)) where the middle axis
+    is neither parallel to the third nor meets it: up to 4 slots (t1, t2, t3).
+
+    The elimination of :mod:`subproblems.s2_rrr`: ``y(t1) = exp(-xi1 t1) q`` and ``z(t3) = exp(xi3 t3) p``
+    have the same height along axis 2 and the same distance from it, ``M (cos t3, sin t3) = E(t1)``;
+    Cramer's rule and ``|adj(M) E(t1)| = |det M|`` give a trigonometric quartic in t1, solved by the
+    half-angle substitution (centred where the quartic is largest) and Ferrari, then Newton steps;
+    t3 from Cramer's point, t2 turns ``z`` onto ``y`` (S2-R); one Newton step on the whole equation.
+    A complex pair's slots are :data:`EMPTY` where the other pair is real.  Deferred: both pairs
+    complex (unreachable: the reference path's least-squares row), M nearly rank 1
+    (:data:`RRR_REGULAR`), ``p`` on axis 3 or ``q`` on axis 1, a quartic vanishing identically (t1
+    free), a (nearly) double root (:data:`RRR_DOUBLE`), the middle point on axis 2 (t2 free).
+    4 slots."""
+    size2 = dot(p, p) + dot(q, q) + dot(r1, r1) + dot(r2, r2) + dot(r3, r3)
+    size = m.sqrt(size2) + TINY
+    # circle of q about axis 1: y = c0 + cc cos t1 - cs sin t1; of p about axis 3: z = e0 + ec cos + es sin
+    u = sub(q, r1)
+    uw = dot(w1, u)
+    cc = axpy(-uw, w1, u)
+    cs = cross(w1, cc)
+    c0 = axpy(uw, w1, r1)
+    v = sub(p, r3)
+    vw = dot(w3, v)
+    ec = axpy(-vw, w3, v)
+    es = cross(w3, ec)
+    e0 = axpy(vw, w3, r3)
+    k, h = sub(e0, r2), sub(c0, r2)
+    # rows: the height along axis 2, the squared distance from r2 (divided by the size: lengths)
+    m00, m01 = dot(w2, ec), dot(w2, es)
+    m10, m11 = 2.0 * dot(k, ec) / size, 2.0 * dot(k, es) / size
+    g0 = (dot(w2, sub(c0, e0)), (dot(h, h) + dot(cc, cc) - dot(k, k) - dot(ec, ec)) / size)
+    gc = (dot(w2, cc), 2.0 * dot(h, cc) / size)
+    gs = (-dot(w2, cs), -2.0 * dot(h, cs) / size)
+    det = m00 * m11 - m01 * m10
+    mm = m00 * m00 + m01 * m01 + m10 * m10 + m11 * m11
+    # adj(M) E(t1) = A0 + Ac cos t1 + As sin t1; |.|^2 - det^2 as a Fourier series in t1
+    a0 = (m11 * g0[0] - m01 * g0[1], m00 * g0[1] - m10 * g0[0])
+    ac = (m11 * gc[0] - m01 * gc[1], m00 * gc[1] - m10 * gc[0])
+    as_ = (m11 * gs[0] - m01 * gs[1], m00 * gs[1] - m10 * gs[0])
+    qa = ac[0] * ac[0] + ac[1] * ac[1]
+    qb = 2.0 * (ac[0] * as_[0] + ac[1] * as_[1])
+    qc = as_[0] * as_[0] + as_[1] * as_[1]
+    f = (a0[0] * a0[0] + a0[1] * a0[1] - det * det + 0.5 * (qa + qc),
+         2.0 * (a0[0] * ac[0] + a0[1] * ac[1]), 2.0 * (a0[0] * as_[0] + a0[1] * as_[1]),
+         0.5 * (qa - qc), 0.5 * qb)
+    ee = g0[0] * g0[0] + g0[1] * g0[1] + gc[0] * gc[0] + gc[1] * gc[1] + gs[0] * gs[0] + gs[1] * gs[1]
+    ref = mm * (mm + ee) + TINY  # the coefficients' size
+    fn = m.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2] + f[3] * f[3] + f[4] * f[4])
+    lim = NEAR2 * size2
+    flag = ((det * det <= RRR_REGULAR * RRR_REGULAR * mm * mm) | (dot(cc, cc) <= lim) | (dot(ec, ec) <= lim)
+            | (fn <= NEAR * ref)) * DEFER
+    # the centre: the sample angle where |F| is largest; theta = t1 - phi, phi = centre - pi
+    big_f, pc, ps = _trig2(f, 1.0, 0.0), -1.0, 0.0
+    for c, s in _RRR_SAMPLES[1:]:
+        fk = _trig2(f, c, s)
+        better = abs(fk) > abs(big_f)
+        big_f, pc, ps = m.where(better, fk, big_f), m.where(better, -c, pc), m.where(better, -s, ps)
+    c2p, s2p = pc * pc - ps * ps, 2.0 * ps * pc
+    f0, c1, s1, c2, s2 = f
+    c1r, s1r = c1 * pc + s1 * ps, s1 * pc - c1 * ps  # the series in theta
+    c2r, s2r = c2 * c2p + s2 * s2p, s2 * c2p - c2 * s2p
+    # times (1 + x^2)^2, x = tan(theta / 2): a quartic whose leading coefficient is F(centre) = big_f
+    inv = 1.0 / m.where(big_f == 0.0, 1.0, big_f)
+    xs, discs, p_, k_ = _quartic_real(m, (2.0 * s1r - 4.0 * s2r) * inv, (2.0 * f0 - 6.0 * c2r) * inv,
+                              (2.0 * s1r + 4.0 * s2r) * inv, (f0 + c1r + c2r) * inv)
+    phi = m.atan2(ps, pc)
+    # a complex pair is no solution: its slots are empty where the other pair is real, and the
+    # instance goes to the reference path (its least-squares row) where both are complex; a
+    # discriminant within roundoff of 0 is a double root (a tangency): the reference path too
+    band = RRR_DOUBLE * RRR_DOUBLE * (1.0 + abs(p_) + k_)
+    some_real = (discs[0] >= -band) | (discs[1] >= -band)
+    out = []
+    for i, x in enumerate(xs):
+        d = discs[i // 2]
+        real = d >= -band
+        kind = (abs(d) <= band) * DEFER | (d < -band) * m.where(some_real, EMPTY, DEFER)
+        t1 = phi + 2.0 * m.atan2(x, 1.0)
+        for _ in range(RRR_NEWTON):  # on F(t1) itself: the quartic's roots to full accuracy
+            c, s = m.cos(t1), m.sin(t1)
+            c2_, s2_ = c * c - s * s, 2.0 * s * c
+            fv = f0 + c1 * c + s1 * s + c2 * c2_ + s2 * s2_
+            dv = s1 * c - c1 * s + 2.0 * (s2 * c2_ - c2 * s2_)
+            t1 = m.where(real, t1 - fv * dv / (dv * dv + TINY), t1)
+        c, s = m.cos(t1), m.sin(t1)
+        c2_, s2_ = c * c - s * s, 2.0 * s * c
+        fv = f0 + c1 * c + s1 * s + c2 * c2_ + s2 * s2_
+        dv = s1 * c - c1 * s + 2.0 * (s2 * c2_ - c2 * s2_)
+        double = (abs(dv) <= RRR_DOUBLE * ref) & (abs(fv) <= RRR_DOUBLE * ref)
+        # Cramer's point (cos t3, sin t3) = adj(M) E(t1) / det
+        t3 = m.atan2((a0[1] + ac[1] * c + as_[1] * s) * det, (a0[0] + ac[0] * c + as_[0] * s) * det)
+        y = (c0[0] + cc[0] * c - cs[0] * s, c0[1] + cc[1] * c - cs[1] * s, c0[2] + cc[2] * c - cs[2] * s)
+        c3, s3 = m.cos(t3), m.sin(t3)
+        z = (e0[0] + ec[0] * c3 + es[0] * s3, e0[1] + ec[1] * c3 + es[1] * s3,
+             e0[2] + ec[2] * c3 + es[2] * s3)
+        t2, f2, c2t, s2t = angle_about_cs(m, w2, sub(z, r2), sub(y, r2), size2)
+        n1, n2, n3 = _rrr_gauss_newton(m, w1, r1, w2, r2, w3, r3, p, q, (t1, t2, t3),
+                                       (c, s, c2t, s2t, c3, s3))
+        t1, t2, t3 = m.where(real, n1, t1), m.where(real, n2, t2), m.where(real, n3, t3)
+        out.append((t1, t2, t3, flag | f2 | double * DEFER | kind))
+    return tuple(out)
+
+
+def _turn_cs(w, c, s, x):
+    """:func:`rotate` by the angle whose cosine and sine are ``c``, ``s``."""
+    w0, w1, w2 = w
+    x0, x1, x2 = x
+    k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c)
+    return (
+        c * x0 + s * (w1 * x2 - w2 * x1) + k * w0,
+        c * x1 + s * (w2 * x0 - w0 * x2) + k * w1,
+        c * x2 + s * (w0 * x1 - w1 * x0) + k * w2,
+    )
+
+
+def _rrr_gauss_newton(m, w1, r1, w2, r2, w3, r3, p, q, t, cs):
+    """One Newton step of ``exp(xi1 t1) exp(xi2 t2) exp(xi3 t3)(p) = q`` from ``t`` = (t1, t2, t3)
+    (``cs``: their cosines and sines): the quartic's root t1 is located to eps over the root
+    separation, and Cramer's t3 inherits that error over the separation (two roots 0.005 apart: 1e-11
+    of the size).  A singular Jacobian (a tangency, deferred anyway) leaves the values as they are."""
+    c1, s1, c2, s2, c3, s3 = cs
+    x3 = axpy(1.0, _turn_cs(w3, c3, s3, sub(p, r3)), r3)
+    x2 = axpy(1.0, _turn_cs(w2, c2, s2, sub(x3, r2)), r2)
+    x1 = _turn_cs(w1, c1, s1, sub(x2, r1))  # the point, less r1
+    # the axes 2 and 3 where they are: axis 2 carried by t1, axis 3 by t2 then t1 (points less r1)
+    a2 = _turn_cs(w1, c1, s1, w2)
+    b2 = _turn_cs(w1, c1, s1, sub(r2, r1))
+    a3 = _turn_cs(w1, c1, s1, _turn_cs(w2, c2, s2, w3))
+    b3 = _turn_cs(w1, c1, s1, sub(axpy(1.0, _turn_cs(w2, c2, s2, sub(r3, r2)), r2), r1))
+    j1 = cross(w1, x1)  # d point / d t_i: w_i x (point - a point of axis i)
+    j2 = cross(a2, sub(x1, b2))
+    j3 = cross(a3, sub(x1, b3))
+    e = sub(sub(q, r1), x1)
+    c23, c31, c12 = cross(j2, j3), cross(j3, j1), cross(j1, j2)
+    det = dot(j1, c23)
+    ok = abs(det) > NEAR * m.sqrt(dot(j1, j1) * dot(j2, j2) * dot(j3, j3))
+    inv = m.where(ok, 1.0, 0.0) / m.where(ok, det, 1.0)
+    return t[0] + dot(e, c23) * inv, t[1] + dot(e, c31) * inv, t[2] + dot(e, c12) * inv
+
+
 def _screw_rows(twists, n=None):
     """6-tuples of floats or arrays as an (m, 6) array, or (n, m, 6) when ``n`` is given."""
     if n is None:
@@ -554,8 +764,8 @@ def _input(name, value, n=None):
 def reference(m, code, twists, inputs):
     """Any registered subproblem through its reference solver, in the kernels' slot convention.
 
-    For steps with no plain-arithmetic kernel (S2-RRR, S2-RR with skew axes, the other class I and
-    class III types): ``twists`` are 6-tuples ``(v, w)`` of floats or arrays, ``inputs`` maps the
+    For steps with no plain-arithmetic kernel (S2-RRR of a snapped plan, S2-RR with skew axes, the other
+    class I and class III types): ``twists`` are 6-tuples ``(v, w)`` of floats or arrays, ``inputs`` maps the
     solver's keywords (``T`` as 12 entries, ``p``, ``q``, ``h`` as 3-tuples, ``d``) to values.  A
     continuum defers; unfilled slots are flagged :data:`EMPTY`; least-squares rows are returned like
     exact ones (the caller's pose check tells them apart).

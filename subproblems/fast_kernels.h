@@ -13,7 +13,7 @@
  *    double *q, slots x outs values slot-major (slot k, output j at q[k * outs + j]), and int *f,
  *    one flag per slot.  Slots x outs: plane_r 2x1, plane_t 1x1, dist_r 2x1, dist_t 2x1, slide1 1x1, slide3 1x3,
  *    turn_slide2 1x3, slide2_turn 2x3, point_r 1x1, point_rr_meet 2x2, point_rr_parallel 2x2, rot_r 1x1, rot_rr 1x2,
- *    rot_rrr 2x3;
+ *    rot_rrr 2x3, point_rrr 4x3;
  *  - the angle kernels (plane_r, dist_r, point_r, point_rr_meet, point_rr_parallel, rot_r, rot_rr,
  *    rot_rrr) have an ikc_NAME_cs form, fast.NAME_cs's port, that also writes double *cs: slots x outs
  *    pairs (cos, sin) of each output angle (slot k, output j at cs[2 * (k * outs + j)]), computed from
@@ -516,6 +516,224 @@ static inline void ikc_rot_rrr_cs(const double *w1, const double *w2, const doub
             cs[6 * i + 2 * j] = lock[i] ? cos(v) : tcs[6 * i + 2 * j];
             cs[6 * i + 2 * j + 1] = lock[i] ? sin(v) : tcs[6 * i + 2 * j + 1];
         }
+    }
+}
+
+/* ------------------------------------------------------------------------------------------------
+ * S2-RRR, the regular case (fast.point_rrr and its helpers, same order of operations) */
+
+#define IKC_RRR_REGULAR 1e-3  /* tolerances.FAST_RRR_REGULAR */
+#define IKC_RRR_DOUBLE 1e-6   /* tolerances.FAST_RRR_DOUBLE */
+#define IKC_RRR_NEWTON 3      /* fast.RRR_NEWTON */
+
+/* fast._trig2: f0 + c1 cos + s1 sin + c2 cos 2 + s2 sin 2 at (cos, sin) = (c, s) */
+static inline double ikc_rrr_trig2(const double *f, double c, double s) {
+    return f[0] + f[1] * c + f[2] * s + f[3] * (c * c - s * s) + f[4] * (2.0 * s * c);
+}
+
+/* fast._cubic_largest: the largest real root of x^3 + p x^2 + q x + r */
+static inline double ikc_rrr_cubic_largest(double p, double q, double r) {
+    double a = q - p * p / 3.0;
+    double b = 2.0 * p * p * p / 27.0 - p * q / 3.0 + r;
+    double disc = 0.25 * b * b + a * a * a / 27.0;
+    double sq = sqrt(ikc_pos(disc));
+    double one = cbrt(-0.5 * b + sq) + cbrt(-0.5 * b - sq);
+    double ra = sqrt(ikc_pos(-a / 3.0));
+    double three = 2.0 * ra * cos(acos(ikc_clip1(-0.5 * b / ikc_big(ra * ra * ra))) / 3.0);
+    double x = (disc > 0.0 ? one : three) - p / 3.0;
+    for (int i = 0; i < 2; i++) {
+        double g = ((x + p) * x + q) * x + r;
+        double dg = (3.0 * x + 2.0 * p) * x + q;
+        x = x - g * dg / (dg * dg + IKC_TINY);
+    }
+    return x;
+}
+
+/* fast._quartic_real: x[0..3] the roots of x^4 + b x^3 + c x^2 + d x + e as reals, disc[0..1] the two
+ * quadratics' discriminants; *pp, *kk the depressed quartic's p and the resolvent's root */
+static inline void ikc_rrr_quartic_real(double b, double c, double d, double e, double *x, double *disc,
+                                        double *pp, double *kk) {
+    double b4 = 0.25 * b;
+    double p = c - 6.0 * b4 * b4;
+    double q = d - 2.0 * c * b4 + 8.0 * b4 * b4 * b4;
+    double r = e - d * b4 + c * b4 * b4 - 3.0 * b4 * b4 * b4 * b4;
+    double k = ikc_pos(ikc_rrr_cubic_largest(p, 0.25 * p * p - r, -0.125 * q * q));
+    double s = sqrt(2.0 * k);
+    int tiny = s * s <= 1e-14 * (fabs(p) + sqrt(fabs(r)) + IKC_TINY);
+    double h = tiny ? 0.0 : q / (2.0 * ikc_big(tiny ? 1.0 : s));
+    double z = sqrt(ikc_pos(0.25 * p * p - r));
+    for (int i = 0; i < 2; i++) {
+        double sign = i == 0 ? 1.0 : -1.0;
+        double disc_f = 0.25 * s * s - (0.5 * p + k + sign * h);
+        double y2 = -0.5 * p - sign * z;
+        double dd = tiny ? y2 : disc_f;
+        double root = sqrt(ikc_pos(dd));
+        double centre = tiny ? 0.0 : 0.5 * sign * s;
+        x[2 * i] = centre + root - b4;
+        x[2 * i + 1] = centre - root - b4;
+        disc[i] = dd;
+    }
+    *pp = p;
+    *kk = k;
+}
+
+/* fast._turn_cs: exp([w] th) x with cos th = c, sin th = s */
+static inline void ikc_turn_cs(const double *w, double c, double s, const double *x, double *out) {
+    double w0 = w[0], w1 = w[1], w2 = w[2];
+    double x0 = x[0], x1 = x[1], x2 = x[2];
+    double k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c);
+    out[0] = c * x0 + s * (w1 * x2 - w2 * x1) + k * w0;
+    out[1] = c * x1 + s * (w2 * x0 - w0 * x2) + k * w1;
+    out[2] = c * x2 + s * (w0 * x1 - w1 * x0) + k * w2;
+}
+
+/* fast._rrr_gauss_newton: one Newton step of the whole S2-RRR equation from t (cs: cos, sin of each) */
+static inline void ikc_rrr_gauss_newton(const double *w1, const double *r1, const double *w2, const double *r2,
+                                        const double *w3, const double *r3, const double *p, const double *qq,
+                                        double *t, const double *cs) {
+    double d[3], x3[3], x2[3], x1[3], a2[3], b2[3], a3[3], b3[3], u[3];
+    ikc_sub(p, r3, d);
+    ikc_turn_cs(w3, cs[4], cs[5], d, u);
+    ikc_axpy(1.0, u, r3, x3);
+    ikc_sub(x3, r2, d);
+    ikc_turn_cs(w2, cs[2], cs[3], d, u);
+    ikc_axpy(1.0, u, r2, x2);
+    ikc_sub(x2, r1, d);
+    ikc_turn_cs(w1, cs[0], cs[1], d, x1);
+    ikc_turn_cs(w1, cs[0], cs[1], w2, a2);
+    ikc_sub(r2, r1, d);
+    ikc_turn_cs(w1, cs[0], cs[1], d, b2);
+    ikc_turn_cs(w2, cs[2], cs[3], w3, u);
+    ikc_turn_cs(w1, cs[0], cs[1], u, a3);
+    ikc_sub(r3, r2, d);
+    ikc_turn_cs(w2, cs[2], cs[3], d, u);
+    ikc_axpy(1.0, u, r2, d);
+    ikc_sub(d, r1, u);
+    ikc_turn_cs(w1, cs[0], cs[1], u, b3);
+    double j1[3], j2[3], j3[3], e[3], c23[3], c31[3], c12[3];
+    ikc_cross(w1, x1, j1);
+    ikc_sub(x1, b2, d);
+    ikc_cross(a2, d, j2);
+    ikc_sub(x1, b3, d);
+    ikc_cross(a3, d, j3);
+    ikc_sub(qq, r1, d);
+    ikc_sub(d, x1, e);
+    ikc_cross(j2, j3, c23);
+    ikc_cross(j3, j1, c31);
+    ikc_cross(j1, j2, c12);
+    double det = ikc_dot(j1, c23);
+    int ok = fabs(det) > IKC_NEAR * sqrt(ikc_dot(j1, j1) * ikc_dot(j2, j2) * ikc_dot(j3, j3));
+    double inv = (ok ? 1.0 : 0.0) / (ok ? det : 1.0);
+    t[0] = t[0] + ikc_dot(e, c23) * inv;
+    t[1] = t[1] + ikc_dot(e, c31) * inv;
+    t[2] = t[2] + ikc_dot(e, c12) * inv;
+}
+
+/* S2-RRR: exp(xi1 t1) exp(xi2 t2) exp(xi3 t3)(p) = q, axes 2 and 3 neither parallel nor meeting (the
+ * quartic of subproblems/s2_rrr.py by Ferrari, Newton steps; fast.point_rrr).  4 slots x 3; a complex
+ * pair's slots IKC_EMPTY where the other pair is real; degenerate or unreachable: IKC_DEFER */
+static inline void ikc_point_rrr(const double *w1, const double *r1, const double *w2, const double *r2,
+                                 const double *w3, const double *r3, const double *p, const double *qq,
+                                 double *q, int *f) {
+    double size2 = ikc_dot(p, p) + ikc_dot(qq, qq) + ikc_dot(r1, r1) + ikc_dot(r2, r2) + ikc_dot(r3, r3);
+    double size = sqrt(size2) + IKC_TINY;
+    double u[3], cc[3], cs[3], c0[3], v[3], ec[3], es[3], e0[3], k[3], h[3], d[3];
+    ikc_sub(qq, r1, u);
+    double uw = ikc_dot(w1, u);
+    ikc_axpy(-uw, w1, u, cc);
+    ikc_cross(w1, cc, cs);
+    ikc_axpy(uw, w1, r1, c0);
+    ikc_sub(p, r3, v);
+    double vw = ikc_dot(w3, v);
+    ikc_axpy(-vw, w3, v, ec);
+    ikc_cross(w3, ec, es);
+    ikc_axpy(vw, w3, r3, e0);
+    ikc_sub(e0, r2, k);
+    ikc_sub(c0, r2, h);
+    double m00 = ikc_dot(w2, ec), m01 = ikc_dot(w2, es);
+    double m10 = 2.0 * ikc_dot(k, ec) / size, m11 = 2.0 * ikc_dot(k, es) / size;
+    ikc_sub(c0, e0, d);
+    double g0[2] = {ikc_dot(w2, d), (ikc_dot(h, h) + ikc_dot(cc, cc) - ikc_dot(k, k) - ikc_dot(ec, ec)) / size};
+    double gc[2] = {ikc_dot(w2, cc), 2.0 * ikc_dot(h, cc) / size};
+    double gs[2] = {-ikc_dot(w2, cs), -2.0 * ikc_dot(h, cs) / size};
+    double det = m00 * m11 - m01 * m10;
+    double mm = m00 * m00 + m01 * m01 + m10 * m10 + m11 * m11;
+    double a0[2] = {m11 * g0[0] - m01 * g0[1], m00 * g0[1] - m10 * g0[0]};
+    double ac[2] = {m11 * gc[0] - m01 * gc[1], m00 * gc[1] - m10 * gc[0]};
+    double as[2] = {m11 * gs[0] - m01 * gs[1], m00 * gs[1] - m10 * gs[0]};
+    double qa = ac[0] * ac[0] + ac[1] * ac[1];
+    double qb = 2.0 * (ac[0] * as[0] + ac[1] * as[1]);
+    double qc = as[0] * as[0] + as[1] * as[1];
+    double fs[5] = {a0[0] * a0[0] + a0[1] * a0[1] - det * det + 0.5 * (qa + qc),
+                    2.0 * (a0[0] * ac[0] + a0[1] * ac[1]), 2.0 * (a0[0] * as[0] + a0[1] * as[1]),
+                    0.5 * (qa - qc), 0.5 * qb};
+    double ee = g0[0] * g0[0] + g0[1] * g0[1] + gc[0] * gc[0] + gc[1] * gc[1] + gs[0] * gs[0] + gs[1] * gs[1];
+    double ref = mm * (mm + ee) + IKC_TINY;
+    double fn = sqrt(fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2] + fs[3] * fs[3] + fs[4] * fs[4]);
+    double lim = IKC_NEAR2 * size2;
+    int flag = ((det * det <= IKC_RRR_REGULAR * IKC_RRR_REGULAR * mm * mm) || (ikc_dot(cc, cc) <= lim) ||
+                (ikc_dot(ec, ec) <= lim) || (fn <= IKC_NEAR * ref)) ? IKC_DEFER : 0;
+    /* the centre: the sample angle k pi / 4 where |F| is largest (fast._RRR_SAMPLES) */
+    double big_f = ikc_rrr_trig2(fs, 1.0, 0.0), pc = -1.0, ps = 0.0;
+    for (int j = 1; j < 8; j++) {
+        double c = cos(j * IKC_PI / 4), s = sin(j * IKC_PI / 4);
+        double fk = ikc_rrr_trig2(fs, c, s);
+        if (fabs(fk) > fabs(big_f)) {
+            big_f = fk;
+            pc = -c;
+            ps = -s;
+        }
+    }
+    double c2p = pc * pc - ps * ps, s2p = 2.0 * ps * pc;
+    double f0 = fs[0], c1 = fs[1], s1 = fs[2], c2 = fs[3], s2 = fs[4];
+    double c1r = c1 * pc + s1 * ps, s1r = s1 * pc - c1 * ps;
+    double c2r = c2 * c2p + s2 * s2p, s2r = s2 * c2p - c2 * s2p;
+    double inv = 1.0 / (big_f == 0.0 ? 1.0 : big_f);
+    double xs[4], discs[2], p_, k_;
+    ikc_rrr_quartic_real((2.0 * s1r - 4.0 * s2r) * inv, (2.0 * f0 - 6.0 * c2r) * inv, (2.0 * s1r + 4.0 * s2r) * inv,
+                         (f0 + c1r + c2r) * inv, xs, discs, &p_, &k_);
+    double phi = atan2(ps, pc);
+    double band = IKC_RRR_DOUBLE * IKC_RRR_DOUBLE * (1.0 + fabs(p_) + k_);
+    int some_real = (discs[0] >= -band) || (discs[1] >= -band);
+    for (int i = 0; i < 4; i++) {
+        double dd = discs[i / 2];
+        int real = dd >= -band;
+        int kind = (fabs(dd) <= band ? IKC_DEFER : 0) | (dd < -band ? (some_real ? IKC_EMPTY : IKC_DEFER) : 0);
+        double t1 = phi + 2.0 * atan2(xs[i], 1.0);
+        for (int j = 0; j < IKC_RRR_NEWTON; j++) {
+            double c = cos(t1), s = sin(t1);
+            double c2_ = c * c - s * s, s2_ = 2.0 * s * c;
+            double fv = f0 + c1 * c + s1 * s + c2 * c2_ + s2 * s2_;
+            double dv = s1 * c - c1 * s + 2.0 * (s2 * c2_ - c2 * s2_);
+            t1 = real ? t1 - fv * dv / (dv * dv + IKC_TINY) : t1;
+        }
+        double c = cos(t1), s = sin(t1);
+        double c2_ = c * c - s * s, s2_ = 2.0 * s * c;
+        double fv = f0 + c1 * c + s1 * s + c2 * c2_ + s2 * s2_;
+        double dv = s1 * c - c1 * s + 2.0 * (s2 * c2_ - c2 * s2_);
+        int dbl = (fabs(dv) <= IKC_RRR_DOUBLE * ref) && (fabs(fv) <= IKC_RRR_DOUBLE * ref);
+        double t3 = atan2((a0[1] + ac[1] * c + as[1] * s) * det, (a0[0] + ac[0] * c + as[0] * s) * det);
+        double y[3] = {c0[0] + cc[0] * c - cs[0] * s, c0[1] + cc[1] * c - cs[1] * s, c0[2] + cc[2] * c - cs[2] * s};
+        double c3 = cos(t3), s3 = sin(t3);
+        double z[3] = {e0[0] + ec[0] * c3 + es[0] * s3, e0[1] + ec[1] * c3 + es[1] * s3,
+                       e0[2] + ec[2] * c3 + es[2] * s3};
+        double zr[3], yr[3], tcs[6];
+        int f2;
+        ikc_sub(z, r2, zr);
+        ikc_sub(y, r2, yr);
+        double t2 = ikc_angle_about_cs(w2, zr, yr, size2, &f2, tcs + 2);
+        double t[3] = {t1, t2, t3};
+        if (real) {
+            tcs[0] = c;
+            tcs[1] = s;
+            tcs[4] = c3;
+            tcs[5] = s3;
+            ikc_rrr_gauss_newton(w1, r1, w2, r2, w3, r3, p, qq, t, tcs);
+        }
+        q[3 * i] = t[0];
+        q[3 * i + 1] = t[1];
+        q[3 * i + 2] = t[2];
+        f[i] = flag | f2 | (dbl ? IKC_DEFER : 0) | kind;
     }
 }
 

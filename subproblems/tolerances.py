@@ -239,6 +239,12 @@ FAST_DEGENERATE = 1e-7
 FAST_TANGENT = 1e-10
 #: Joint distance within which two copies of a tangent root are one solution (``IKC_SPLIT_ROOT``).
 FAST_SPLIT_ROOT = 1e-6
+#: S2-RRR kernel (fast.point_rrr): |det M| at most this times |M|^2 (M nearly rank 1: axes 2 and 3
+#: nearly parallel or meeting) defers to the reference path (``IKC_RRR_REGULAR``).
+FAST_RRR_REGULAR = 1e-3
+#: S2-RRR kernel: a polished root where the quartic and its derivative are both below this (relative
+#: to the coefficients) is (nearly) double: deferred (``IKC_RRR_DOUBLE``).
+FAST_RRR_DOUBLE = 1e-6
 #: Candidates missing by less than this (relative) need Newton steps (``IKC_NEAR_MISS``).
 NEAR_MISS = 1e-4
 #: A value within this outside a joint limit is clamped onto it: a double root at a limit is only

@@ -137,7 +137,8 @@ def test_search_on_the_fast_chain_recovers_as_the_reference(name, monkeypatch):
     assert recovered[True] >= recovered[False] - 2 and recovered[True] >= 0.95 * len(Q), recovered
 
 
-GENERAL_STEPS = {  # arms whose closed form has a step with no plain-arithmetic kernel (found by fuzzing)
+GENERAL_STEPS = {  # arms whose closed form has a general step (found by fuzzing): S2-RRR's kernel (point_rrr,
+    # the regular case), S2-TRR's reference solver inside the fast chain
     "S2-RRR": ("RRRRRR", [(0.1, -math.pi / 2, 0.1), (0.1, -math.pi / 2, 0.25), (0.25, math.pi / 3, 0.0),
                           (0.0, math.pi / 2, 0.4), (0.0, math.pi / 3, 0.0), (0.1, 0.0, 0.25)]),
     "S2-TRR": ("TRRRRR", [(0.0, math.pi / 2, 0.25), (0.25, -math.pi / 2, 0.4), (0.0, math.pi / 3, 0.4),
@@ -145,16 +146,20 @@ GENERAL_STEPS = {  # arms whose closed form has a step with no plain-arithmetic 
 }
 
 
+GENERAL_CALLS = {"S2-RRR": "_fk.point_rrr(", "S2-TRR": "_fk.reference("}
+
+
 @pytest.mark.parametrize("code", sorted(GENERAL_STEPS))
 def test_general_solver_inside_the_fast_chain(code):
-    """A step without a kernel runs its reference solver inside the fast chain (``fast.reference``):
-    the same solutions as the reference runtime, single and batch, and every one exact."""
+    """A general step runs its kernel (S2-RRR: ``fast.point_rrr``, deferring its degenerate cases) or,
+    without one, its reference solver inside the fast chain (``fast.reference``): the same solutions as
+    the reference runtime, single and batch, and every one exact."""
     from tests.test_compiler_generality import _dh_chain
 
     kinds, rows = GENERAL_STEPS[code]
     chain = _dh_chain(rows, kinds)
     module = compile_robot(chain)
-    assert module.FAST_PATH and code in module.PLAN and "_fk.reference(" in module.__source__
+    assert module.FAST_PATH and code in module.PLAN and GENERAL_CALLS[code] in module.__source__
     Q = sample_configurations(chain, 25, seed=3, special=0.2)
     Ts = np.array([module.fk(q) for q in Q])
     S, V, L, _, C = module.solve_batch_info(Ts)

@@ -177,8 +177,9 @@ IDENTITY = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
 class _Emitter:
     """Walks the plan, building the loop nest as IR."""
 
-    def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans):
+    def __init__(self, twists, kinds, home, couplings, free_joints, scale, target, spans, snapped=False):
         self.c = _Code()
+        self.snapped = snapped  # the plan's (ChainData.snapped)
         self.spans = spans  # per joint: the slide length a representative rep = pi stands for
         self.reps = 0  # steps given a representative so far
         self.twists = np.where(np.abs(twists) <= ZERO, 0.0, twists)
@@ -419,6 +420,9 @@ class ChainData:
     upper: tuple
     scale: float
     search: bool
+    # a snapped plan (its twists the snapped robot's): S2-RRR keeps its reference solver, whose
+    # near-miss rows seed the true robot's solutions at a fold (PointStep.lower)
+    snapped: bool = False
 
     @classmethod
     def from_plan(cls, plan, chain, *, independent, free_joints, scale) -> ChainData:
@@ -430,7 +434,8 @@ class ChainData:
             kinds=chain.joint_types, home=np.asarray(chain.home, float), couplings=couplings,
             known=tuple(free_joints) + tuple(plan.search), independent=tuple(independent),
             vary=tuple(chain.independent), lower=tuple(map(float, chain.lower)),
-            upper=tuple(map(float, chain.upper)), scale=float(scale), search=bool(plan.search))
+            upper=tuple(map(float, chain.upper)), scale=float(scale), search=bool(plan.search),
+            snapped=bool(plan.snapped))
 
     @classmethod
     def from_module(cls, ns, steps_name: str = "_STEPS") -> ChainData:
@@ -443,7 +448,7 @@ class ChainData:
             known=tuple(ns["_INDEPENDENT"][k] for k in ns["_FREE"]) + search,
             independent=tuple(ns["_INDEPENDENT"]), vary=tuple(ns["_VARY"]),
             lower=tuple(map(float, ns["_VARY_LOWER"])), upper=tuple(map(float, ns["_VARY_UPPER"])),
-            scale=float(ns["SCALE"]), search=bool(search))
+            scale=float(ns["SCALE"]), search=bool(search), snapped=bool(ns["_POLISH"]))
 
     def spans(self) -> list:
         """Per joint, the slide length a representative ``rep = pi`` stands for: the larger limit's
@@ -471,7 +476,7 @@ def build_program(data: ChainData, *, cse: bool = True) -> ir.Program | None:
     steps = [s if isinstance(s, Step) else Step.from_module_entry(s) for s in data.steps]
     steps = classify_pairs(steps, data.twists, data.kinds, data.scale)
     em = _Emitter(data.twists, data.kinds, data.home, data.couplings, list(data.known), data.scale,
-                  data.target, data.spans())
+                  data.target, data.spans(), data.snapped)
     c = em.c
     goal = [ir.Name(f"g{i}") for i in range(12)]
     H = data.home

@@ -21,7 +21,7 @@ from ikcompiler.codegen import ir
 KERNEL_SLOTS = {
     "plane_r": 2, "plane_t": 1, "dist_r": 2, "dist_t": 2, "slide1": 1, "slide3": 1, "turn_slide2": 1,
     "slide2_turn": 2, "point_r": 1,
-    "point_rr_meet": 2, "point_rr_parallel": 2, "rot_r": 1, "rot_rr": 1, "rot_rrr": 2,
+    "point_rr_meet": 2, "point_rr_parallel": 2, "rot_r": 1, "rot_rr": 1, "rot_rrr": 2, "point_rrr": 4,
 }
 # kernels with a ``NAME_cs`` form (fast.py, fast_kernels.h) that also returns the cosine and sine of
 # each output angle, from the quantities the angle is the atan2 or acos of: a chain reads them where it

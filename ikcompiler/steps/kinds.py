@@ -136,6 +136,11 @@ class PointStep(Step):
             (w1, r1), (w2, r2) = args
             fn = "point_rr_parallel" if self.axes == "parallel" else "point_rr_meet"
             call = em.kernel(fn, w1, r1, w2, r2, point, Tpp, em.lock_rep())
+        elif self.code == "S2-RRR" and not em.snapped:  # the regular case; the kernel defers the others
+            # (a snapped plan keeps the reference solver: its near-miss rows at a complex pair seed
+            # the true robot's solutions born at a fold, tests/test_near_miss_rows.py)
+            (w1, r1), (w2, r2), (w3, r3) = args
+            call = em.kernel("point_rrr", w1, r1, w2, r2, w3, r3, point, Tpp)
         elif self.code in ("S2-T", "S2-TTT"):
             b = [em.c.lin([(1.0, a), (-1.0, x)]) for a, x in zip(Tpp, point)]
             slides = [a[0] for a in args]

@@ -40,7 +40,9 @@ but more than ``EXACT``, and the checks below apply where it does not):
    parallel axes gave NaN on ARRAY (``pos``/``big`` now map NaN like the scalar comparisons).
 
 Not covered by the specs: ``slide3`` and ``turn_slide2`` (added to ``fast.py`` after this file was
-specified); ``slide2_turn`` (S2-TTR) has its own round trip and reference agreement at the end.
+specified); ``slide2_turn`` (S2-TTR) and ``point_rrr`` (S2-RRR: round trip and the reference's exact
+rows on general and pr2-like instances, its degenerate cases deferred, ARRAY against SCALAR) have their
+own tests at the end.
 
 Budgets follow the active hypothesis profile (``HYPOTHESIS_PROFILE``).
 """
@@ -1031,3 +1033,184 @@ def test_slide1_solves_s2_t_and_agrees_with_the_reference_and_both_backends():
         assert int(flag) == int(many[0][-1][k])
         assert abs(one - many[0][0][k]) <= 1e-12 * max(1.0, abs(one))
     assert int(many[0][-1][-1]) & fast.DEFER
+
+
+# ---------------------------------------------------------------------------------------------------
+# S2-RRR (point_rrr): its own instances, round trip and reference agreement, degenerate cases, backends
+
+RRR_SPECIAL = (0.0, math.pi / 2, -math.pi / 2, math.pi)
+
+
+def _rrr_point(W, R, th, p):
+    g = np.eye(4)
+    for w, r, t in zip(W, R, th):
+        g = g @ twist_exp(revolute_twist(w, r), t)
+    return g[:3, :3] @ p + g[:3, 3]
+
+
+def rrr_drawn(rng, reachable: bool = True, family: str = "general"):
+    """An S2-RRR instance ``(w1, r1, w2, r2, w3, r3, p, q)`` and the joint values it was built from
+    (None when ``q`` is arbitrary).  ``general``: random axes and points; ``arm``: a pr2-like shoulder
+    (axis 1 vertical, axis 2 across it at an offset, axis 3 the elbow turned by a roll about the upper
+    arm), joint values at special angles a third of the time."""
+    if family == "arm":
+        roll = rng.choice([rng.uniform(-math.pi, math.pi), 0.3, -2.0])
+        upper = np.array([1.0, 0.0, 0.0])
+        ey = np.array([0.0, 1.0, 0.0])
+        W = [np.array([0.0, 0.0, 1.0]), ey, rotation_exp(upper, roll) @ ey]
+        R = [np.zeros(3), np.array([0.1, 0.0, 0.0]), np.array([0.5, 0.0, 0.0])]
+        p = np.array([0.82, 0.0, 0.0]) + rng.uniform(-0.05, 0.05, 3) * (rng.random() < 0.5)
+    else:
+        W = [_unit_rng(rng) for _ in range(3)]
+        R = [rng.normal(size=3) for _ in range(3)]
+        p = rng.normal(size=3)
+    th = rng.uniform(-math.pi, math.pi, 3)
+    special = rng.random(3) < (1 / 3 if family == "arm" else 0.1)
+    th[special] = rng.choice(RRR_SPECIAL, int(special.sum()))
+    q = _rrr_point(W, R, th, p) if reachable else rng.normal(size=3) * 2.0
+    return (W[0], R[0], W[1], R[1], W[2], R[2], p, q), (th if reachable else None)
+
+
+def rrr_instance(rng, reachable: bool = True):
+    return rrr_drawn(rng, reachable, "general" if rng.random() < 0.6 else "arm")[0]
+
+
+def rrr_corners():
+    """Degenerate S2-RRR instances the kernel must defer, with what each is."""
+    ex, ey, ez = np.eye(3)
+    z = np.zeros(3)
+    elbow = rotation_exp(ex, 0.7) @ ey
+    arm = [ez, z, ey, 0.1 * ex, elbow, 0.5 * ex]
+    W, R = arm[0::2], arm[1::2]
+    wrist, on3 = 0.82 * ex, 0.5 * ex + 0.3 * elbow
+    out = {
+        "tangent": (*arm, wrist, _rrr_point(W, R, (0.3, 0.4, 0.0), wrist)),  # the arm stretched
+        "unreachable": (*arm, wrist, 10.0 * ex),
+        "p on axis 3": (*arm, on3, _rrr_point(W, R, (0.3, 0.4, 1.0), on3)),
+        "q on axis 1": (*arm, wrist, 0.6 * ez),
+        "axes 2, 3 parallel": (ez, z, ey, 0.1 * ex, ey, 0.5 * ex, wrist, _rrr_point(
+            [ez, ey, ey], R, (0.3, 0.4, 1.0), wrist)),
+        "axes 2, 3 meeting": (ez, z, ey, 0.1 * ex, ex, 0.1 * ex + 0.2 * ey, wrist + 0.3 * ez, _rrr_point(
+            [ez, ey, ex], [z, 0.1 * ex, 0.1 * ex + 0.2 * ey], (0.3, 0.4, 1.0), wrist + 0.3 * ez)),
+        "axes 1, 2 coincident": (ez, z, ez, z, elbow, 0.5 * ex, wrist, _rrr_point(
+            [ez, ez, elbow], [z, z, 0.5 * ex], (0.3, 0.4, 1.0), wrist)),
+        "axes 1, 3 one line": (ez, z, ey, 0.1 * ex, ez, 0.3 * ez, wrist, _rrr_point(
+            [ez, ey, ez], [z, 0.1 * ex, 0.3 * ez], (0.3, 0.0, 1.0), wrist)),
+        "middle point on axis 2": (*arm, wrist, _rrr_point(W, R, (0.3, 0.4, 0.0), 0.1 * ex)),
+        "zero": (z, z, z, z, z, z, z, z),
+    }
+    # the middle point on axis 2: p carried by t3 onto axis 2 (0.1 ex + s ey)
+    p_mid = _rrr_point([elbow], [0.5 * ex], (-1.0,), 0.1 * ex + 0.4 * ey)
+    out["middle point on axis 2"] = (*arm, p_mid, _rrr_point(W, R, (0.3, 0.4, 1.0), p_mid))
+    return [tuple(np.asarray(a, dtype=float) for a in c) for c in out.values()]
+
+
+def _rrr_slots(args):
+    return fast.point_rrr(fast.SCALAR, *(tuple(float(x) for x in a) for a in args))
+
+
+def _rrr_reference(args):
+    w1, r1, w2, r2, w3, r3, p, q = args
+    return solve("S2-RRR", [revolute_twist(w1, r1), revolute_twist(w2, r2), revolute_twist(w3, r3)], p=p, q=q)
+
+
+def _rrr_size(args):
+    return math.sqrt(sum(float(np.dot(a, a)) for a in args[1::2] + (args[7],)))
+
+
+def _rrr_check(args, th=None):
+    """Where the caller uses the kernel (no filled slot defers): every filled slot exact to 1e-12 of
+    the size, equal as a set to the reference's exact rows (no continuum there), the drawn values
+    among them.  Returns whether the kernel was used."""
+    slots = [s for s in _rrr_slots(args) if not int(s[3]) & fast.EMPTY]
+    if any(int(s[3]) & fast.DEFER for s in slots):
+        return False
+    W, R, p, q = args[0:6:2], args[1:6:2], args[6], args[7]
+    size = max(1.0, _rrr_size(args))
+    exact = []
+    for s in slots:
+        err = float(np.linalg.norm(_rrr_point(W, R, s[:3], p) - q))
+        assert err <= 1e-12 * size, (args, s, err)
+        exact.append(s[:3])
+    ref = _rrr_reference(args)
+    assert not ref.continuum, args
+    rows = [r for r, ls in zip(ref.q, ref.ls) if not ls]
+
+    def near(a, b):
+        return max(angle_distance(x, y) for x, y in zip(a, b)) <= MATCH
+
+    assert all(any(near(r, s) for s in exact) for r in rows), (args, rows, exact)
+    assert all(any(near(r, s) for r in rows) for s in exact), (args, rows, exact)
+    if th is not None:
+        assert any(near(th, s) for s in exact), (args, th, exact)
+    return True
+
+
+@pytest.mark.parametrize("family", ["general", "arm"])
+def test_point_rrr_round_trip_and_reference(family):
+    """``point_rrr`` (S2-RRR) on drawn instances: where it is used, its exact slots are the reference's
+    exact rows and hold the drawn joint values; it is used on nearly all reachable instances off a
+    tangency."""
+    rng = np.random.default_rng(41 if family == "general" else 43)
+    used = reachable = 0
+    for k in range(max(60, 4 * EXAMPLES)):
+        args, th = rrr_drawn(rng, k % 4 != 0, family)
+        got = _rrr_check(args, th)
+        if th is not None:
+            reachable += 1
+            used += got
+    # the arm's elbow at 0 or pi (a sixth of its instances) is a stretched or folded arm: a tangency
+    assert used >= (0.95 if family == "general" else 0.75) * reachable, (used, reachable)
+
+
+def test_point_rrr_defers_its_degenerate_cases():
+    """Tangent (a stretched arm), unreachable, a point on its axis, axes 2 and 3 parallel or meeting
+    (M rank 1), axes 1 and 2 coincident or 1 and 3 one line (t1 free), the middle point on axis 2
+    (t2 free), all zero: a filled slot defers, so the caller sends the instance to the reference path."""
+    for args in rrr_corners():
+        slots = [s for s in _rrr_slots(args) if not int(s[3]) & fast.EMPTY]
+        assert any(int(s[3]) & fast.DEFER for s in slots), (args, slots)
+
+
+def test_point_rrr_backends_agree():
+    """fast.ARRAY on a stack of general, arm, unreachable and degenerate instances equals fast.SCALAR
+    on each: flags identical, the angles of the slots a caller uses to 1e-12 (NaN where SCALAR gives
+    NaN)."""
+    rng = np.random.default_rng(47)
+    cases = [rrr_instance(rng, bool(k % 3)) for k in range(80)] + rrr_corners()
+    stacked = [tuple(np.array([c[i][j] for c in cases]) for j in range(3)) for i in range(8)]
+    with np.errstate(all="ignore"):
+        many = fast.point_rrr(fast.ARRAY, *stacked)
+    for k, c in enumerate(cases):
+        for slot_one, slot_many in zip(_rrr_slots(c), many):
+            assert int(slot_one[3]) == int(slot_many[3][k]), (k, c)
+            if int(slot_one[3]) & (fast.DEFER | fast.EMPTY):
+                continue  # unused: an ill-conditioned instance (M singular) amplifies an ulp of libm
+            for a, b in zip(slot_one[:3], (x[k] for x in slot_many[:3])):
+                if math.isnan(a) or math.isnan(b):
+                    assert math.isnan(a) and math.isnan(b), (k, c)
+                else:
+                    assert angle_distance(a, b) <= 1e-12, (k, c, a, b)
+
+
+def _rrr_used(args):
+    """The filled slots' angles, or None where the caller hands the instance to the reference path."""
+    slots = [s for s in _rrr_slots(args) if not int(s[3]) & fast.EMPTY]
+    return None if any(int(s[3]) & fast.DEFER for s in slots) else [s[:3] for s in slots]
+
+
+@pytest.mark.parametrize("factor", [1e-3, 1e3])
+def test_point_rrr_is_scale_invariant(factor):
+    """The same instance in other units (lengths times 1e-3 or 1e3): handed back alike, else the same
+    solutions (its tolerances are relative to the geometry's size)."""
+    rng = np.random.default_rng(53)
+    for k in range(60):
+        args = rrr_instance(rng, k % 3 != 0)
+        scaled = tuple(a if i in (0, 2, 4) else a * factor for i, a in enumerate(args))
+        one, other = _rrr_used(args), _rrr_used(scaled)
+        assert (one is None) == (other is None), (args, factor)
+        if one is not None:
+            assert len(one) == len(other)
+            for s in one:
+                gap = min(max(angle_distance(a, b) for a, b in zip(s, t)) for t in other)
+                assert gap <= 1e-9, (args, factor)

@@ -8,8 +8,8 @@ The header is a port of :mod:`subproblems.fast` in the same order of operations,
   points on or near axes, normals along or across an axis or zero, meeting / parallel / antiparallel /
   nearly parallel / coincident axes, gimbal locks, special angles 0, +-pi/2, pi, reachable and
   unreachable right-hand sides), for the ten kernels it specifies;
-* raw instances from this file for all fourteen (``slide1``, ``slide3``, ``turn_slide2``, ``slide2_turn``
-  included): each vector argument drawn as a fresh one, a copy, a multiple or a near copy of an
+* raw instances from this file for all fifteen (``slide1``, ``slide3``, ``turn_slide2``, ``slide2_turn``,
+  ``point_rrr`` included): each vector argument drawn as a fresh one, a copy, a multiple or a near copy of an
   earlier one, zero, or on an earlier axis, so that coincidences of every pair of arguments come up;
 * hand-built corner cases, and a bulk run of numpy-random instances.
 
@@ -56,6 +56,7 @@ KERNELS = {
     "rot_r": ("uR", 1, "R"),
     "rot_rr": ("uuR", 1, "RR"),
     "rot_rrr": ("uuuRs", 2, "RRR"),
+    "point_rrr": ("upupuppp", 4, "RRR"),
 }
 # the Python argument names of the ten kernels test_fast_kernels specifies, for its instances
 SPEC_BY_NAME = {s.name: s for s in SPECS}
@@ -276,6 +277,10 @@ def _more_corners(name):
             [ex, ey, ex, ey, ex, ey, 0.0],  # the axis in the slides' plane
             [ex, ey, ez, ex, ex, ez, 1.0],  # the point on the axis, off the plane: none
         ]
+    if name == "point_rrr":  # (w1, r1, w2, r2, w3, r3, p, q)
+        from tests.subproblems.test_fast_kernels import rrr_corners
+
+        return [list(c) for c in rrr_corners()]
     spec = SPEC_BY_NAME[name]
     cases = [[inst[a] for a in spec.args] for inst in _corners(name)]
     if name == "rot_rrr":  # w2 1.2e-7 from w1 (t1_rep defers, t2 does not), R w3 along w1: a lock
@@ -303,6 +308,10 @@ def _rng_args(name, rng):
         return [rng.uniform(-2, 2, 3) for _ in range(4)]
     if name == "slide2_turn":
         return [src.unit(), src.unit(), src.unit(), src.vec(), src.vec(), src.vec(), rng.uniform(-3, 3)]
+    if name == "point_rrr":  # reachable (special angles among the joint values) or arbitrary
+        from tests.subproblems.test_fast_kernels import rrr_instance
+
+        return list(rrr_instance(rng, reachable=rng.random() < 0.7))
     w, r, v2, v3, t = src.unit(), src.vec(), src.vec(), src.vec(), src.vec()
     th = rng.choice([rng.uniform(-math.pi, math.pi), *SPECIAL_ANGLES])
     return [w, r, v2, v3, rotation_exp(w, th).ravel(), t]
