@@ -135,15 +135,7 @@ def mat_t_vec(R, x):
 
 def rotate(m, w, th, x):
     """``exp([w] th) x`` (Rodrigues)."""
-    c, s = m.cos(th), m.sin(th)
-    w0, w1, w2 = w
-    x0, x1, x2 = x
-    k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c)
-    return (
-        c * x0 + s * (w1 * x2 - w2 * x1) + k * w0,
-        c * x1 + s * (w2 * x0 - w0 * x2) + k * w1,
-        c * x2 + s * (w0 * x1 - w1 * x0) + k * w2,
-    )
+    return _turn_cs(w, m.cos(th), m.sin(th), x)
 
 
 def unit_pair(m, c, s):

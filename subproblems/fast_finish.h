@@ -1917,26 +1917,39 @@ static void *ikc_run(void *arg) {
 
 /* N raw targets (N x 16, 9 or 3 entries, as ikc_one takes them) and their free values (N x nfree) in
  * `threads` threads; count[i] is the solution count, IKC_PYTHON or IKC_INVALID. */
-static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const double *fr, int limits,
-                     double *q, double *res, int *ls, int *cont, int *count, int threads) {
+/* How many threads a batch of n poses takes: 1..64, and 1 below a few hundred poses a thread (a thread
+ * costs more than that). */
+static int ikc_threads_for(int64_t n, int threads) {
     if (threads < 1) threads = 1;
     if (threads > 64) threads = 64;
-    if (n < 256 * threads) threads = 1;  /* a thread costs more than a few hundred poses */
-    ikc_job jobs[64];
+    return n < 256 * threads ? 1 : threads;
+}
+
+/* run(jobs[t]) for t < threads (`size` bytes a job): job 0 here, the others in threads of their own,
+ * each share done here where no thread is to be had; returns when every share is done.  The drivers
+ * below (ikc_many, the block path's, free_ends.h's) fill their jobs and call this. */
+static void ikc_run_shares(int threads, void *(*run)(void *), void *jobs, size_t size) {
     pthread_t ids[64];
     int started[64] = {0};
-    for (int t = 0; t < threads; t++) {
-        jobs[t] = (ikc_job){rb, n * t / threads, n * (t + 1) / threads, goals, fr, limits, q, res, ls, cont,
-                            count};
-    }
-    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run, &jobs[t]) == 0;
-    ikc_run(&jobs[0]);
+    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, run, (char *)jobs + t * size) == 0;
+    run(jobs);
     for (int t = 1; t < threads; t++) {
         if (started[t])
             pthread_join(ids[t], NULL);
         else
-            ikc_run(&jobs[t]);  /* no thread to be had: do its share here */
+            run((char *)jobs + t * size);
     }
+}
+
+static void ikc_many(const ikc_robot *rb, int64_t n, const double *goals, const double *fr, int limits,
+                     double *q, double *res, int *ls, int *cont, int *count, int threads) {
+    threads = ikc_threads_for(n, threads);
+    ikc_job jobs[64];
+    for (int t = 0; t < threads; t++) {
+        jobs[t] = (ikc_job){rb, n * t / threads, n * (t + 1) / threads, goals, fr, limits, q, res, ls, cont,
+                            count};
+    }
+    ikc_run_shares(threads, ikc_run, jobs, sizeof jobs[0]);
 }
 
 /* ---- the block path of a batch (docs/design.md section 14, "SIMD over poses") ----
@@ -2078,24 +2091,13 @@ static void ikc_many_block(const ikc_robot *rb, ikc_block_fn block, ikc_block_fn
         ikc_many(rb, n, goals, fr, limits, q, res, ls, cont, count, threads);
         return;
     }
-    if (threads < 1) threads = 1;
-    if (threads > 64) threads = 64;
-    if (n < 256 * threads) threads = 1;
+    threads = ikc_threads_for(n, threads);
     ikc_block_job jobs[64];
-    pthread_t ids[64];
-    int started[64] = {0};
     for (int t = 0; t < threads; t++) {
         /* each thread's share starts on a multiple of 4 poses */
         int64_t start = (n * t / threads) & ~(int64_t)3, stop = t + 1 == threads ? n : (n * (t + 1) / threads) & ~(int64_t)3;
         jobs[t] = (ikc_block_job){{rb, start, stop, goals, fr, limits, q, res, ls, cont, count}, block, block_libm,
                                   leaves};
     }
-    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_run_block, &jobs[t]) == 0;
-    ikc_run_block(&jobs[0]);
-    for (int t = 1; t < threads; t++) {
-        if (started[t])
-            pthread_join(ids[t], NULL);
-        else
-            ikc_run_block(&jobs[t]);
-    }
+    ikc_run_shares(threads, ikc_run_block, jobs, sizeof jobs[0]);
 }

@@ -91,15 +91,19 @@ static inline void ikc_mat_t_vec(const double *R, const double *x, double *out) 
     out[2] = c;
 }
 
-/* exp([w] th) x (Rodrigues) */
-static inline void ikc_rotate(const double *w, double th, const double *x, double *out) {
-    double c = cos(th), s = sin(th);
+/* fast._turn_cs: exp([w] th) x with cos th = c, sin th = s (Rodrigues) */
+static inline void ikc_turn_cs(const double *w, double c, double s, const double *x, double *out) {
     double w0 = w[0], w1 = w[1], w2 = w[2];
     double x0 = x[0], x1 = x[1], x2 = x[2];
     double k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c);
     out[0] = c * x0 + s * (w1 * x2 - w2 * x1) + k * w0;
     out[1] = c * x1 + s * (w2 * x0 - w0 * x2) + k * w1;
     out[2] = c * x2 + s * (w0 * x1 - w1 * x0) + k * w2;
+}
+
+/* exp([w] th) x */
+static inline void ikc_rotate(const double *w, double th, const double *x, double *out) {
+    ikc_turn_cs(w, cos(th), sin(th), x, out);
 }
 
 /* fast.unit_pair: (cos th, sin th) of th = atan2(s, c) from the pair, (1, 0) for a zero pair */
@@ -577,15 +581,6 @@ static inline void ikc_rrr_quartic_real(double b, double c, double d, double e, 
     *kk = k;
 }
 
-/* fast._turn_cs: exp([w] th) x with cos th = c, sin th = s */
-static inline void ikc_turn_cs(const double *w, double c, double s, const double *x, double *out) {
-    double w0 = w[0], w1 = w[1], w2 = w[2];
-    double x0 = x[0], x1 = x[1], x2 = x[2];
-    double k = (w0 * x0 + w1 * x1 + w2 * x2) * (1.0 - c);
-    out[0] = c * x0 + s * (w1 * x2 - w2 * x1) + k * w0;
-    out[1] = c * x1 + s * (w2 * x0 - w0 * x2) + k * w1;
-    out[2] = c * x2 + s * (w0 * x1 - w1 * x0) + k * w2;
-}
 
 /* fast._rrr_gauss_newton: one Newton step of the whole S2-RRR equation from t (cs: cos, sin of each) */
 static inline void ikc_rrr_gauss_newton(const double *w1, const double *r1, const double *w2, const double *r2,

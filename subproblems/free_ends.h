@@ -143,21 +143,10 @@ static void *ikc_fe_run(void *arg) {
 /* N 4x4 targets and their free values (N x nfree) in `threads` threads, as ikc_many. */
 static void ikc_free_many(const ikc_free_ends *fe, int64_t n, const double *goals, const double *fr, int limits,
                           double *q, double *res, int *ls, int *cont, int *count, int threads) {
-    if (threads < 1) threads = 1;
-    if (threads > 64) threads = 64;
-    if (n < 256 * threads) threads = 1;  /* a thread costs more than a few hundred poses */
+    threads = ikc_threads_for(n, threads);
     ikc_fe_job jobs[64];
-    pthread_t ids[64];
-    int started[64] = {0};
     for (int t = 0; t < threads; t++)
         jobs[t] = (ikc_fe_job){fe, n * t / threads, n * (t + 1) / threads, goals, fr, limits, q, res, ls, cont,
                                count};
-    for (int t = 1; t < threads; t++) started[t] = pthread_create(&ids[t], NULL, ikc_fe_run, &jobs[t]) == 0;
-    ikc_fe_run(&jobs[0]);
-    for (int t = 1; t < threads; t++) {
-        if (started[t])
-            pthread_join(ids[t], NULL);
-        else
-            ikc_fe_run(&jobs[t]);
-    }
+    ikc_run_shares(threads, ikc_fe_run, jobs, sizeof jobs[0]);
 }
