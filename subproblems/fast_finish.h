@@ -410,8 +410,8 @@ static double ikc_wrap(double x) {
  * Inlined with `dof` a constant where the finish is specialised to 6 joints (ikc_finish), and the robot's
  * arrays read through locals: the stores to q could alias them, so GCC reloaded rb's fields at every
  * joint (docs/design.md section 14, session 18). */
-static inline __attribute__((always_inline)) int ikc_represent_n(const ikc_robot *rb, double *q, int limits,
-                                                                 int *clamped, const int dof) {
+IKC_INLINE int ikc_represent_n(const ikc_robot *rb, double *q, int limits,
+                               int *clamped, const int dof) {
     const int *revolute = rb->revolute;
     const double *lower = rb->lower, *upper = rb->upper;
     int status = IKC_INSIDE;
@@ -516,10 +516,10 @@ static inline int ikc_row6_kept(ikc_row6 x, const ikc_b4 *rev, const ikc_row6 *l
  * tangent root located to sqrt(eps)) get Newton steps on the true robot first, as the Python batch
  * path gives them.  Returns the count, IKC_PYTHON, or IKC_FAMILY_MISS.  Outputs: q (slots x dof), res,
  * ls (inexact), cont (a representative of a self-motion). */
-static inline __attribute__((always_inline)) int ikc_finish_n(const ikc_robot *rb, const double *g, int n,
-                                                               const double *Q, const double *E, const int *F,
-                                                               int limits, double *q, double *res, int *ls,
-                                                               int *cont, const int dof) {
+IKC_INLINE int ikc_finish_n(const ikc_robot *rb, const double *g, int n,
+                            const double *Q, const double *E, const int *F,
+                            int limits, double *q, double *res, int *ls,
+                            int *cont, const int dof) {
     const int *revolute = rb->revolute;
     const double exact_tol = rb->tol * rb->scale, near = IKC_NEAR_MISS * rb->scale;
     double same = 1e-9 * (rb->scale > 1.0 ? rb->scale : 1.0);
